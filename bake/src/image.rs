@@ -1,0 +1,184 @@
+//! Linear RGB float images, and their files: multi-layer EXR (exact) and tonemapped sRGB PNG.
+
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// A linear-radiance RGB image, row-major, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Vec3>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Image { width, height, pixels: vec![Vec3::ZERO; (width * height) as usize] }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> Vec3 {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    pub fn set(&mut self, x: u32, y: u32, value: Vec3) {
+        self.pixels[(y * self.width + x) as usize] = value;
+    }
+}
+
+/// Why an image file could not be read or written, naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{path}: {message}")]
+    Io { path: PathBuf, message: String },
+    #[error("{path}: layer \"{layer}\" not found (the file has: {available}); name one of those")]
+    MissingLayer { path: PathBuf, layer: String, available: String },
+    #[error("{a} is {aw}x{ah} but {b} is {bw}x{bh}; compare images of the same size")]
+    SizeMismatch { a: String, aw: u32, ah: u32, b: String, bw: u32, bh: u32 },
+}
+
+fn io_error(path: &Path, message: impl std::fmt::Display) -> ImageError {
+    ImageError::Io { path: path.to_path_buf(), message: message.to_string() }
+}
+
+/// Writes a file through a temporary sibling and a rename, so a failure never leaves a
+/// half-written file under the final name.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageError> {
+    let file_name = path.file_name().ok_or_else(|| io_error(path, "not a file path"))?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(file_name);
+    tmp_name.push(format!(".{}.tmp", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    if let Err(message) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_error(path, message));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_error(path, e)
+    })
+}
+
+struct LayerPixels<'a>(&'a Image);
+
+impl exr::prelude::GetPixel for LayerPixels<'_> {
+    type Pixel = (f32, f32, f32);
+    fn get_pixel(&self, position: exr::prelude::Vec2<usize>) -> Self::Pixel {
+        let p = self.0.get(position.x() as u32, position.y() as u32);
+        (p.x, p.y, p.z)
+    }
+}
+
+/// Writes named RGB float layers (all the same size) into one EXR file, losslessly.
+pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    let Some((_, first)) = layers.first() else {
+        return Err(io_error(path, "no layers to write"));
+    };
+    let size = (first.width as usize, first.height as usize);
+    let exr_layers: Vec<_> = layers
+        .iter()
+        .map(|(name, image)| {
+            Layer::new(
+                size,
+                LayerAttributes::named(*name),
+                Encoding::SMALL_LOSSLESS,
+                SpecificChannels::rgb(LayerPixels(image)),
+            )
+        })
+        .collect();
+    let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(size));
+    let exr_image = exr::image::Image::from_layers(attributes, Layers::from_vec(exr_layers));
+    write_atomically(path, |tmp| exr_image.write().to_file(tmp).map_err(|e| e.to_string()))
+}
+
+/// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb").
+pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
+    use exr::prelude::*;
+    type RgbImage = crate::image::Image;
+    let file = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |resolution, _| RgbImage::new(resolution.width() as u32, resolution.height() as u32),
+            |image: &mut RgbImage, position, (r, g, b): (f32, f32, f32)| {
+                image.set(position.x() as u32, position.y() as u32, Vec3::new(r, g, b))
+            },
+        )
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
+    Ok(file
+        .layer_data
+        .into_iter()
+        .map(|layer| {
+            let name = layer.attributes.layer_name.map(|n| n.to_string());
+            (name.unwrap_or_else(|| "rgb".into()), layer.channel_data.pixels)
+        })
+        .collect())
+}
+
+/// Reads one layer of an EXR file: the named one, or the first when `layer` is None.
+pub fn read_exr_layer(path: &Path, layer: Option<&str>) -> Result<Image, ImageError> {
+    let layers = read_exr_layers(path)?;
+    let available = layers.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ");
+    let found = match layer {
+        Some(wanted) => layers.into_iter().find(|(n, _)| n == wanted),
+        None => layers.into_iter().next(),
+    };
+    found.map(|(_, image)| image).ok_or_else(|| ImageError::MissingLayer {
+        path: path.to_path_buf(),
+        layer: layer.unwrap_or("(first)").to_string(),
+        available,
+    })
+}
+
+/// The display transform of every PNG relume writes, on the GPU (`tonemap.comp`) and here:
+/// exposure, the ACES filmic fit of Narkowicz (2015) per channel, then the sRGB curve.
+pub fn tonemap_to_srgb8(linear: Vec3, exposure: f32) -> [u8; 3] {
+    let aces = |x: f32| {
+        let x = (x * exposure).max(0.0);
+        ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+    };
+    let encode = |c: f32| (linear_to_srgb(aces(c)) * 255.0 + 0.5) as u8;
+    [encode(linear.x), encode(linear.y), encode(linear.z)]
+}
+
+pub fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Writes 8-bit RGB pixels (row-major, top row first) as a PNG file.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(rgb).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+/// Tonemaps a linear image (see [`tonemap_to_srgb8`]) and writes it as PNG.
+pub fn write_png_tonemapped(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+    let rgb: Vec<u8> =
+        image.pixels.iter().flat_map(|p| tonemap_to_srgb8(*p, exposure)).collect();
+    write_png_rgb8(path, image.width, image.height, &rgb)
+}

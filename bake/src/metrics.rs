@@ -1,0 +1,139 @@
+//! Error metrics between a method's image and the reference, defined once for all of relume.
+//!
+//! RMSE is taken over every channel of every pixel. NRMSE is that RMSE divided by the RMS of
+//! the reference over the same values: `sqrt(sum (a - r)^2 / sum r^2)`. It is pooled over the
+//! channels rather than averaged per channel so that a channel the reference barely lights
+//! (the blue of a red wall) cannot dominate it. docs/METRICS.md states the same.
+
+use crate::image::{Image, ImageError};
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorStats {
+    pub rmse: f64,
+    pub nrmse: f64,
+    /// Pixels of the method image that hold a NaN or an infinity (any is a failure).
+    pub non_finite_pixels: usize,
+}
+
+fn check_sizes(image: &Image, reference: &Image) -> Result<(), ImageError> {
+    if (image.width, image.height) == (reference.width, reference.height) {
+        return Ok(());
+    }
+    Err(ImageError::SizeMismatch {
+        a: "the image".into(),
+        aw: image.width,
+        ah: image.height,
+        b: "the reference".into(),
+        bw: reference.width,
+        bh: reference.height,
+    })
+}
+
+/// RMSE and NRMSE of `image` against `reference`; non-finite pixels are counted, not summed.
+pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageError> {
+    check_sizes(image, reference)?;
+    let (mut squared_error, mut squared_reference, mut values) = (0.0f64, 0.0f64, 0usize);
+    let mut non_finite_pixels = 0;
+    for (a, r) in image.pixels.iter().zip(&reference.pixels) {
+        if !a.is_finite() {
+            non_finite_pixels += 1;
+            continue;
+        }
+        let d = (*a - *r).as_dvec3();
+        squared_error += d.length_squared();
+        squared_reference += r.as_dvec3().length_squared();
+        values += 3;
+    }
+    let rmse = (squared_error / values.max(1) as f64).sqrt();
+    let reference_rms = (squared_reference / values.max(1) as f64).sqrt();
+    let nrmse = if reference_rms > 0.0 { rmse / reference_rms } else { f64::INFINITY };
+    Ok(ErrorStats { rmse, nrmse, non_finite_pixels })
+}
+
+/// A false-colour picture of the per-pixel error: the mean absolute channel error divided by
+/// the reference's RMS, from black (0) through blue, cyan, green and yellow to red (>= `scale`).
+/// Non-finite pixels are magenta.
+pub fn false_colour(image: &Image, reference: &Image, scale: f32) -> Result<Vec<u8>, ImageError> {
+    check_sizes(image, reference)?;
+    let rms = (reference.pixels.iter().map(|r| r.length_squared() as f64).sum::<f64>()
+        / (3 * reference.pixels.len()).max(1) as f64)
+        .sqrt()
+        .max(f64::MIN_POSITIVE) as f32;
+    Ok(image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .flat_map(|(a, r)| {
+            if !a.is_finite() {
+                return [255, 0, 255];
+            }
+            let error = (*a - *r).abs().element_sum() / 3.0 / rms;
+            heat_ramp((error / scale).clamp(0.0, 1.0))
+        })
+        .collect())
+}
+
+fn heat_ramp(t: f32) -> [u8; 3] {
+    const STOPS: [Vec3; 6] = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ];
+    let x = t * (STOPS.len() - 1) as f32;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let c = STOPS[i].lerp(STOPS[i + 1], x - i as f32) * 255.0 + 0.5;
+    [c.x as u8, c.y as u8, c.z as u8]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flat(value: Vec3) -> Image {
+        Image { width: 2, height: 2, pixels: vec![value; 4] }
+    }
+
+    #[test]
+    fn identical_images_have_zero_error() {
+        let a = flat(Vec3::new(0.2, 0.5, 1.0));
+        assert_eq!(compare(&a, &a).unwrap().nrmse, 0.0);
+    }
+
+    #[test]
+    fn a_uniform_ten_percent_offset_has_nrmse_one_tenth() {
+        let r = flat(Vec3::splat(2.0));
+        let stats = compare(&flat(Vec3::splat(2.2)), &r).unwrap();
+        assert!((stats.nrmse - 0.1).abs() < 1e-6, "{stats:?}");
+        assert!((stats.rmse - 0.2).abs() < 1e-6, "{stats:?}");
+    }
+
+    #[test]
+    fn non_finite_pixels_are_counted_not_averaged() {
+        let mut a = flat(Vec3::ONE);
+        a.pixels[1] = Vec3::new(f32::NAN, 0.0, 0.0);
+        let stats = compare(&a, &flat(Vec3::ONE)).unwrap();
+        assert_eq!(stats.non_finite_pixels, 1);
+        assert_eq!(stats.nrmse, 0.0);
+    }
+
+    #[test]
+    fn sizes_must_match() {
+        let small = Image::new(1, 1);
+        assert!(compare(&small, &flat(Vec3::ONE)).is_err());
+    }
+
+    #[test]
+    fn false_colour_marks_large_error_red_and_nan_magenta() {
+        let mut a = flat(Vec3::splat(100.0));
+        a.pixels[0] = Vec3::ONE;
+        a.pixels[3] = Vec3::splat(f32::INFINITY);
+        let rgb = false_colour(&a, &flat(Vec3::ONE), 0.5).unwrap();
+        assert_eq!(&rgb[0..3], &[0, 0, 0]);
+        assert_eq!(&rgb[3..6], &[255, 0, 0]);
+        assert_eq!(&rgb[9..12], &[255, 0, 255]);
+    }
+}

@@ -1,0 +1,256 @@
+//! The frame, top to bottom: VSM moments -> moments blur -> forward lighting -> tonemap.
+//! `Renderer::record` writes it into any command buffer (the caller's, for integrators);
+//! `Renderer::render` is the headless driver relume's own tools use.
+
+use crate::gpu_scene::GpuScene;
+use crate::passes::forward::{ForwardParams, ForwardPass, DEPTH_FORMAT, RADIANCE_FORMAT};
+use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
+use crate::passes::vsm::VsmPass;
+use crate::passes::vsm_blur::VsmBlurPass;
+use crate::vk::{vk, Access, Buffer, CommandRecorder, Context, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
+use gpu_allocator::MemoryLocation;
+use relume_bake::image::Image as HdrImage;
+use relume_bake::scene::{Camera, Light, Scene};
+
+/// Everything that shapes a frame; validated by [`RenderSettings::validate`].
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Shadow-map size in texels (square), per layer.
+    pub shadow_map_size: u32,
+    /// Gaussian blur radius of the moments in texels (0: no blur).
+    pub blur_radius: u32,
+    /// Floor on the variance in the Chebyshev bound, in square metres.
+    pub min_variance: f32,
+    /// Light-bleeding reduction: the part of the bound's tail cut off, in [0, 1).
+    pub bleeding_reduction: f32,
+    /// Off: every light is fully visible (shading only; for comparing shading alone).
+    pub shadows: bool,
+    /// Exposure multiplier of the display transform.
+    pub exposure: f32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            shadow_map_size: 1024,
+            blur_radius: 2,
+            min_variance: 1e-5,
+            bleeding_reduction: 0.2,
+            shadows: true,
+            exposure: 1.0,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Refuses settings no frame can be made with, saying which and what is allowed.
+    pub fn validate(&self) -> Result<(), String> {
+        let checks = [
+            (self.width >= 1 && self.width <= 16384, "width must be 1..=16384 pixels"),
+            (self.height >= 1 && self.height <= 16384, "height must be 1..=16384 pixels"),
+            (self.shadow_map_size >= 16 && self.shadow_map_size <= 8192, "shadow map size must be 16..=8192 texels"),
+            (self.blur_radius <= 64, "blur radius must be 0..=64 texels"),
+            (self.min_variance.is_finite() && self.min_variance >= 0.0, "minimum variance must be finite and >= 0"),
+            ((0.0..1.0).contains(&self.bleeding_reduction), "light-bleeding reduction must be in [0, 1)"),
+            (self.exposure.is_finite() && self.exposure > 0.0, "exposure must be finite and > 0"),
+        ];
+        match checks.iter().find(|(ok, _)| !ok) {
+            Some((_, message)) => Err(message.to_string()),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The passes in frame order; timestamps are written before the first and after each.
+pub const PASS_NAMES: [&str; 4] = ["vsm_moments", "vsm_blur", "forward", "tonemap"];
+
+/// GPU time of each pass of one frame, in milliseconds (empty when the device has no timestamps).
+#[derive(Clone, Debug, Default)]
+pub struct FrameTimings {
+    pub passes_ms: Vec<(&'static str, f64)>,
+    pub total_ms: f64,
+}
+
+pub struct Renderer {
+    settings: RenderSettings,
+    camera: Camera,
+    scene: GpuScene,
+    vsm: VsmPass,
+    blur: VsmBlurPass,
+    forward: ForwardPass,
+    tonemap: TonemapPass,
+    sampler: vk::Sampler,
+    /// Linear radiance, the frame's HDR result.
+    pub radiance: Image,
+    depth: Image,
+    /// Tonemapped sRGB, the frame's display result.
+    pub display: Image,
+    readback: (Buffer, Buffer),
+    queries: Option<TimestampQueries>,
+    tracker: Tracker,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+impl Renderer {
+    /// Uploads the scene and creates every pass and target. Nothing here runs per frame.
+    pub fn new(ctx: &Context, scene: &Scene, settings: &RenderSettings) -> VkResult<Renderer> {
+        settings.validate().map_err(VkError::Invalid)?;
+        if scene.lights.is_empty() && scene.materials.iter().all(|m| m.emission == glam::Vec3::ZERO) {
+            return Err(VkError::Invalid(format!("{}: the scene has no light", scene.source.display())));
+        }
+        let (w, h) = (settings.width, settings.height);
+        let target = |name, format, usage| {
+            Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
+        };
+        use vk::ImageUsageFlags as U;
+        let gpu_scene = GpuScene::upload(ctx, scene)?;
+        let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
+        let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
+        let sampler = ctx.create_sampler(ctx.info.linear_moments)?;
+        let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments, sampler)?;
+        let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
+        let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
+        let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
+        let tonemap = TonemapPass::new(ctx, &radiance, &display)?;
+        let pixels = (w * h) as u64;
+        let readback = (
+            Buffer::new(ctx, "radiance readback", pixels * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
+            Buffer::new(ctx, "display readback", pixels * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
+        );
+        let queries = TimestampQueries::new(ctx, PASS_NAMES.len() as u32 + 1)?;
+        Ok(Renderer {
+            settings: settings.clone(),
+            camera: scene.camera,
+            scene: gpu_scene,
+            vsm,
+            blur,
+            forward,
+            tonemap,
+            sampler,
+            radiance,
+            depth,
+            display,
+            readback,
+            queries,
+            tracker: Tracker::default(),
+            cmd: ctx.allocate_command_buffer()?,
+            fence: ctx.create_fence()?,
+        })
+    }
+
+    /// Moves the lights (same kinds and count as the scene had). Takes effect next frame.
+    pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
+        self.scene.set_lights(lights)
+    }
+
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
+    }
+
+    fn forward_params(&self) -> ForwardParams {
+        let s = &self.settings;
+        ForwardParams {
+            clip_from_world: self.camera.clip_from_world(s.width, s.height),
+            camera_position: self.camera.position().extend(1.0),
+            light_count: self.scene.light_count(),
+            shadows: s.shadows as u32,
+            min_variance: s.min_variance,
+            bleeding_reduction: s.bleeding_reduction,
+        }
+    }
+
+    /// Records one whole frame into `rec` (begun by the caller, ended and submitted by the
+    /// caller). `tracker` holds the images' states; after the call it holds what the frame
+    /// left them in (`radiance` and `display` are left as compute storage).
+    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
+        let timestamp = |i: u32| {
+            if let Some(q) = &self.queries {
+                q.write(rec, i)
+            }
+        };
+        if let Some(q) = &self.queries {
+            q.reset(rec);
+        }
+        timestamp(0);
+        if self.settings.shadows {
+            self.vsm.record(rec, tracker, &self.scene);
+        }
+        timestamp(1);
+        if self.settings.shadows {
+            self.blur.record(rec, tracker, &self.vsm.moments);
+        }
+        timestamp(2);
+        let targets = (&self.radiance, &self.depth);
+        self.forward.record(rec, tracker, &self.scene, &self.vsm.moments, targets, &self.forward_params());
+        timestamp(3);
+        self.tonemap.record(rec, tracker, &self.radiance, &self.display, self.settings.exposure);
+        timestamp(4);
+    }
+
+    /// Renders one frame on the context's queue and waits for its fence (never the device).
+    pub fn render(&mut self, ctx: &Context) -> VkResult<FrameTimings> {
+        self.submit_frame(ctx, false)?;
+        self.timings(ctx)
+    }
+
+    /// Renders one frame and reads back its linear radiance and its display image (RGBA8).
+    pub fn render_and_read(&mut self, ctx: &Context) -> VkResult<(HdrImage, Vec<u8>)> {
+        self.submit_frame(ctx, true)?;
+        let (w, h) = (self.settings.width, self.settings.height);
+        let floats = self.readback.0.read_bytes((w * h * 16) as usize)?;
+        let mut radiance = HdrImage::new(w, h);
+        for (pixel, bytes) in radiance.pixels.iter_mut().zip(floats.chunks_exact(16)) {
+            let channel = |i: usize| f32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default());
+            *pixel = glam::Vec3::new(channel(0), channel(1), channel(2));
+        }
+        Ok((radiance, self.readback.1.read_bytes((w * h * 4) as usize)?))
+    }
+
+    fn submit_frame(&mut self, ctx: &Context, read_back: bool) -> VkResult<()> {
+        let rec = ctx.begin(self.cmd)?;
+        let mut tracker = std::mem::take(&mut self.tracker);
+        self.record(&rec, &mut tracker);
+        if read_back {
+            tracker.use_image(&rec, &self.radiance, Access::TransferSource);
+            tracker.use_image(&rec, &self.display, Access::TransferSource);
+            rec.copy_image_to_buffer(&self.radiance, self.readback.0.raw);
+            rec.copy_image_to_buffer(&self.display, self.readback.1.raw);
+            rec.transfer_to_host_barrier();
+        }
+        self.tracker = tracker;
+        ctx.submit_and_wait(rec, self.fence)
+    }
+
+    fn timings(&self, ctx: &Context) -> VkResult<FrameTimings> {
+        let Some(queries) = &self.queries else { return Ok(FrameTimings::default()) };
+        let stamps = queries.read_ms(ctx, queries.capacity())?;
+        let passes_ms = PASS_NAMES.iter().zip(stamps.windows(2)).map(|(name, w)| (*name, w[1] - w[0])).collect();
+        Ok(FrameTimings { passes_ms, total_ms: stamps[stamps.len() - 1] - stamps[0] })
+    }
+
+    /// Destroys every resource, in reverse order of creation. The GPU must be done with them
+    /// (true after `render`, which waits for its fence).
+    pub fn destroy(mut self, ctx: &Context) {
+        ctx.destroy_fence(self.fence);
+        ctx.free_command_buffer(self.cmd);
+        if let Some(q) = &mut self.queries {
+            q.destroy(ctx);
+        }
+        self.readback.1.destroy(ctx);
+        self.readback.0.destroy(ctx);
+        self.tonemap.destroy(ctx);
+        self.display.destroy(ctx);
+        self.depth.destroy(ctx);
+        self.radiance.destroy(ctx);
+        self.forward.destroy(ctx);
+        ctx.destroy_sampler(self.sampler);
+        self.blur.destroy(ctx);
+        self.vsm.destroy(ctx);
+        self.scene.destroy(ctx);
+    }
+}

@@ -1,0 +1,18 @@
+//! relume's Vulkan renderer. A library first: [`Renderer::record`] writes a whole frame into a
+//! command buffer the caller owns, on a device the caller may provide
+//! ([`vk::Context::from_existing`]); [`Renderer::render`] is the headless driver.
+//!
+//! Layers: `vk` owns every unsafe Vulkan call; `passes` are safe code, one file per pass;
+//! `frame` wires them in order.
+
+pub mod frame;
+pub mod gpu_scene;
+pub mod passes;
+pub mod vk;
+
+pub use frame::{FrameTimings, RenderSettings, Renderer, PASS_NAMES};
+
+/// SPIR-V of every shader in `shaders/`, compiled by build.rs.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

@@ -1,0 +1,89 @@
+//! Variance shadow maps, moments pass (000 §3.4): every shadow layer of every light renders
+//! the scene's depth from the light and stores its first two moments in a layer of one
+//! RG32F array image.
+
+use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
+use crate::shaders;
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, Tracker, VkResult};
+
+pub const MOMENTS_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct VsmPush {
+    light: u32,
+    layer: u32,
+}
+
+pub struct VsmPass {
+    pipeline: GraphicsPipeline,
+    descriptors: DescriptorSet,
+    /// The moments of every layer; the blur pass and the lighting passes read it.
+    pub moments: Image,
+    depth: Image,
+    layer_views: Vec<vk::ImageView>,
+}
+
+impl VsmPass {
+    pub(crate) fn new(ctx: &Context, scene: &GpuScene, size: u32) -> VkResult<VsmPass> {
+        let layers = scene.shadow_views.len().max(1) as u32;
+        let moments = Image::new(ctx, "vsm moments", ImageDesc {
+            width: size,
+            height: size,
+            layers,
+            format: MOMENTS_FORMAT,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+            view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+        })?;
+        let depth = Image::new(ctx, "vsm depth", ImageDesc {
+            width: size,
+            height: size,
+            layers: 1,
+            format: vk::Format::D32_SFLOAT,
+            usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            view_type: vk::ImageViewType::TYPE_2D,
+        })?;
+        let layer_views = (0..layers).map(|l| moments.layer_view(ctx, l)).collect::<VkResult<Vec<_>>>()?;
+        let descriptors = DescriptorSet::new(
+            ctx,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            &[Binding::StorageBuffer(scene.lights.raw), Binding::StorageBuffer(scene.layers.raw)],
+        )?;
+        let pipeline = GraphicsPipeline::new(ctx, &GraphicsPipelineDesc {
+            vertex: shaders::VSM_MOMENTS_VERT,
+            fragment: shaders::VSM_MOMENTS_FRAG,
+            vertex_stride: VERTEX_STRIDE,
+            attributes: &vertex_attributes()[..1],
+            color_formats: &[MOMENTS_FORMAT],
+            depth_format: vk::Format::D32_SFLOAT,
+            // Both faces: an occluder's back faces are what a closed mesh shows the light.
+            cull_mode: vk::CullModeFlags::NONE,
+            set_layout: descriptors.layout,
+            push_bytes: std::mem::size_of::<VsmPush>() as u32,
+        })?;
+        Ok(VsmPass { pipeline, descriptors, moments, depth, layer_views })
+    }
+
+    /// Writes: `moments` (colour attachment), its depth buffer. Reads: scene buffers.
+    pub(crate) fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, scene: &GpuScene) {
+        rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
+        for view in &scene.shadow_views {
+            tracker.use_image(rec, &self.moments, Access::ColorAttachmentWrite);
+            tracker.use_image(rec, &self.depth, Access::DepthAttachmentWrite);
+            rec.push_constants(self.pipeline.layout, &VsmPush { light: view.light, layer: view.layer });
+            rec.begin_rendering(self.moments.desc.extent(), self.layer_views[view.layer as usize], self.depth.view);
+            rec.draw_indexed(scene.vertices.raw, scene.indices.raw, scene.index_count);
+            rec.end_rendering();
+        }
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        for view in self.layer_views.drain(..) {
+            crate::vk::destroy_view(ctx, view);
+        }
+        self.pipeline.destroy(ctx);
+        self.descriptors.destroy(ctx);
+        self.depth.destroy(ctx);
+        self.moments.destroy(ctx);
+    }
+}

@@ -1,0 +1,85 @@
+//! The one place barriers come from. Passes declare how they are about to use each image
+//! (`Access`); the tracker knows how each image was last used and records the barrier
+//! between the two, or none for a read after a read in the same layout.
+
+use super::{CommandRecorder, Image};
+use ash::vk;
+use std::collections::HashMap;
+
+/// How a pass uses an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Never used yet (or its contents may be discarded).
+    Undefined,
+    ColorAttachmentWrite,
+    DepthAttachmentWrite,
+    FragmentSampled,
+    ComputeStorageRead,
+    ComputeStorageWrite,
+    TransferSource,
+}
+
+impl Access {
+    fn stage_access_layout(self) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::ImageLayout) {
+        use vk::{AccessFlags2 as A, ImageLayout as L, PipelineStageFlags2 as S};
+        match self {
+            Access::Undefined => (S::NONE, A::NONE, L::UNDEFINED),
+            Access::ColorAttachmentWrite => {
+                (S::COLOR_ATTACHMENT_OUTPUT, A::COLOR_ATTACHMENT_WRITE, L::COLOR_ATTACHMENT_OPTIMAL)
+            }
+            Access::DepthAttachmentWrite => (
+                S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
+                A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                L::DEPTH_ATTACHMENT_OPTIMAL,
+            ),
+            Access::FragmentSampled => (S::FRAGMENT_SHADER, A::SHADER_SAMPLED_READ, L::SHADER_READ_ONLY_OPTIMAL),
+            Access::ComputeStorageRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
+            Access::ComputeStorageWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
+            Access::TransferSource => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
+        }
+    }
+
+    fn writes(self) -> bool {
+        matches!(self, Access::ColorAttachmentWrite | Access::DepthAttachmentWrite | Access::ComputeStorageWrite)
+    }
+}
+
+/// The last known use of every image a frame touches.
+#[derive(Default)]
+pub struct Tracker {
+    last: HashMap<vk::Image, Access>,
+}
+
+impl Tracker {
+    /// States what `image` was last used for before the frame (the caller's contract, for
+    /// images the caller owns); images never seen are taken as `Undefined`.
+    pub fn assume(&mut self, image: &Image, access: Access) {
+        self.last.insert(image.raw, access);
+    }
+
+    /// How `image` was last used: what the frame leaves it in, for the caller.
+    pub fn state(&self, image: &Image) -> Access {
+        self.last.get(&image.raw).copied().unwrap_or(Access::Undefined)
+    }
+
+    /// Records the barrier that makes `image` ready for `next`.
+    pub fn use_image(&mut self, rec: &CommandRecorder, image: &Image, next: Access) {
+        let previous = self.state(image);
+        self.last.insert(image.raw, next);
+        if previous == next && !next.writes() {
+            return;
+        }
+        let (src_stage, src_access, old_layout) = previous.stage_access_layout();
+        let (dst_stage, dst_access, new_layout) = next.stage_access_layout();
+        let barrier = vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(src_stage)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst_stage)
+            .dst_access_mask(dst_access)
+            .old_layout(old_layout)
+            .new_layout(new_layout)
+            .image(image.raw)
+            .subresource_range(image.desc.all_layers());
+        rec.image_barrier(barrier);
+    }
+}

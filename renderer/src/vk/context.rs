@@ -1,0 +1,351 @@
+//! The Vulkan context: instance, device, queue, allocator and a command pool. relume makes its
+//! own headless context, or wraps a device the caller already has.
+
+use super::device::{self, DeviceInfo};
+use super::instance::{self, MessageLog};
+use super::{VkError, VkResult};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Turns on VK_LAYER_KHRONOS_validation with synchronization validation.
+    pub validation: bool,
+    /// A device index or part of its name (e.g. "llvmpipe"); None picks a real GPU if any.
+    pub device: Option<String>,
+}
+
+pub struct Context {
+    pub device: ash::Device,
+    pub instance: ash::Instance,
+    pub physical: vk::PhysicalDevice,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub info: DeviceInfo,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    command_pool: vk::CommandPool,
+    _entry: ash::Entry,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    messages: MessageLog,
+    owns_device: bool,
+}
+
+impl Context {
+    /// A headless context on a device chosen by `options` (or the RELUME_DEVICE variable).
+    pub fn headless(options: &ContextOptions) -> VkResult<Context> {
+        let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
+        let parts = instance::create(options.validation, &messages)?;
+        let selector = options.device.clone().or_else(|| std::env::var("RELUME_DEVICE").ok());
+        let created = device::create(&parts.instance, selector.as_deref());
+        let dev = match created {
+            Ok(d) => d,
+            Err(e) => {
+                destroy_instance(&parts.instance, parts.debug.as_ref());
+                return Err(e);
+            }
+        };
+        Self::assemble(parts.entry, parts.instance, parts.debug, dev.physical, dev.device, dev.queue_family, dev.queue, dev.info, messages, true)
+    }
+
+    /// Wraps a device the caller created and keeps owning (it must have Vulkan 1.3 with
+    /// dynamicRendering, synchronization2 and shaderStorageImageExtendedFormats enabled).
+    /// relume never destroys the caller's device or instance.
+    pub fn from_existing(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical: vk::PhysicalDevice,
+        device: ash::Device,
+        queue_family: u32,
+        queue: vk::Queue,
+    ) -> VkResult<Context> {
+        // SAFETY: plain queries of the caller's live objects.
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        let info = DeviceInfo {
+            name,
+            driver: String::new(),
+            device_type: format!("{:?}", props.device_type),
+            timestamp_period_ns: (props.limits.timestamp_period > 0.0).then_some(props.limits.timestamp_period as f64),
+            linear_moments: true,
+        };
+        let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
+        Self::assemble(entry, instance, None, physical, device, queue_family, queue, info, messages, false)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        physical: vk::PhysicalDevice,
+        device: ash::Device,
+        queue_family: u32,
+        queue: vk::Queue,
+        info: DeviceInfo,
+        messages: MessageLog,
+        owns_device: bool,
+    ) -> VkResult<Context> {
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: the device is live and the family exists.
+        let command_pool = allocator.map_err(VkError::from).and_then(|a| {
+            unsafe { device.create_command_pool(&pool_info, None) }.map(|p| (a, p)).map_err(VkError::from)
+        });
+        let (allocator, command_pool) = match command_pool {
+            Ok(pair) => pair,
+            Err(e) => {
+                if owns_device {
+                    // SAFETY: nothing was created on the device yet.
+                    unsafe { device.destroy_device(None) };
+                    destroy_instance(&instance, debug.as_ref());
+                }
+                return Err(e);
+            }
+        };
+        Ok(Context {
+            device,
+            instance,
+            physical,
+            queue,
+            queue_family,
+            info,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool,
+            _entry: entry,
+            debug,
+            messages,
+            owns_device,
+        })
+    }
+
+    pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Validation warnings and errors reported so far (empty without validation).
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    pub fn allocate_command_buffer(&self) -> VkResult<vk::CommandBuffer> {
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is live.
+        Ok(unsafe { self.device.allocate_command_buffers(&info) }?[0])
+    }
+
+    pub fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller guarantees the buffer is not pending.
+        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+    }
+
+    pub fn create_fence(&self) -> VkResult<vk::Fence> {
+        // SAFETY: a valid create info.
+        Ok(unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }?)
+    }
+
+    pub fn destroy_fence(&self, fence: vk::Fence) {
+        // SAFETY: the caller guarantees the fence is not pending.
+        unsafe { self.device.destroy_fence(fence, None) };
+    }
+
+    /// Begins recording `cmd` for one submission.
+    pub fn begin(&self, cmd: vk::CommandBuffer) -> VkResult<CommandRecorder<'_>> {
+        let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the caller guarantees `cmd` is not pending (its fence was waited on).
+        unsafe {
+            self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            self.device.begin_command_buffer(cmd, &info)?;
+        }
+        Ok(CommandRecorder { device: &self.device, cmd })
+    }
+
+    /// Ends `rec`, submits it signalling `fence`, and waits for that fence (not the device).
+    pub fn submit_and_wait(&self, rec: CommandRecorder, fence: vk::Fence) -> VkResult<()> {
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(rec.cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        // SAFETY: the buffer was fully recorded; the fence is unsignalled and reset after use.
+        unsafe {
+            self.device.end_command_buffer(rec.cmd)?;
+            self.device.queue_submit2(self.queue, &submit, fence)?;
+            self.device.wait_for_fences(&[fence], true, u64::MAX)?;
+            self.device.reset_fences(&[fence])?;
+        }
+        Ok(())
+    }
+
+    /// Creates the clamp-to-edge sampler shadow maps are read through.
+    pub fn create_sampler(&self, linear: bool) -> VkResult<vk::Sampler> {
+        let filter = if linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(filter)
+            .min_filter(filter)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        // SAFETY: a valid create info.
+        Ok(unsafe { self.device.create_sampler(&info, None) }?)
+    }
+
+    pub fn destroy_sampler(&self, sampler: vk::Sampler) {
+        // SAFETY: the caller guarantees the sampler is unused.
+        unsafe { self.device.destroy_sampler(sampler, None) };
+    }
+}
+
+fn destroy_instance(
+    instance: &ash::Instance,
+    debug: Option<&(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+) {
+    // SAFETY: nothing created from the instance is alive any more.
+    unsafe {
+        if let Some((loader, messenger)) = debug {
+            loader.destroy_debug_utils_messenger(*messenger, None);
+        }
+        instance.destroy_instance(None);
+    }
+}
+
+impl Drop for Context {
+    /// Teardown in reverse order of creation: pool, allocator, then (when relume made them)
+    /// device, messenger and instance. Every resource made from this context must be destroyed first.
+    fn drop(&mut self) {
+        // SAFETY: every object made from this context was destroyed by its owner before.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.command_pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owns_device {
+                self.device.destroy_device(None);
+                destroy_instance(&self.instance, self.debug.as_ref());
+            }
+        }
+    }
+}
+
+/// A command buffer being recorded; the safe face of every vkCmd* call passes make.
+pub struct CommandRecorder<'a> {
+    pub(super) device: &'a ash::Device,
+    pub cmd: vk::CommandBuffer,
+}
+
+impl<'a> CommandRecorder<'a> {
+    /// Records into a command buffer the caller began and will end and submit.
+    pub fn wrap(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
+        CommandRecorder { device: &ctx.device, cmd }
+    }
+
+    pub fn image_barrier(&self, barrier: vk::ImageMemoryBarrier2) {
+        let barriers = [barrier];
+        // SAFETY: recording state; the barrier names a live image.
+        unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+    }
+
+    pub fn bind_compute(&self, pipeline: vk::Pipeline, layout: vk::PipelineLayout, set: vk::DescriptorSet) {
+        self.bind(vk::PipelineBindPoint::COMPUTE, pipeline, layout, set);
+    }
+
+    pub fn bind_graphics(&self, pipeline: vk::Pipeline, layout: vk::PipelineLayout, set: vk::DescriptorSet) {
+        self.bind(vk::PipelineBindPoint::GRAPHICS, pipeline, layout, set);
+    }
+
+    fn bind(&self, point: vk::PipelineBindPoint, pipeline: vk::Pipeline, layout: vk::PipelineLayout, set: vk::DescriptorSet) {
+        // SAFETY: recording state; the set matches the layout it was made for.
+        unsafe {
+            self.device.cmd_bind_pipeline(self.cmd, point, pipeline);
+            self.device.cmd_bind_descriptor_sets(self.cmd, point, layout, 0, &[set], &[]);
+        }
+    }
+
+    pub fn push_constants<T: Copy>(&self, layout: vk::PipelineLayout, value: &T) {
+        // SAFETY: T is plain data; the layout's range covers ALL stages from offset 0.
+        let bytes = unsafe { std::slice::from_raw_parts(value as *const T as *const u8, std::mem::size_of::<T>()) };
+        unsafe { self.device.cmd_push_constants(self.cmd, layout, vk::ShaderStageFlags::ALL, 0, bytes) };
+    }
+
+    pub fn dispatch(&self, x: u32, y: u32, z: u32) {
+        // SAFETY: recording state with a compute pipeline bound.
+        unsafe { self.device.cmd_dispatch(self.cmd, x, y, z) };
+    }
+
+    /// Begins dynamic rendering into `color` (cleared to zero) and `depth` (cleared to far),
+    /// with viewport and scissor covering `extent`.
+    pub fn begin_rendering(&self, extent: vk::Extent2D, color: vk::ImageView, depth: vk::ImageView) {
+        let colors = [vk::RenderingAttachmentInfo::default()
+            .image_view(color)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })];
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(depth)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&colors).depth_attachment(&depth);
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: recording state; the views are live and in the stated layouts (the tracker saw to it).
+        unsafe {
+            self.device.cmd_begin_rendering(self.cmd, &info);
+            self.device.cmd_set_viewport(self.cmd, 0, &[viewport]);
+            self.device.cmd_set_scissor(self.cmd, 0, &[area]);
+        }
+    }
+
+    pub fn end_rendering(&self) {
+        // SAFETY: paired with begin_rendering.
+        unsafe { self.device.cmd_end_rendering(self.cmd) };
+    }
+
+    pub fn draw_indexed(&self, vertices: vk::Buffer, indices: vk::Buffer, index_count: u32) {
+        // SAFETY: recording state inside rendering; buffers hold the declared data.
+        unsafe {
+            self.device.cmd_bind_vertex_buffers(self.cmd, 0, &[vertices], &[0]);
+            self.device.cmd_bind_index_buffer(self.cmd, indices, 0, vk::IndexType::UINT32);
+            self.device.cmd_draw_indexed(self.cmd, index_count, 1, 0, 0, 0);
+        }
+    }
+
+    /// Copies an image (one layer, tightly packed) into a buffer.
+    pub fn copy_image_to_buffer(&self, image: &super::Image, buffer: vk::Buffer) {
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(1))
+            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+        // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (tracker) and the buffer is large enough.
+        unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
+    }
+
+    /// Makes the transfer writes of this submission visible to the host after its fence.
+    pub fn transfer_to_host_barrier(&self) {
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+        // SAFETY: recording state.
+        unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().memory_barriers(&barrier)) };
+    }
+}

@@ -1,0 +1,42 @@
+//! The Vulkan backend: the only place in relume that makes unsafe Vulkan calls or touches the
+//! allocator. One file per Vulkan object; everything above it is safe Rust.
+
+mod barrier;
+mod buffer;
+mod context;
+mod descriptor;
+mod device;
+mod image;
+mod instance;
+mod pipeline;
+mod query;
+
+pub use ash::vk;
+pub use barrier::{Access, Tracker};
+pub use buffer::Buffer;
+pub use context::{CommandRecorder, Context, ContextOptions};
+pub use descriptor::{Binding, DescriptorSet};
+pub use device::DeviceInfo;
+pub use image::{Image, ImageDesc};
+pub use pipeline::{ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc};
+pub use query::TimestampQueries;
+pub use image::destroy_view;
+
+/// Everything that can go wrong in the backend, each with what to do about it.
+#[derive(Debug, thiserror::Error)]
+pub enum VkError {
+    #[error("cannot load the Vulkan loader (libvulkan.so.1): {0}; install mesa-vulkan-drivers and libvulkan1")]
+    Loader(String),
+    #[error("no Vulkan device matches {0}; run `vulkaninfo --summary` to list them")]
+    NoDevice(String),
+    #[error("device {device} lacks {missing}; relume needs Vulkan 1.3 with dynamic rendering and synchronization2")]
+    MissingFeature { device: String, missing: String },
+    #[error("Vulkan call failed: {0}")]
+    Call(#[from] vk::Result),
+    #[error("GPU memory allocation failed: {0}")]
+    Allocation(#[from] gpu_allocator::AllocationError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+pub type VkResult<T> = Result<T, VkError>;

@@ -1,0 +1,19 @@
+#version 450
+// Forward pass: scene geometry in world space, as the CPU scene holds it.
+#extension GL_GOOGLE_include_directive : require
+#include "forward_push.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 3) in uint in_material;
+
+layout(location = 0) out vec3 world_position;
+layout(location = 1) out vec3 world_normal;
+layout(location = 3) flat out uint material;
+
+void main() {
+    world_position = in_position;
+    world_normal = in_normal;
+    material = in_material;
+    gl_Position = pc.clip_from_world * vec4(in_position, 1.0);
+}

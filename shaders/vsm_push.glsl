@@ -1,0 +1,4 @@
+layout(push_constant) uniform VsmPush {
+    uint light;
+    uint layer;
+} pc;

@@ -1,0 +1,396 @@
+//! `relume`: the command-line program. Each subcommand is a thin user of the libraries:
+//! `bake` (scenes, reference path tracer, metrics) and `renderer` (Vulkan).
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
+use relume_bake::bvh::SceneBvh;
+use relume_bake::gltf_load::{load_with_camera, CameraOverride};
+use relume_bake::image::{self, Image};
+use relume_bake::metrics;
+use relume_bake::reference::{render_reference, ReferenceSettings};
+use relume_bake::scene::Scene;
+use relume_renderer::vk::{Context, ContextOptions};
+use relume_renderer::{FrameTimings, RenderSettings, Renderer};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+mod report;
+
+#[derive(Parser)]
+#[command(name = "relume", version, about = "Precomputed lighting, measured against a path tracer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene with the Vulkan renderer (headless) to EXR and PNG.
+    Render(RenderArgs),
+    /// Render the ground truth with the CPU path tracer to a layered EXR (direct, indirect, combined).
+    Reference(ReferenceArgs),
+    /// Compare two EXR images: RMSE, NRMSE and a false-colour error image.
+    Compare(CompareArgs),
+    /// The main job: render a scene with Vulkan and the reference, compare, write images and a report.
+    Run(RunArgs),
+    /// Regenerate the shipped scenes (scenes/*.gltf) from their generator.
+    Scenes {
+        #[arg(long, default_value = "scenes")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args, Clone)]
+struct SceneArgs {
+    /// A glTF 2.0 scene (.gltf or .glb).
+    scene: PathBuf,
+    /// Camera instead of the scene's: "eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]".
+    #[arg(long)]
+    camera: Option<String>,
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+}
+
+#[derive(Args, Clone)]
+struct GpuArgs {
+    /// Shadow-map size in texels per layer.
+    #[arg(long, default_value_t = 1024)]
+    shadow_map_size: u32,
+    /// Gaussian blur radius of the shadow moments, texels (0: none).
+    #[arg(long, default_value_t = 2)]
+    blur_radius: u32,
+    /// Floor on the variance in the Chebyshev bound (m^2).
+    #[arg(long, default_value_t = 1e-5)]
+    min_variance: f32,
+    /// Light-bleeding reduction in [0, 1).
+    #[arg(long, default_value_t = 0.2)]
+    bleeding_reduction: f32,
+    /// Turn shadows off (shading only).
+    #[arg(long)]
+    no_shadows: bool,
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe;
+    /// the RELUME_DEVICE variable does the same).
+    #[arg(long)]
+    device: Option<String>,
+    /// Turn on the Vulkan validation layers; any message fails the command.
+    #[arg(long)]
+    validation: bool,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Output EXR; a tonemapped PNG is written beside it.
+    #[arg(long, short, default_value = "render.exr")]
+    out: PathBuf,
+    /// Render this many frames and report the median GPU time of every pass.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+}
+
+#[derive(Args, Clone)]
+struct PathTracerArgs {
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    /// Stop after this many seconds (at whole passes over the image).
+    #[arg(long)]
+    time_limit: Option<f64>,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Sample pixel centres only (as a rasteriser does).
+    #[arg(long)]
+    pixel_centres: bool,
+    #[arg(long, default_value_t = 64)]
+    max_bounces: u32,
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    trace: PathTracerArgs,
+    /// Ignore visibility of punctual lights (shading only, to compare with `render --no-shadows`).
+    #[arg(long)]
+    no_shadows: bool,
+    #[arg(long, short, default_value = "reference.exr")]
+    out: PathBuf,
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// The image under test (EXR).
+    image: PathBuf,
+    /// The reference (EXR).
+    reference: PathBuf,
+    /// Layer of the image to compare (default: its first layer).
+    #[arg(long)]
+    layer: Option<String>,
+    /// Layer of the reference (default: "combined" when it has one, else its first layer).
+    #[arg(long)]
+    reference_layer: Option<String>,
+    /// Write a false-colour error image (PNG) here.
+    #[arg(long)]
+    error_image: Option<PathBuf>,
+    /// Error that maps to red in the error image, relative to the reference RMS.
+    #[arg(long, default_value_t = 0.5)]
+    error_scale: f32,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(flatten)]
+    trace: PathTracerArgs,
+    /// Folder for the images and report.md.
+    #[arg(long, short, default_value = "out")]
+    out: PathBuf,
+    /// Frames to time the Vulkan renderer over.
+    #[arg(long, default_value_t = 100)]
+    frames: u32,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(args) => render_command(&args),
+        Command::Reference(args) => reference_command(&args),
+        Command::Compare(args) => compare_command(&args),
+        Command::Run(args) => report::run_main_job(&args),
+        Command::Scenes { out } => {
+            for path in relume_tools::scenegen::write_all(&out)? {
+                println!("wrote {}", path.display());
+            }
+            Ok(())
+        }
+    }
+}
+
+fn load_scene(args: &SceneArgs) -> Result<Scene> {
+    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
+        bail!("image size {}x{} is out of range; use 1..=16384 pixels per side", args.width, args.height);
+    }
+    let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
+    let loaded = load_with_camera(&args.scene, camera.as_ref())?;
+    for warning in &loaded.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(loaded.scene)
+}
+
+fn render_settings(scene: &SceneArgs, gpu: &GpuArgs) -> Result<RenderSettings> {
+    let settings = RenderSettings {
+        width: scene.width,
+        height: scene.height,
+        shadow_map_size: gpu.shadow_map_size,
+        blur_radius: gpu.blur_radius,
+        min_variance: gpu.min_variance,
+        bleeding_reduction: gpu.bleeding_reduction,
+        shadows: !gpu.no_shadows,
+        exposure: gpu.exposure,
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("render settings: {e}"))?;
+    Ok(settings)
+}
+
+/// What a Vulkan render produced: the HDR image, the display pixels, per-frame timings.
+struct GpuRender {
+    radiance: Image,
+    display_rgba: Vec<u8>,
+    frames: Vec<FrameTimings>,
+    device: String,
+}
+
+fn render_on_gpu(scene: &Scene, settings: &RenderSettings, gpu: &GpuArgs, frames: u32) -> Result<GpuRender> {
+    let options = ContextOptions { validation: gpu.validation, device: gpu.device.clone() };
+    let ctx = Context::headless(&options).context("Vulkan")?;
+    let mut renderer = Renderer::new(&ctx, scene, settings).context("Vulkan renderer")?;
+    let result = (|| {
+        let mut timings = Vec::with_capacity(frames as usize);
+        // The first frames warm caches and pipelines; time the rest.
+        for _ in 0..frames.min(3) {
+            renderer.render(&ctx)?;
+        }
+        for _ in 0..frames {
+            timings.push(renderer.render(&ctx)?);
+        }
+        let (radiance, display_rgba) = renderer.render_and_read(&ctx)?;
+        Ok::<_, relume_renderer::vk::VkError>(GpuRender {
+            radiance,
+            display_rgba,
+            frames: timings,
+            device: format!("{} ({})", ctx.info.name, ctx.info.driver),
+        })
+    })();
+    renderer.destroy(&ctx);
+    let messages = ctx.validation_messages();
+    if !messages.is_empty() {
+        bail!("{} Vulkan validation message(s), first: {}", messages.len(), messages[0]);
+    }
+    Ok(result?)
+}
+
+fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
+    rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+fn render_command(args: &RenderArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let settings = render_settings(&args.scene, &args.gpu)?;
+    let frames = args.frames.max(1);
+    let out = render_on_gpu(&scene, &settings, &args.gpu, frames)?;
+    write_render_outputs(&args.out, &out)?;
+    println!("device: {}", out.device);
+    print_timings(&out.frames);
+    Ok(())
+}
+
+fn write_render_outputs(exr_path: &Path, out: &GpuRender) -> Result<()> {
+    image::write_exr_layers(exr_path, &[("radiance", &out.radiance)])?;
+    let png = exr_path.with_extension("png");
+    let (w, h) = (out.radiance.width, out.radiance.height);
+    image::write_png_rgb8(&png, w, h, &rgba_to_rgb(&out.display_rgba))?;
+    println!("wrote {} and {}", exr_path.display(), png.display());
+    Ok(())
+}
+
+/// Median GPU time of each pass over the timed frames, then the frame total.
+pub(crate) fn median_timings(frames: &[FrameTimings]) -> Vec<(String, f64)> {
+    let Some(first) = frames.first() else { return Vec::new() };
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut rows: Vec<_> = first
+        .passes_ms
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| (name.to_string(), median(frames.iter().map(|f| f.passes_ms[i].1).collect())))
+        .collect();
+    if !rows.is_empty() {
+        rows.push(("frame".into(), median(frames.iter().map(|f| f.total_ms).collect())));
+    }
+    rows
+}
+
+fn print_timings(frames: &[FrameTimings]) {
+    let rows = median_timings(frames);
+    if rows.is_empty() {
+        println!("the device reports no timestamps");
+        return;
+    }
+    println!("GPU time, median of {} frame(s):", frames.len());
+    for (name, ms) in rows {
+        println!("  {name:<12} {ms:>9.3} ms");
+    }
+}
+
+fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shadows: bool) -> Result<ReferenceSettings> {
+    if trace.spp == 0 {
+        bail!("--spp 0: take at least one sample per pixel");
+    }
+    let max_time = match trace.time_limit {
+        Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
+        Some(s) => Some(Duration::from_secs_f64(s)),
+        None => None,
+    };
+    if trace.threads == Some(0) {
+        bail!("--threads 0: use at least one thread");
+    }
+    Ok(ReferenceSettings {
+        samples_per_pixel: trace.spp,
+        max_time,
+        seed: trace.seed,
+        width: scene.width,
+        height: scene.height,
+        max_bounces: trace.max_bounces,
+        pixel_centres: trace.pixel_centres,
+        shadows,
+        threads: trace.threads,
+        progress: true,
+    })
+}
+
+/// The reference's three layers and how they were made.
+pub(crate) struct ReferenceRun {
+    images: relume_bake::reference::ReferenceImages,
+    seconds: f64,
+}
+
+fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> ReferenceRun {
+    let start = Instant::now();
+    let bvh = SceneBvh::new(scene);
+    let images = render_reference(scene, &bvh, settings);
+    ReferenceRun { images, seconds: start.elapsed().as_secs_f64() }
+}
+
+fn write_reference(path: &Path, run: &ReferenceRun, exposure: f32) -> Result<()> {
+    let i = &run.images;
+    image::write_exr_layers(path, &[("direct", &i.direct), ("indirect", &i.indirect), ("combined", &i.combined)])?;
+    let png = path.with_extension("png");
+    image::write_png_tonemapped(&png, &i.combined, exposure)?;
+    println!("wrote {} and {}", path.display(), png.display());
+    Ok(())
+}
+
+fn reference_command(args: &ReferenceArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
+    let run = trace_reference(&scene, &settings);
+    write_reference(&args.out, &run, args.exposure)?;
+    println!(
+        "{} samples per pixel in {:.2} s, {:.0} paths/s",
+        run.images.samples_per_pixel, run.seconds, run.images.paths_per_second
+    );
+    if run.images.nonfinite_samples > 0 {
+        bail!("{} samples were NaN or infinite; the scene holds degenerate data", run.images.nonfinite_samples);
+    }
+    Ok(())
+}
+
+fn compare_command(args: &CompareArgs) -> Result<()> {
+    let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
+    let reference = match &args.reference_layer {
+        Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,
+        None => image::read_exr_layer(&args.reference, Some("combined"))
+            .or_else(|_| image::read_exr_layer(&args.reference, None))?,
+    };
+    let stats = metrics::compare(&image, &reference)
+        .with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
+    println!("RMSE  {:.6}\nNRMSE {:.6}", stats.rmse, stats.nrmse);
+    if let Some(path) = &args.error_image {
+        let rgb = metrics::false_colour(&image, &reference, args.error_scale)?;
+        image::write_png_rgb8(path, image.width, image.height, &rgb)?;
+        println!("wrote {}", path.display());
+    }
+    if stats.non_finite_pixels > 0 {
+        bail!("{}: {} pixel(s) are NaN or infinite", args.image.display(), stats.non_finite_pixels);
+    }
+    Ok(())
+}
