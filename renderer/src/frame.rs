@@ -165,9 +165,22 @@ impl Renderer {
     }
 
     /// Records one whole frame into `rec` (begun by the caller, ended and submitted by the
-    /// caller). `tracker` holds the images' states; after the call it holds what the frame
-    /// left them in (`radiance` and `display` are left as compute storage).
-    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
+    /// caller, who must not submit two frames of one renderer at once). The renderer keeps
+    /// the state of every image it owns across frames, whoever recorded them;
+    /// [`Renderer::image_states`] tells what a frame left them in (`radiance` as compute
+    /// storage read, `display` as compute storage write).
+    pub fn record(&mut self, rec: &CommandRecorder) {
+        let mut tracker = std::mem::take(&mut self.tracker);
+        self.record_passes(rec, &mut tracker);
+        self.tracker = tracker;
+    }
+
+    /// The last use of every image the renderer owns, as recorded so far.
+    pub fn image_states(&self) -> &Tracker {
+        &self.tracker
+    }
+
+    fn record_passes(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
         let timestamp = |i: u32| {
             if let Some(q) = &self.queries {
                 q.write(rec, i)
@@ -214,7 +227,7 @@ impl Renderer {
     fn submit_frame(&mut self, ctx: &Context, read_back: bool) -> VkResult<()> {
         let rec = ctx.begin(self.cmd)?;
         let mut tracker = std::mem::take(&mut self.tracker);
-        self.record(&rec, &mut tracker);
+        self.record_passes(&rec, &mut tracker);
         if read_back {
             tracker.use_image(&rec, &self.radiance, Access::TransferSource);
             tracker.use_image(&rec, &self.display, Access::TransferSource);

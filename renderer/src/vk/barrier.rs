@@ -51,12 +51,6 @@ pub struct Tracker {
 }
 
 impl Tracker {
-    /// States what `image` was last used for before the frame (the caller's contract, for
-    /// images the caller owns); images never seen are taken as `Undefined`.
-    pub fn assume(&mut self, image: &Image, access: Access) {
-        self.last.insert(image.raw, access);
-    }
-
     /// How `image` was last used: what the frame leaves it in, for the caller.
     pub fn state(&self, image: &Image) -> Access {
         self.last.get(&image.raw).copied().unwrap_or(Access::Undefined)

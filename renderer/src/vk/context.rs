@@ -133,6 +133,12 @@ impl Context {
         self.allocator.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    /// The shared log of validation messages; it outlives the context, so teardown messages
+    /// (objects never destroyed) can be read after the context is dropped.
+    pub fn message_log(&self) -> Arc<Mutex<Vec<String>>> {
+        Arc::clone(&self.messages)
+    }
+
     /// Validation warnings and errors reported so far (empty without validation).
     pub fn validation_messages(&self) -> Vec<String> {
         self.messages.lock().map(|m| m.clone()).unwrap_or_default()
