@@ -5,4 +5,5 @@ layout(push_constant) uniform ForwardPush {
     uint shadows;            // 0: visibility off (shading only), 1: variance shadow maps
     float min_variance;
     float bleeding_reduction;
+    uint material;           // of the current draw: one draw per mesh
 } pc;

@@ -1,5 +1,15 @@
 //! relume's CPU side: the scene, images and error metrics (plain data the renderer reads too)
 //! and, behind the `baking` feature, the BVH and the reference path tracer.
 
+pub mod gltf_load;
 pub mod image;
+pub mod metrics;
 pub mod scene;
+pub mod testing;
+
+#[cfg(feature = "baking")]
+pub mod bvh;
+#[cfg(feature = "baking")]
+pub mod sampling;
+#[cfg(feature = "baking")]
+pub mod reference;

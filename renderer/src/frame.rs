@@ -111,7 +111,7 @@ impl Renderer {
         let gpu_scene = GpuScene::upload(ctx, scene)?;
         let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
         let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let sampler = ctx.create_sampler(ctx.info.linear_moments)?;
+        let sampler = ctx.create_sampler(ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments, sampler)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
@@ -161,6 +161,8 @@ impl Renderer {
             shadows: s.shadows as u32,
             min_variance: s.min_variance,
             bleeding_reduction: s.bleeding_reduction,
+            material: 0,
+            _pad: [0; 3],
         }
     }
 

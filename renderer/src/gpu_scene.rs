@@ -1,9 +1,10 @@
 //! The scene as the GPU reads it: one vertex and index buffer for every mesh, the materials,
 //! the lights and the shadow-map layers each light renders. Layouts match `shaders/*.glsl`.
 
-use crate::vk::{vk, Buffer, Context, VkError, VkResult};
+use crate::vk::{vk, Access, Buffer, Context, Image, ImageDesc, Tracker, VkError, VkResult};
 use glam::{Mat4, Vec3, Vec4};
-use relume_bake::scene::{Light, LightKind, Scene};
+use gpu_allocator::MemoryLocation;
+use relume_bake::scene::{Light, LightKind, Scene, Texture};
 
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -11,19 +12,17 @@ pub(crate) struct GpuVertex {
     position: [f32; 3],
     normal: [f32; 3],
     uv0: [f32; 2],
-    material: u32,
 }
 
 pub(crate) const VERTEX_STRIDE: u32 = std::mem::size_of::<GpuVertex>() as u32;
 
-/// Vertex attributes: position, normal, material index (locations 0, 1, 3). uv0 is in the
-/// vertex for the passes that will sample textures; no pass reads it yet.
+/// Vertex attributes: position, normal, uv0 (locations 0-2).
 pub(crate) fn vertex_attributes() -> [vk::VertexInputAttributeDescription; 3] {
     let attribute = |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
     [
         attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
         attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
-        attribute(3, vk::Format::R32_UINT, 32),
+        attribute(2, vk::Format::R32G32_SFLOAT, 24),
     ]
 }
 
@@ -31,7 +30,16 @@ pub(crate) fn vertex_attributes() -> [vk::VertexInputAttributeDescription; 3] {
 #[derive(Clone, Copy)]
 struct GpuMaterial {
     base_color: Vec4,
-    emission: Vec4,
+    /// rgb emission, w the base-colour texture index (-1: none).
+    emission_texture: Vec4,
+}
+
+/// One mesh's index range and material: a draw of the forward pass.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Draw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub material: u32,
 }
 
 #[repr(C)]
@@ -65,6 +73,10 @@ pub(crate) struct GpuScene {
     pub materials: Buffer,
     pub lights: Buffer,
     pub layers: Buffer,
+    pub draws: Vec<Draw>,
+    /// Base-colour textures in linear RGBA32F, sampled with repeat; one white texel when
+    /// the scene has none, so the shader's texture array is never empty.
+    pub textures: Vec<Image>,
     pub light_kinds: Vec<LightKind>,
     pub shadow_views: Vec<ShadowView>,
     bounds: (Vec3, Vec3),
@@ -72,11 +84,14 @@ pub(crate) struct GpuScene {
 
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> VkResult<GpuScene> {
-        let (vertices, indices) = flatten_meshes(scene);
+        let (vertices, indices, draws) = flatten_meshes(scene);
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
-            .map(|m| GpuMaterial { base_color: m.base_color, emission: m.emission.extend(0.0) })
+            .map(|m| GpuMaterial {
+                base_color: m.base_color,
+                emission_texture: m.emission.extend(m.base_color_texture.map_or(-1.0, |t| t as f32)),
+            })
             .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let light_kinds: Vec<_> = scene.lights.iter().map(|l| l.kind).collect();
@@ -94,6 +109,8 @@ impl GpuScene {
             materials: Buffer::with_data(ctx, "materials", storage, &materials)?,
             lights: Buffer::with_data(ctx, "lights", storage, &vec![GpuLight::default(); scene.lights.len().max(1)])?,
             layers: Buffer::with_data(ctx, "shadow layers", storage, &vec![Mat4::ZERO; shadow_views.len().max(1)])?,
+            draws,
+            textures: upload_textures(ctx, &scene.textures)?,
             light_kinds,
             shadow_views,
             bounds: scene.bounds(),
@@ -133,26 +150,76 @@ impl GpuScene {
         for buffer in [&mut self.vertices, &mut self.indices, &mut self.materials, &mut self.lights, &mut self.layers] {
             buffer.destroy(ctx);
         }
+        for texture in &mut self.textures {
+            texture.destroy(ctx);
+        }
     }
 }
 
-fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>) {
+fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
     let mut vertices = Vec::new();
     let mut indices = Vec::new();
+    let mut draws = Vec::with_capacity(scene.meshes.len());
     for mesh in &scene.meshes {
         let base = vertices.len() as u32;
         for (i, (p, n)) in mesh.positions.iter().zip(&mesh.normals).enumerate() {
             let uv = mesh.uv0.as_ref().map_or(glam::Vec2::ZERO, |uv| uv[i]);
-            vertices.push(GpuVertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-                uv0: uv.to_array(),
-                material: mesh.material as u32,
-            });
+            vertices.push(GpuVertex { position: p.to_array(), normal: n.to_array(), uv0: uv.to_array() });
         }
+        draws.push(Draw {
+            first_index: indices.len() as u32,
+            index_count: mesh.indices.len() as u32,
+            material: mesh.material as u32,
+        });
         indices.extend(mesh.indices.iter().map(|i| i + base));
     }
-    (vertices, indices)
+    (vertices, indices, draws)
+}
+
+/// Uploads every texture through one staging buffer and one submission, at creation.
+fn upload_textures(ctx: &Context, textures: &[Texture]) -> VkResult<Vec<Image>> {
+    let white = Texture { name: "white".into(), width: 1, height: 1, texels: vec![Vec4::ONE] };
+    let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
+    let texel_count: usize = textures.iter().map(|t| t.texels.len()).sum();
+    let staging = Buffer::new(ctx, "texture staging", (texel_count * 16) as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+    let mut images = Vec::with_capacity(textures.len());
+    let result = (|| {
+        let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
+        staging.write(&all_texels)?;
+        let cmd = ctx.allocate_command_buffer()?;
+        let fence = ctx.create_fence()?;
+        let rec = ctx.begin(cmd)?;
+        let mut tracker = Tracker::default();
+        let mut offset = 0u64;
+        for texture in textures {
+            let image = Image::new(ctx, &texture.name, ImageDesc {
+                width: texture.width,
+                height: texture.height,
+                layers: 1,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+                view_type: vk::ImageViewType::TYPE_2D,
+            })?;
+            tracker.use_image(&rec, &image, Access::TransferDestination);
+            rec.copy_buffer_to_image_at(staging.raw, offset, &image);
+            tracker.use_image(&rec, &image, Access::FragmentSampled);
+            offset += texture.texels.len() as u64 * 16;
+            images.push(image);
+        }
+        let submitted = ctx.submit_and_wait(rec, fence);
+        ctx.destroy_fence(fence);
+        ctx.free_command_buffer(cmd);
+        submitted
+    })();
+    let mut staging = staging;
+    staging.destroy(ctx);
+    match result {
+        Ok(()) => Ok(images),
+        Err(e) => {
+            images.iter_mut().for_each(|i| i.destroy(ctx));
+            Err(e)
+        }
+    }
 }
 
 fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {

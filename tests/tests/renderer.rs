@@ -129,3 +129,25 @@ fn a_validation_error_is_caught() {
     let messages = ctx.validation_messages();
     assert!(messages.iter().any(|m| m.contains("size")), "no validation message: {messages:?}");
 }
+
+#[test]
+fn base_colour_textures_match_the_reference() {
+    let mut plane = testing::square(Vec3::ZERO, Vec3::X * 2.0, -Vec3::Z * 2.0, 2, 0);
+    // Two repeats of the texture across the plane, so repeat wrapping is exercised.
+    plane.uv0 = Some(plane.positions.iter().map(|p| glam::Vec2::new(p.x + 2.0, p.z + 2.0) * 0.5).collect());
+    let checker: Vec<glam::Vec4> = (0..16)
+        .map(|i| if (i % 4 + i / 4) % 2 == 0 { glam::Vec4::new(1.0, 0.2, 0.1, 1.0) } else { glam::Vec4::ONE })
+        .collect();
+    let texture = relume_bake::scene::Texture { name: "checker".into(), width: 4, height: 4, texels: checker };
+    let mut material = testing::material("checked", Vec3::splat(0.8), Vec3::ZERO);
+    material.base_color_texture = Some(0);
+    let camera = testing::look_at(Vec3::new(0.0, 3.0, 3.0), Vec3::ZERO, Vec3::Y, 50f32.to_radians());
+    let light = testing::point_light(Vec3::new(0.3, 2.0, 0.2), Vec3::splat(10.0));
+    let mut scene = testing::scene("checker", vec![plane], vec![material], vec![light], camera);
+    scene.textures.push(texture);
+    let image = render_validated(&scene, &RenderSettings { shadows: false, ..settings() });
+    let reference = reference_direct(&scene, 256, 256, false);
+    let nrmse = nrmse_with_artifacts("textured", &image, &reference);
+    println!("textured plane: NRMSE {nrmse:.5}");
+    assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
+}

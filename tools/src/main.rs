@@ -194,7 +194,7 @@ fn run(cli: Cli) -> Result<()> {
 
 fn load_scene(args: &SceneArgs) -> Result<Scene> {
     if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
-        bail!("image size {}x{} is out of range; use 1..=16384 pixels per side", args.width, args.height);
+        bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
     let loaded = load_with_camera(&args.scene, camera.as_ref())?;

@@ -19,23 +19,30 @@ pub struct ForwardParams {
     pub shadows: u32,
     pub min_variance: f32,
     pub bleeding_reduction: f32,
+    /// The material of the current draw (set per draw by the pass).
+    pub material: u32,
+    pub _pad: [u32; 3],
 }
 
 pub struct ForwardPass {
     pipeline: GraphicsPipeline,
     descriptors: DescriptorSet,
+    texture_sampler: vk::Sampler,
 }
 
 impl ForwardPass {
-    pub(crate) fn new(ctx: &Context, scene: &GpuScene, moments: &Image, sampler: vk::Sampler) -> VkResult<ForwardPass> {
+    pub(crate) fn new(ctx: &Context, scene: &GpuScene, moments: &Image, shadow_sampler: vk::Sampler) -> VkResult<ForwardPass> {
+        // Textures are filtered by hand in the shader (texelFetch); the sampler only binds them.
+        let texture_sampler = ctx.create_sampler(false, vk::SamplerAddressMode::REPEAT)?;
         let descriptors = DescriptorSet::new(
             ctx,
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             &[
                 Binding::StorageBuffer(scene.lights.raw),
                 Binding::StorageBuffer(scene.layers.raw),
-                Binding::SampledImage { view: moments.view, sampler },
+                Binding::SampledImages { views: vec![moments.view], sampler: shadow_sampler },
                 Binding::StorageBuffer(scene.materials.raw),
+                Binding::SampledImages { views: scene.textures.iter().map(|t| t.view).collect(), sampler: texture_sampler },
             ],
         )?;
         let pipeline = GraphicsPipeline::new(ctx, &GraphicsPipelineDesc {
@@ -49,11 +56,13 @@ impl ForwardPass {
             cull_mode: vk::CullModeFlags::NONE,
             set_layout: descriptors.layout,
             push_bytes: std::mem::size_of::<ForwardParams>() as u32,
+            fragment_constants: &[scene.textures.len() as u32],
         })?;
-        Ok(ForwardPass { pipeline, descriptors })
+        Ok(ForwardPass { pipeline, descriptors, texture_sampler })
     }
 
-    /// Reads: `moments` (sampled), scene buffers. Writes: `radiance`, `depth`.
+    /// Reads: `moments` and the textures (sampled), scene buffers. Writes: `radiance`, `depth`.
+    /// One draw per mesh, so the material (and its texture) is uniform across each draw.
     pub(crate) fn record(
         &self,
         rec: &CommandRecorder,
@@ -68,14 +77,18 @@ impl ForwardPass {
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
-        rec.push_constants(self.pipeline.layout, params);
         rec.begin_rendering(radiance.desc.extent(), radiance.view, depth.view);
-        rec.draw_indexed(scene.vertices.raw, scene.indices.raw, scene.index_count);
+        rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
+        for draw in &scene.draws {
+            rec.push_constants(self.pipeline.layout, &ForwardParams { material: draw.material, ..*params });
+            rec.draw_indexed(draw.first_index, draw.index_count);
+        }
         rec.end_rendering();
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
         self.pipeline.destroy(ctx);
         self.descriptors.destroy(ctx);
+        ctx.destroy_sampler(self.texture_sampler);
     }
 }

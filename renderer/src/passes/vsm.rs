@@ -60,6 +60,7 @@ impl VsmPass {
             cull_mode: vk::CullModeFlags::NONE,
             set_layout: descriptors.layout,
             push_bytes: std::mem::size_of::<VsmPush>() as u32,
+            fragment_constants: &[],
         })?;
         Ok(VsmPass { pipeline, descriptors, moments, depth, layer_views })
     }
@@ -72,7 +73,8 @@ impl VsmPass {
             tracker.use_image(rec, &self.depth, Access::DepthAttachmentWrite);
             rec.push_constants(self.pipeline.layout, &VsmPush { light: view.light, layer: view.layer });
             rec.begin_rendering(self.moments.desc.extent(), self.layer_views[view.layer as usize], self.depth.view);
-            rec.draw_indexed(scene.vertices.raw, scene.indices.raw, scene.index_count);
+            rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
+            rec.draw_indexed(0, scene.index_count);
             rec.end_rendering();
         }
     }

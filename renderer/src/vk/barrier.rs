@@ -17,6 +17,7 @@ pub enum Access {
     ComputeStorageRead,
     ComputeStorageWrite,
     TransferSource,
+    TransferDestination,
 }
 
 impl Access {
@@ -36,11 +37,18 @@ impl Access {
             Access::ComputeStorageRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
             Access::ComputeStorageWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
             Access::TransferSource => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
+            Access::TransferDestination => (S::COPY, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         }
     }
 
     fn writes(self) -> bool {
-        matches!(self, Access::ColorAttachmentWrite | Access::DepthAttachmentWrite | Access::ComputeStorageWrite)
+        matches!(
+            self,
+            Access::ColorAttachmentWrite
+                | Access::DepthAttachmentWrite
+                | Access::ComputeStorageWrite
+                | Access::TransferDestination
+        )
     }
 }
 

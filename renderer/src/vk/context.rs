@@ -193,15 +193,16 @@ impl Context {
         Ok(())
     }
 
-    /// Creates the clamp-to-edge sampler shadow maps are read through.
-    pub fn create_sampler(&self, linear: bool) -> VkResult<vk::Sampler> {
+    /// A sampler without mipmaps: clamp-to-edge for shadow maps, repeat for material
+    /// textures (glTF's default wrap, as the path tracer samples them).
+    pub fn create_sampler(&self, linear: bool, address: vk::SamplerAddressMode) -> VkResult<vk::Sampler> {
         let filter = if linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_u(address)
+            .address_mode_v(address)
+            .address_mode_w(address)
             .max_lod(0.0);
         // SAFETY: a valid create info.
         Ok(unsafe { self.device.create_sampler(&info, None) }?)
@@ -326,13 +327,18 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_end_rendering(self.cmd) };
     }
 
-    pub fn draw_indexed(&self, vertices: vk::Buffer, indices: vk::Buffer, index_count: u32) {
-        // SAFETY: recording state inside rendering; buffers hold the declared data.
+    pub fn bind_geometry(&self, vertices: vk::Buffer, indices: vk::Buffer) {
+        // SAFETY: recording state; the buffers hold vertices and u32 indices.
         unsafe {
             self.device.cmd_bind_vertex_buffers(self.cmd, 0, &[vertices], &[0]);
             self.device.cmd_bind_index_buffer(self.cmd, indices, 0, vk::IndexType::UINT32);
-            self.device.cmd_draw_indexed(self.cmd, index_count, 1, 0, 0, 0);
         }
+    }
+
+    /// Draws `count` indices from `first` of the bound geometry.
+    pub fn draw_indexed(&self, first: u32, count: u32) {
+        // SAFETY: recording state inside rendering; the range lies in the bound index buffer.
+        unsafe { self.device.cmd_draw_indexed(self.cmd, count, 1, first, 0, 0) };
     }
 
     /// Copies an image (one layer, tightly packed) into a buffer.
@@ -342,6 +348,17 @@ impl<'a> CommandRecorder<'a> {
             .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (tracker) and the buffer is large enough.
         unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
+    }
+
+    /// Fills layer 0 of an image (in TRANSFER_DST_OPTIMAL) from tightly packed buffer data
+    /// starting at `offset` bytes.
+    pub fn copy_buffer_to_image_at(&self, buffer: vk::Buffer, offset: u64, image: &super::Image) {
+        let region = vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(1))
+            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+        // SAFETY: the image is in TRANSFER_DST_OPTIMAL (tracker) and the buffer holds its texels.
+        unsafe { self.device.cmd_copy_buffer_to_image(self.cmd, buffer, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]) };
     }
 
     /// Makes the transfer writes of this submission visible to the host after its fence.

@@ -7,7 +7,8 @@ use ash::vk;
 /// One binding and the resource it points at.
 pub enum Binding {
     StorageBuffer(vk::Buffer),
-    SampledImage { view: vk::ImageView, sampler: vk::Sampler },
+    /// An array of sampled images, all read through one sampler (one view: a single image).
+    SampledImages { views: Vec<vk::ImageView>, sampler: vk::Sampler },
     StorageImage(vk::ImageView),
 }
 
@@ -15,8 +16,33 @@ impl Binding {
     fn kind(&self) -> vk::DescriptorType {
         match self {
             Binding::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Binding::SampledImage { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::SampledImages { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+
+    fn count(&self) -> u32 {
+        match self {
+            Binding::SampledImages { views, .. } => views.len() as u32,
+            _ => 1,
+        }
+    }
+
+    fn image_infos(&self) -> Vec<vk::DescriptorImageInfo> {
+        match self {
+            Binding::SampledImages { views, sampler } => views
+                .iter()
+                .map(|view| {
+                    vk::DescriptorImageInfo::default()
+                        .image_view(*view)
+                        .sampler(*sampler)
+                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                })
+                .collect(),
+            Binding::StorageImage(view) => {
+                vec![vk::DescriptorImageInfo::default().image_view(*view).image_layout(vk::ImageLayout::GENERAL)]
+            }
+            Binding::StorageBuffer(_) => Vec::new(),
         }
     }
 }
@@ -37,13 +63,13 @@ impl DescriptorSet {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
                     .descriptor_type(b.kind())
-                    .descriptor_count(1)
+                    .descriptor_count(b.count())
                     .stage_flags(stages)
             })
             .collect();
         let pool_sizes: Vec<_> = bindings
             .iter()
-            .map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: 1 })
+            .map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: b.count() })
             .collect();
         let device = &ctx.device;
         // SAFETY: create infos refer to locals alive for each call; objects are destroyed in
@@ -75,19 +101,7 @@ impl DescriptorSet {
                 _ => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
-        let image_infos: Vec<_> = bindings
-            .iter()
-            .map(|b| match b {
-                Binding::SampledImage { view, sampler } => [vk::DescriptorImageInfo::default()
-                    .image_view(*view)
-                    .sampler(*sampler)
-                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
-                Binding::StorageImage(view) => {
-                    [vk::DescriptorImageInfo::default().image_view(*view).image_layout(vk::ImageLayout::GENERAL)]
-                }
-                Binding::StorageBuffer(_) => [vk::DescriptorImageInfo::default()],
-            })
-            .collect();
+        let image_infos: Vec<_> = bindings.iter().map(Binding::image_infos).collect();
         let writes: Vec<_> = bindings
             .iter()
             .enumerate()

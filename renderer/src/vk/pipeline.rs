@@ -61,6 +61,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub cull_mode: vk::CullModeFlags,
     pub set_layout: vk::DescriptorSetLayout,
     pub push_bytes: u32,
+    /// Fragment specialization constants: `constant_id = i` takes `fragment_constants[i]`.
+    pub fragment_constants: &'a [u32],
 }
 
 pub struct GraphicsPipeline {
@@ -73,9 +75,18 @@ impl GraphicsPipeline {
         let layout = pipeline_layout(ctx, desc.set_layout, desc.push_bytes)?;
         let vertex = shader_module(ctx, desc.vertex)?;
         let fragment = shader_module(ctx, desc.fragment)?;
+        let entries: Vec<_> = (0..desc.fragment_constants.len())
+            .map(|i| vk::SpecializationMapEntry { constant_id: i as u32, offset: 4 * i as u32, size: 4 })
+            .collect();
+        let constant_bytes: Vec<u8> = desc.fragment_constants.iter().flat_map(|c| c.to_ne_bytes()).collect();
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(&constant_bytes);
         let stages = [
             vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex).name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fragment).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fragment)
+                .name(c"main")
+                .specialization_info(&specialization),
         ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)

@@ -1,0 +1,401 @@
+//! Ray casting against a whole [`Scene`]: every mesh's triangles in one compressed wide BVH
+//! (obvhs' CWBVH), with a watertight triangle test.
+//!
+//! The path tracer and the bakers reach the geometry only through [`SceneBvh::closest_hit`] and
+//! [`SceneBvh::occluded`] (plus [`SceneBvh::offset_origin`] for leaving a surface), so another
+//! backend can replace this one behind the same three calls.
+//!
+//! Two facts about obvhs shape this file:
+//! - The primitive ids its traversal hands to the intersection closure are positions in the
+//!   BVH's leaf order, not input order. The triangles are therefore copied into leaf order
+//!   once at build time (`leaf_triangles`), and `leaf_primitive` maps a leaf slot back to the
+//!   scene's triangle.
+//! - Its box test never reports boxes closer than a fixed 1e-4 along the ray, so geometry
+//!   nearer than that to a ray origin may be missed. Rays that leave a surface therefore start
+//!   [`SceneBvh::epsilon`] off it (at least 1e-4, more in large scenes, where f32 positions are
+//!   coarser), along the geometric normal, on the side the ray leaves to.
+
+use crate::scene::Scene;
+use glam::{Mat3A, Vec2, Vec3, Vec3A};
+use obvhs::{
+    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    ray::{Ray, RayHit},
+    triangle::Triangle,
+    BvhBuildParams,
+};
+use std::time::Duration;
+
+/// A ray's closest intersection, with what shading needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance along the (unit) ray direction.
+    pub t: f32,
+    /// The hit point, interpolated from the triangle's vertices (more precise than o + t d).
+    pub position: Vec3,
+    /// Unit normal of the triangle's plane on its front side: counter-clockwise winding, as
+    /// glTF defines front faces. Not flipped towards the ray.
+    pub geometric_normal: Vec3,
+    /// The mesh's vertex normals interpolated and renormalised (the geometric normal where
+    /// they cancel out). Not flipped towards the ray.
+    pub shading_normal: Vec3,
+    /// Barycentric weights of the triangle's second and third vertices (the first has
+    /// 1 - x - y).
+    pub barycentrics: Vec2,
+    /// Interpolated first texture coordinate (zero when the mesh has none).
+    pub uv0: Vec2,
+    /// Index into [`Scene::meshes`].
+    pub mesh: u32,
+    /// Triangle index within that mesh (its indices are `3 * triangle ..`).
+    pub triangle: u32,
+    /// Index of the triangle in the scene's flattened triangle list (meshes in order); see
+    /// [`SceneBvh::primitive_index`].
+    pub primitive: u32,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+/// Per-triangle shading data in the scene's flattened order.
+#[derive(Clone, Copy, Debug)]
+struct Primitive {
+    positions: [Vec3; 3],
+    normals: [Vec3; 3],
+    uvs: [Vec2; 3],
+    mesh: u32,
+    triangle: u32,
+    material: u32,
+}
+
+/// The scene's triangles in a BVH, owning copies of the data a hit reports (no borrow of the
+/// scene, so it can be built once and shared between threads).
+pub struct SceneBvh {
+    bvh: Option<CwBvh>,
+    /// Triangle vertices in the BVH's leaf order, for the intersection test.
+    leaf_triangles: Vec<[Vec3A; 3]>,
+    /// Flattened scene triangle of each leaf slot.
+    leaf_primitive: Vec<u32>,
+    primitives: Vec<Primitive>,
+    /// First flattened index of each mesh.
+    mesh_offsets: Vec<u32>,
+    epsilon: f32,
+}
+
+impl SceneBvh {
+    /// Builds the BVH over every triangle of every mesh.
+    pub fn new(scene: &Scene) -> Self {
+        let mut primitives = Vec::with_capacity(scene.triangle_count());
+        let mut mesh_offsets = Vec::with_capacity(scene.meshes.len());
+        for (mesh_index, mesh) in scene.meshes.iter().enumerate() {
+            mesh_offsets.push(primitives.len() as u32);
+            for (triangle, idx) in mesh.indices.chunks_exact(3).enumerate() {
+                let i = [idx[0] as usize, idx[1] as usize, idx[2] as usize];
+                let uv = |k: usize| mesh.uv0.as_ref().map_or(Vec2::ZERO, |uv| uv[i[k]]);
+                primitives.push(Primitive {
+                    positions: i.map(|k| mesh.positions[k]),
+                    normals: i.map(|k| mesh.normals[k]),
+                    uvs: [uv(0), uv(1), uv(2)],
+                    mesh: mesh_index as u32,
+                    triangle: triangle as u32,
+                    material: mesh.material as u32,
+                });
+            }
+        }
+        let triangles: Vec<Triangle> = primitives
+            .iter()
+            .map(|p| Triangle {
+                v0: p.positions[0].into(),
+                v1: p.positions[1].into(),
+                v2: p.positions[2].into(),
+            })
+            .collect();
+        let (bvh, leaf_triangles, leaf_primitive) = if triangles.is_empty() {
+            (None, Vec::new(), Vec::new())
+        } else {
+            // medium_build does not split triangles, so the leaf order is a permutation.
+            let bvh = build_cwbvh_from_tris(
+                &triangles,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            );
+            let leaf_triangles = bvh
+                .primitive_indices
+                .iter()
+                .map(|&i| {
+                    let t = &triangles[i as usize];
+                    [t.v0, t.v1, t.v2]
+                })
+                .collect();
+            let leaf_primitive = bvh.primitive_indices.clone();
+            (Some(bvh), leaf_triangles, leaf_primitive)
+        };
+
+        let (lo, hi) = scene.bounds();
+        let magnitude = if primitives.is_empty() {
+            0.0
+        } else {
+            lo.abs().max(hi.abs()).max_element()
+        };
+        SceneBvh {
+            bvh,
+            leaf_triangles,
+            leaf_primitive,
+            primitives,
+            mesh_offsets,
+            epsilon: 1e-4 + 1e-5 * magnitude,
+        }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.primitives.len()
+    }
+
+    /// The flattened index of a mesh's triangle, as [`Hit::primitive`] reports it.
+    pub fn primitive_index(&self, mesh: usize, triangle: usize) -> u32 {
+        self.mesh_offsets[mesh] + triangle as u32
+    }
+
+    /// The three world-space vertices of a flattened triangle.
+    pub fn primitive_positions(&self, primitive: u32) -> [Vec3; 3] {
+        self.primitives[primitive as usize].positions
+    }
+
+    /// The material of a flattened triangle.
+    pub fn primitive_material(&self, primitive: u32) -> u32 {
+        self.primitives[primitive as usize].material
+    }
+
+    /// How far rays start off a surface: 1e-4 (obvhs' minimum box distance) plus 1e-5 of the
+    /// largest coordinate magnitude in the scene (about 170 f32 ulps there), which covers
+    /// the rounding of hit positions.
+    pub fn epsilon(&self) -> f32 {
+        self.epsilon
+    }
+
+    /// A ray origin for leaving the surface at `point` in direction `dir`: moved
+    /// [`Self::epsilon`] along the geometric normal, to the side `dir` points to, so the ray
+    /// cannot hit the surface it starts on.
+    #[inline]
+    pub fn offset_origin(&self, point: Vec3, geometric_normal: Vec3, dir: Vec3) -> Vec3 {
+        let side = if geometric_normal.dot(dir) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        point + geometric_normal * (side * self.epsilon)
+    }
+
+    /// The closest triangle the ray `origin + t dir`, 0 < t < `t_max`, hits. `dir` should be
+    /// unit length so that `t` is a distance.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let wt = WatertightRay::new(origin, dir);
+        let mut hit = RayHit::none();
+        let mut best = (0.0f32, 0.0f32);
+        let found = bvh.ray_traverse(ray, &mut hit, |r, leaf| {
+            match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
+                Some((t, b1, b2)) => {
+                    best = (b1, b2);
+                    t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        if !found {
+            return None;
+        }
+        let primitive = self.leaf_primitive[hit.primitive_id as usize];
+        Some(self.make_hit(primitive, hit.t, Vec2::new(best.0, best.1)))
+    }
+
+    /// Whether anything blocks the ray `origin + t dir` for 0 < t < `t_max` (a shadow ray;
+    /// stops at the first blocker found, not the closest).
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let wt = WatertightRay::new(origin, dir);
+        !bvh.ray_traverse_miss(ray, |r, leaf| {
+            wt.intersect(&self.leaf_triangles[leaf], r.tmax)
+                .map_or(f32::INFINITY, |h| h.0)
+        })
+    }
+
+    fn make_hit(&self, primitive: u32, t: f32, bary: Vec2) -> Hit {
+        let p = &self.primitives[primitive as usize];
+        let w = Vec3::new(1.0 - bary.x - bary.y, bary.x, bary.y);
+        let [p0, p1, p2] = p.positions;
+        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let shading = p.normals[0] * w.x + p.normals[1] * w.y + p.normals[2] * w.z;
+        let shading_normal = shading.try_normalize().unwrap_or(geometric_normal);
+        Hit {
+            t,
+            position: p0 * w.x + p1 * w.y + p2 * w.z,
+            geometric_normal,
+            shading_normal,
+            barycentrics: bary,
+            uv0: p.uvs[0] * w.x + p.uvs[1] * w.y + p.uvs[2] * w.z,
+            mesh: p.mesh,
+            triangle: p.triangle,
+            primitive,
+            material: p.material,
+        }
+    }
+}
+
+/// Per-ray constants of the watertight ray/triangle test of Woop, Benthin and Wald,
+/// "Watertight Ray/Triangle Intersection" (JCGT 2(1), 2013): vertices are moved to the ray's
+/// origin and sheared so the ray becomes the +z axis; the three 2D edge functions are then
+/// evaluated identically for the two triangles that share an edge, so no ray slips between
+/// neighbours. That matters for the analytic tests: a ray leaking out of a closed furnace
+/// would read black.
+struct WatertightRay {
+    origin: Vec3A,
+    /// Rows (Sx, Sy, Sz) of the shear as a matrix, so one vertex is transformed with three
+    /// SIMD multiply-adds. Each row has one exact zero, so every component is rounded exactly
+    /// as the paper's scalar code rounds it and watertightness is kept.
+    shear: Mat3A,
+}
+
+impl WatertightRay {
+    #[inline]
+    fn new(origin: Vec3, dir: Vec3) -> Self {
+        // kz: the dominant axis; kx, ky the other two, swapped when dir[kz] < 0 to keep the
+        // winding. Each row of the shear written out per case, no indexed stores.
+        let a = dir.abs();
+        let (x, y, z) = (dir.x, dir.y, dir.z);
+        let shear = if a.z >= a.x && a.z >= a.y {
+            let (sx, sy) = if z < 0.0 {
+                (y / z, x / z)
+            } else {
+                (x / z, y / z)
+            };
+            let (ex, ey) = if z < 0.0 {
+                (Vec3A::Y, Vec3A::X)
+            } else {
+                (Vec3A::X, Vec3A::Y)
+            };
+            [ex - Vec3A::Z * sx, ey - Vec3A::Z * sy, Vec3A::Z / z]
+        } else if a.x >= a.y {
+            // kz = x: (kx, ky) = (y, z).
+            let (sx, sy) = if x < 0.0 {
+                (z / x, y / x)
+            } else {
+                (y / x, z / x)
+            };
+            let (ex, ey) = if x < 0.0 {
+                (Vec3A::Z, Vec3A::Y)
+            } else {
+                (Vec3A::Y, Vec3A::Z)
+            };
+            [ex - Vec3A::X * sx, ey - Vec3A::X * sy, Vec3A::X / x]
+        } else {
+            // kz = y: (kx, ky) = (z, x).
+            let (sx, sy) = if y < 0.0 {
+                (x / y, z / y)
+            } else {
+                (z / y, x / y)
+            };
+            let (ex, ey) = if y < 0.0 {
+                (Vec3A::X, Vec3A::Z)
+            } else {
+                (Vec3A::Z, Vec3A::X)
+            };
+            [ex - Vec3A::Y * sx, ey - Vec3A::Y * sy, Vec3A::Y / y]
+        };
+        WatertightRay {
+            origin: origin.into(),
+            shear: Mat3A::from_cols(shear[0], shear[1], shear[2]).transpose(),
+        }
+    }
+
+    /// (t, b1, b2) of a hit with 0 < t < t_max, or None.
+    #[inline(always)]
+    fn intersect(&self, tri: &[Vec3A; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+        let a = self.shear * (tri[0] - self.origin);
+        let b = self.shear * (tri[1] - self.origin);
+        let c = self.shear * (tri[2] - self.origin);
+        let mut u = c.x * b.y - c.y * b.x;
+        let mut v = a.x * c.y - a.y * c.x;
+        let mut w = b.x * a.y - b.y * a.x;
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            // On an edge in single precision: decide it in double, as the paper does, so the
+            // two triangles sharing the edge still agree.
+            let e = |px: f32, py: f32, qx: f32, qy: f32| {
+                (px as f64 * qy as f64 - py as f64 * qx as f64) as f32
+            };
+            u = e(c.x, c.y, b.x, b.y);
+            v = e(a.x, a.y, c.x, c.y);
+            w = e(b.x, b.y, a.x, a.y);
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let t_scaled = u * a.z + v * b.z + w * c.z;
+        let inv = 1.0 / det;
+        let t = t_scaled * inv;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        Some((t, v * inv, w * inv))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn single(tri: [Vec3; 3]) -> [Vec3A; 3] {
+        tri.map(Vec3A::from)
+    }
+
+    #[test]
+    fn watertight_test_reports_distance_and_barycentrics() {
+        let tri = single([
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ]);
+        let ray = WatertightRay::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z);
+        let (t, b1, b2) = ray.intersect(&tri, f32::INFINITY).unwrap();
+        assert!((t - 2.0).abs() < 1e-6 && (b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
+        // From behind too (surfaces are two-sided for intersection).
+        let ray = WatertightRay::new(Vec3::new(0.25, 0.5, -3.0), Vec3::Z);
+        let (t, b1, b2) = ray.intersect(&tri, f32::INFINITY).unwrap();
+        assert!((t - 3.0).abs() < 1e-6 && (b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
+        assert!(ray.intersect(&tri, 2.5).is_none());
+        let miss = WatertightRay::new(Vec3::new(0.75, 0.5, 2.0), Vec3::NEG_Z);
+        assert!(miss.intersect(&tri, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn shared_edge_is_hit_by_exactly_one_or_both_never_neither() {
+        // Two triangles of a quad, rays aimed along the shared diagonal in many directions.
+        let q = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let t0 = single([q[0], q[1], q[2]]);
+        let t1 = single([q[0], q[2], q[3]]);
+        for i in 0..2000 {
+            let s = i as f32 / 2000.0;
+            let target = Vec3::new(-0.9 + 1.8 * s, -0.9 + 1.8 * s, 0.0);
+            let origin = Vec3::new(
+                0.3 * (i as f32).sin(),
+                0.7 * (i as f32 * 1.3).cos(),
+                1.0 + s,
+            );
+            let dir = (target - origin).normalize();
+            let ray = WatertightRay::new(origin, dir);
+            let hits = ray.intersect(&t0, f32::INFINITY).is_some() as u32
+                + ray.intersect(&t1, f32::INFINITY).is_some() as u32;
+            assert!(hits >= 1, "ray {i} slipped through the shared edge");
+        }
+    }
+}

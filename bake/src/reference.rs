@@ -1,0 +1,601 @@
+//! The ground-truth path tracer every method in relume is measured against.
+//!
+//! Light transport, deliberately plain so that it can be trusted:
+//! - Surfaces are Lambertian, f = albedo / pi, albedo = [`Material::albedo`] at uv0. They
+//!   scatter on both sides: the shading normal is flipped to face the arriving ray. A direction
+//!   below the *geometric* surface gets f = 0 (as pbrt does), so interpolated normals never
+//!   let light through a surface.
+//! - Emissive triangles emit [`Material::emission`] from their front face only (the side of
+//!   the counter-clockwise geometric normal, glTF's front face).
+//! - Punctual lights are delta lights, reached only by next-event estimation: every vertex
+//!   asks every light for [`Light::incident`], times the cosine at the receiver, times a shadow
+//!   ray that stops at [`Incident::distance`](crate::scene::Incident::distance).
+//! - Emissive triangles are reached by both next-event estimation (a triangle picked in
+//!   proportion to its power, a uniform point on it) and BSDF sampling (cosine-weighted), the
+//!   two combined by multiple importance sampling with the power heuristic (Veach and Guibas,
+//!   1995). Both pdfs are solid-angle densities at the shading point and use the same
+//!   triangle-selection probability, so the weights sum to one for every path.
+//! - Russian roulette on every continuation from the fourth path vertex on (light with up to
+//!   four bounces is never cut), survival probability min(max throughput channel, 0.95),
+//!   throughput divided by it: unbiased, which the furnace test checks to 0.5 %.
+//! - A ray that hits nothing sees black.
+//!
+//! "Bounces" counts scattering events between the light and the camera: emission seen
+//! directly has 0, light reflected once has 1. The `direct` layer holds bounces 0 and 1, the
+//! `indirect` layer 2 and more.
+//!
+//! Determinism: every random number is a function of (seed, pixel, sample, dimension)
+//! ([`crate::sampling`]) and each pixel sums its samples in sample order, so the output bytes
+//! depend on the settings and the seed only, never on the thread count or on how samples were
+//! split into passes.
+
+use crate::bvh::{Hit, SceneBvh};
+use crate::image::Image;
+use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
+use crate::scene::{Light, Material, Scene};
+use glam::{Vec2, Vec3};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use std::f32::consts::PI;
+use std::time::{Duration, Instant};
+
+/// The first path vertex (0 = where the camera ray lands) whose continuation Russian roulette
+/// may cut.
+const ROULETTE_FROM_VERTEX: u32 = 3;
+/// The largest number of samples per pixel one pass over the image takes: small enough that
+/// a time limit is not overshot by much and the progress bar moves.
+const MAX_PASS_SAMPLES: u32 = 16;
+
+#[derive(Clone, Debug)]
+pub struct ReferenceSettings {
+    pub samples_per_pixel: u32,
+    /// Stop early, after the last whole pass over the image that fits in this time (at least
+    /// one sample per pixel is always taken).
+    pub max_time: Option<Duration>,
+    pub seed: u64,
+    pub width: u32,
+    pub height: u32,
+    /// The most scattering events a path may have (Russian roulette usually ends it sooner).
+    pub max_bounces: u32,
+    /// Every sample goes through its pixel's centre instead of a jittered point in the pixel,
+    /// so each pixel sees exactly the surface point a rasteriser shades there.
+    pub pixel_centres: bool,
+    /// When false, punctual lights ignore visibility (a debug mode for comparing unshadowed
+    /// shading against the rasteriser). Emissive triangles are always shadowed.
+    pub shadows: bool,
+    /// Worker threads; None uses rayon's global pool (all cores).
+    pub threads: Option<usize>,
+    /// Draw a progress bar on stderr (indicatif hides it when stderr is not a terminal).
+    pub progress: bool,
+}
+
+impl Default for ReferenceSettings {
+    fn default() -> Self {
+        ReferenceSettings {
+            samples_per_pixel: 64,
+            max_time: None,
+            seed: 0,
+            width: 256,
+            height: 256,
+            max_bounces: 64,
+            pixel_centres: false,
+            shadows: true,
+            threads: None,
+            progress: false,
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct ReferenceImages {
+    /// Emission seen directly plus light after exactly one bounce.
+    pub direct: Image,
+    /// Light after two or more bounces.
+    pub indirect: Image,
+    /// `direct + indirect`, computed per pixel in f32 so the identity holds exactly.
+    pub combined: Image,
+    /// Samples per pixel actually taken: fewer than asked when the time limit hit.
+    pub samples_per_pixel: u32,
+    /// Camera paths traced per second of wall time.
+    pub paths_per_second: f64,
+    /// Samples whose contribution was NaN or infinite, counted as black. Always zero unless
+    /// the scene holds degenerate data; reported so that a failure is never silent.
+    pub nonfinite_samples: u64,
+}
+
+/// Renders the scene's camera view with the reference path tracer.
+pub fn render_reference(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &ReferenceSettings,
+) -> ReferenceImages {
+    let integrator = Integrator::new(scene, bvh, settings);
+    let (width, height) = (settings.width, settings.height);
+    let pixel_count = (width as usize) * (height as usize);
+    // Per pixel: direct rgb, indirect rgb, summed in f64 in sample order.
+    let mut sums = vec![[0.0f64; 6]; pixel_count];
+    let mut nonfinite = vec![0u64; height as usize];
+
+    let progress = if settings.progress {
+        let bar = ProgressBar::new(settings.samples_per_pixel as u64 * height as u64);
+        if let Ok(style) = ProgressStyle::with_template(
+            "reference {bar:40} {percent:>3}% {elapsed_precise} (eta {eta})",
+        ) {
+            bar.set_style(style);
+        }
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+
+    let start = Instant::now();
+    let mut taken = 0u32;
+    let mut pass = 1u32;
+    with_threads(settings.threads, || {
+        while taken < settings.samples_per_pixel && pixel_count > 0 {
+            if let (Some(limit), true) = (settings.max_time, taken > 0) {
+                let elapsed = start.elapsed();
+                let per_sample = elapsed.as_secs_f64() / taken as f64;
+                let fit = (limit.saturating_sub(elapsed).as_secs_f64() / per_sample).floor();
+                if fit < 1.0 {
+                    break;
+                }
+                pass = pass.min(fit as u32);
+            }
+            let samples = taken..taken + pass.min(settings.samples_per_pixel - taken);
+            sums.par_chunks_mut(width as usize)
+                .zip(nonfinite.par_iter_mut())
+                .enumerate()
+                .for_each(|(y, (row, bad))| {
+                    for (x, sum) in row.iter_mut().enumerate() {
+                        *bad += integrator.pixel(x as u32, y as u32, samples.clone(), sum);
+                    }
+                    progress.inc(samples.len() as u64);
+                });
+            taken = samples.end;
+            pass = (pass * 2).min(MAX_PASS_SAMPLES);
+        }
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+
+    let mut direct = Image::new(width, height);
+    let mut indirect = Image::new(width, height);
+    let mut combined = Image::new(width, height);
+    if taken > 0 {
+        let scale = 1.0 / taken as f64;
+        for (i, s) in sums.iter().enumerate() {
+            let d = Vec3::new(
+                (s[0] * scale) as f32,
+                (s[1] * scale) as f32,
+                (s[2] * scale) as f32,
+            );
+            let n = Vec3::new(
+                (s[3] * scale) as f32,
+                (s[4] * scale) as f32,
+                (s[5] * scale) as f32,
+            );
+            direct.pixels[i] = d;
+            indirect.pixels[i] = n;
+            combined.pixels[i] = d + n;
+        }
+    }
+    let paths = taken as f64 * pixel_count as f64;
+    ReferenceImages {
+        direct,
+        indirect,
+        combined,
+        samples_per_pixel: taken,
+        paths_per_second: if seconds > 0.0 { paths / seconds } else { 0.0 },
+        nonfinite_samples: nonfinite.iter().sum(),
+    }
+}
+
+/// The image mean of the radiance that reaches the camera after exactly k bounces, for
+/// k = 0..=`last_bounce` (element k). Traced exactly as [`render_reference`] traces (same
+/// paths, same seed); `max_time` and `progress` are ignored, every sample is taken. For a
+/// closed scene with albedo a and no emitters in view, element k + 1 is about a times
+/// element k: what the energy test checks.
+pub fn radiance_by_bounce(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &ReferenceSettings,
+    last_bounce: u32,
+) -> Vec<Vec3> {
+    let integrator = Integrator::new(scene, bvh, settings);
+    let slots = last_bounce as usize + 1;
+    let rows: Vec<Vec<[f64; 3]>> = with_threads(settings.threads, || {
+        (0..settings.height)
+            .into_par_iter()
+            .map(|y| {
+                let mut row = vec![[0.0f64; 3]; slots];
+                for x in 0..settings.width {
+                    for s in 0..settings.samples_per_pixel {
+                        integrator.trace_sample(x, y, s, &mut |bounce, l| {
+                            if let Some(r) = row.get_mut(bounce as usize) {
+                                r[0] += l.x as f64;
+                                r[1] += l.y as f64;
+                                r[2] += l.z as f64;
+                            }
+                        });
+                    }
+                }
+                row
+            })
+            .collect()
+    });
+    // Summed in row order, so the result does not depend on the thread count.
+    let mut total = vec![[0.0f64; 3]; slots];
+    for row in &rows {
+        for (t, r) in total.iter_mut().zip(row) {
+            for c in 0..3 {
+                t[c] += r[c];
+            }
+        }
+    }
+    let n = settings.samples_per_pixel as f64 * settings.width as f64 * settings.height as f64;
+    let scale = if n > 0.0 { 1.0 / n } else { 0.0 };
+    total
+        .iter()
+        .map(|t| {
+            Vec3::new(
+                (t[0] * scale) as f32,
+                (t[1] * scale) as f32,
+                (t[2] * scale) as f32,
+            )
+        })
+        .collect()
+}
+
+/// Irradiance from the scene's punctual lights at `point` on a surface with unit `normal`,
+/// with visibility: the sum over lights of [`Light::incident`] irradiance times the cosine,
+/// for lights in front of the surface and not blocked. Shadow rays start
+/// [`SceneBvh::epsilon`] off the point along `normal`. Emissive triangles are not included.
+pub fn direct_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal: Vec3) -> Vec3 {
+    scene
+        .lights
+        .iter()
+        .filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true))
+        .sum()
+}
+
+/// Irradiance on the shading normal `ns` from one punctual light, or None when the light is
+/// behind the surface (either normal), outside its cone or range, or blocked.
+#[inline]
+fn punctual_irradiance(
+    bvh: &SceneBvh,
+    light: &Light,
+    point: Vec3,
+    ns: Vec3,
+    ng: Vec3,
+    shadows: bool,
+) -> Option<Vec3> {
+    let incident = light.incident(point);
+    if incident.irradiance.max_element() <= 0.0 {
+        return None;
+    }
+    let cos = ns.dot(incident.to_light);
+    if cos <= 0.0 || ng.dot(incident.to_light) <= 0.0 {
+        return None;
+    }
+    if shadows {
+        let origin = bvh.offset_origin(point, ng, incident.to_light);
+        let t_max = (incident.distance - bvh.epsilon()).max(0.0);
+        if bvh.occluded(origin, incident.to_light, t_max) {
+            return None;
+        }
+    }
+    Some(incident.irradiance * cos)
+}
+
+/// Power heuristic (beta = 2) weight of the strategy with density `a` against one with `b`.
+#[inline]
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// Emissive triangles and the distribution next-event estimation picks them from.
+struct Emitters {
+    /// Flattened primitive index of each emissive triangle.
+    primitives: Vec<u32>,
+    /// Cumulative selection probability; the last entry is 1. In f64 and picked with 53-bit
+    /// numbers, so that even among millions of emitters the odds of each are what `pdf_area`
+    /// says.
+    cdf: Vec<f64>,
+    /// For every flattened primitive: its selection probability divided by its area (the
+    /// area density of a light sample on it), 0 for non-emitters. The probability is the
+    /// difference of consecutive `cdf` entries, exactly what sampling the cdf yields, so both
+    /// MIS strategies see the same number.
+    pdf_area: Vec<f32>,
+}
+
+impl Emitters {
+    fn new(scene: &Scene, bvh: &SceneBvh) -> Self {
+        let mut primitives = Vec::new();
+        let mut power = Vec::new();
+        let mut areas = Vec::new();
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            let emission = scene.materials[mesh.material].emission;
+            let lum = luminance(emission);
+            if lum <= 0.0 {
+                continue;
+            }
+            for t in 0..mesh.indices.len() / 3 {
+                let prim = bvh.primitive_index(m, t);
+                let [p0, p1, p2] = bvh.primitive_positions(prim);
+                let area = 0.5 * (p1 - p0).cross(p2 - p0).length();
+                if area > 0.0 && area.is_finite() {
+                    primitives.push(prim);
+                    power.push(lum as f64 * area as f64);
+                    areas.push(area);
+                }
+            }
+        }
+        let total: f64 = power.iter().sum();
+        let mut cdf = Vec::with_capacity(power.len());
+        let mut running = 0.0f64;
+        for p in &power {
+            running += p;
+            cdf.push(running / total);
+        }
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        let mut pdf_area = vec![0.0f32; bvh.triangle_count()];
+        for (i, &prim) in primitives.iter().enumerate() {
+            let previous = if i == 0 { 0.0 } else { cdf[i - 1] };
+            pdf_area[prim as usize] = ((cdf[i] - previous) / areas[i] as f64) as f32;
+        }
+        Emitters {
+            primitives,
+            cdf,
+            pdf_area,
+        }
+    }
+
+    /// The emitter a uniform number in [0, 1) picks.
+    #[inline]
+    fn pick(&self, u: f64) -> u32 {
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1);
+        self.primitives[i]
+    }
+}
+
+/// Rec. 709 luminance, the weight of an emitter's colour in its selection power.
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+struct Integrator<'a> {
+    scene: &'a Scene,
+    bvh: &'a SceneBvh,
+    emitters: Emitters,
+    seed: u64,
+    width: u32,
+    height: u32,
+    max_bounces: u32,
+    pixel_centres: bool,
+    shadows: bool,
+}
+
+impl<'a> Integrator<'a> {
+    fn new(scene: &'a Scene, bvh: &'a SceneBvh, settings: &ReferenceSettings) -> Self {
+        Integrator {
+            scene,
+            bvh,
+            emitters: Emitters::new(scene, bvh),
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+            max_bounces: settings.max_bounces,
+            pixel_centres: settings.pixel_centres,
+            shadows: settings.shadows,
+        }
+    }
+
+    /// Adds samples `samples` of pixel (x, y) to `sum` (direct rgb, indirect rgb); returns
+    /// how many samples were non-finite (left out of the sum, so counted as black).
+    fn pixel(&self, x: u32, y: u32, samples: std::ops::Range<u32>, sum: &mut [f64; 6]) -> u64 {
+        let mut bad = 0;
+        for s in samples {
+            let (mut direct, mut indirect) = (Vec3::ZERO, Vec3::ZERO);
+            self.trace_sample(x, y, s, &mut |bounce, l| {
+                if bounce <= 1 {
+                    direct += l;
+                } else {
+                    indirect += l;
+                }
+            });
+            if direct.is_finite() && indirect.is_finite() {
+                for c in 0..3 {
+                    sum[c] += direct[c] as f64;
+                    sum[3 + c] += indirect[c] as f64;
+                }
+            } else {
+                bad += 1;
+            }
+        }
+        bad
+    }
+
+    /// Traces sample `s` of pixel (x, y), handing each contribution and its bounce count to
+    /// `sink`.
+    fn trace_sample(&self, x: u32, y: u32, s: u32, sink: &mut impl FnMut(u32, Vec3)) {
+        let sampler = PathSampler::new(self.seed, y * self.width + x, s);
+        let jitter = if self.pixel_centres {
+            Vec2::splat(0.5)
+        } else {
+            let u = sampler.sobol4(0);
+            Vec2::new(u[0], u[1])
+        };
+        let camera = &self.scene.camera;
+        let dir = camera.ray_direction(
+            x as f32 + jitter.x,
+            y as f32 + jitter.y,
+            self.width,
+            self.height,
+        );
+        self.trace_path(&sampler, camera.position(), dir, sink);
+    }
+
+    fn trace_path(
+        &self,
+        sampler: &PathSampler,
+        mut origin: Vec3,
+        mut dir: Vec3,
+        sink: &mut impl FnMut(u32, Vec3),
+    ) {
+        let scene = self.scene;
+        let mut throughput = Vec3::ONE;
+        // Solid-angle density with which `dir` was sampled and the point it left from (both
+        // unused for the camera ray, which cannot be produced by light sampling).
+        let mut bsdf_pdf = 0.0f32;
+        let mut previous = origin;
+        for bounce in 0.. {
+            let Some(hit) = self.bvh.closest_hit(origin, dir, f32::INFINITY) else {
+                break;
+            };
+            let material: &Material = &scene.materials[hit.material as usize];
+            let wo = -dir;
+
+            // Emission reaching the path here: light that has bounced `bounce` times.
+            let cos_light = hit.geometric_normal.dot(wo);
+            if cos_light > 0.0 && material.emission.max_element() > 0.0 {
+                let weight = if bounce == 0 {
+                    1.0
+                } else {
+                    let distance2 = (hit.position - previous).length_squared();
+                    let light_pdf =
+                        self.emitters.pdf_area[hit.primitive as usize] * distance2 / cos_light;
+                    power_heuristic(bsdf_pdf, light_pdf)
+                };
+                sink(bounce, throughput * material.emission * weight);
+            }
+            if bounce >= self.max_bounces {
+                break;
+            }
+            let albedo = material.albedo(&scene.textures, hit.uv0);
+            if albedo.max_element() <= 0.0 {
+                break;
+            }
+            let f = albedo * (1.0 / PI);
+            // Two-sided scattering: both normals on the side the ray came from.
+            let ng = if hit.geometric_normal.dot(wo) >= 0.0 {
+                hit.geometric_normal
+            } else {
+                -hit.geometric_normal
+            };
+            let ns = if hit.shading_normal.dot(wo) >= 0.0 {
+                hit.shading_normal
+            } else {
+                -hit.shading_normal
+            };
+            let p = hit.position;
+
+            for light in &scene.lights {
+                if let Some(e) = punctual_irradiance(self.bvh, light, p, ns, ng, self.shadows) {
+                    sink(bounce + 1, throughput * f * e);
+                }
+            }
+
+            let u = sampler.sobol4(1 + bounce);
+            if !self.emitters.primitives.is_empty() {
+                let pick = sampler.uniform_f64(2 * bounce);
+                if let Some(l) = self.sample_emitter(&hit, p, ns, ng, pick, Vec2::new(u[2], u[3])) {
+                    sink(bounce + 1, throughput * f * l);
+                }
+            }
+
+            // Cosine-weighted continuation: f cos / pdf = albedo.
+            let (t, b) = orthonormal_basis(ns);
+            let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
+            let wi = t * local.x + b * local.y + ns * local.z;
+            if local.z <= 0.0 || ng.dot(wi) <= 0.0 {
+                break;
+            }
+            throughput *= albedo;
+            if bounce >= ROULETTE_FROM_VERTEX {
+                let survive = throughput.max_element().min(0.95);
+                if sampler.uniform(2 * bounce + 1) >= survive {
+                    break;
+                }
+                throughput /= survive;
+            }
+            bsdf_pdf = local.z * (1.0 / PI);
+            previous = p;
+            origin = self.bvh.offset_origin(p, ng, wi);
+            dir = wi;
+        }
+    }
+
+    /// Next-event estimate from the emissive triangles at `p`, MIS-weighted against BSDF
+    /// sampling: Le cos / pdf times the weight, still to be multiplied by f and the
+    /// throughput. None when the sample contributes nothing.
+    fn sample_emitter(
+        &self,
+        hit: &Hit,
+        p: Vec3,
+        ns: Vec3,
+        ng: Vec3,
+        pick: f64,
+        u: Vec2,
+    ) -> Option<Vec3> {
+        let prim = self.emitters.pick(pick);
+        if prim == hit.primitive {
+            return None; // A flat emitter cannot light itself.
+        }
+        let [v0, v1, v2] = self.bvh.primitive_positions(prim);
+        let bary = uniform_triangle(u);
+        let q = v0 * bary.x + v1 * bary.y + v2 * bary.z;
+        let light_normal = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+        let to = q - p;
+        let distance2 = to.length_squared();
+        if distance2 <= 0.0 {
+            return None;
+        }
+        let wi = to / distance2.sqrt();
+        let cos_light = -light_normal.dot(wi);
+        let cos_surface = ns.dot(wi);
+        if cos_light <= 0.0 || cos_surface <= 0.0 || ng.dot(wi) <= 0.0 {
+            return None;
+        }
+        let light_pdf = self.emitters.pdf_area[prim as usize] * distance2 / cos_light;
+        if light_pdf <= 0.0 {
+            return None;
+        }
+        // The shadow segment runs between the two surfaces, each end moved off its surface.
+        let from = self.bvh.offset_origin(p, ng, wi);
+        let to_point = self.bvh.offset_origin(q, light_normal, -wi);
+        let segment = to_point - from;
+        let length = segment.length();
+        if length <= 0.0 || (segment.dot(wi) <= 0.0) {
+            return None;
+        }
+        if self.bvh.occluded(from, segment / length, length) {
+            return None;
+        }
+        let material = &self.scene.materials[self.bvh.primitive_material(prim) as usize];
+        let weight = power_heuristic(light_pdf, cos_surface * (1.0 / PI));
+        Some(material.emission * (cos_surface * weight / light_pdf))
+    }
+}
+
+/// Runs `f` on a local pool of `threads` workers, or on rayon's global pool when None.
+fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+    match threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("could not start the path tracer's worker threads")
+            .install(f),
+        None => f(),
+    }
+}

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs what relume needs from Debian when it is missing: Mesa's lavapipe (software
+# Vulkan), the Vulkan loader and validation layers, and shaderc with the glslang and
+# SPIRV-Tools static libraries it links against. Safe to run again: it installs nothing
+# that is already there.
+set -euo pipefail
+
+packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
+          libshaderc-dev glslang-dev spirv-tools)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if ! command -v cargo >/dev/null; then
+  echo "setup: cargo is missing; install a Rust toolchain (rustup) first" >&2
+  exit 1
+fi

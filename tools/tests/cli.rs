@@ -1,0 +1,174 @@
+//! The `relume` program refuses bad input with one clear line naming the file and the item,
+//! a non-zero exit code, no panic, and no output file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("relume-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// A one-triangle scene lit by a point light; `positions` and `indices` may be made invalid.
+fn write_scene(dir: &Path, positions: [[f32; 3]; 3], indices: [u32; 3], with_light: bool) -> PathBuf {
+    let mut bin = Vec::new();
+    for p in positions.iter().flatten() {
+        bin.extend_from_slice(&p.to_le_bytes());
+    }
+    for i in indices {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    std::fs::write(dir.join("scene.bin"), &bin).expect("write bin");
+    let light_ext = r#""extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 10}]}},"#;
+    let light_node = r#",{"translation": [0, 2, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}"#;
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, {ext}
+      "scene": 0, "scenes": [{{"nodes": [0{light_ref}]}}],
+      "nodes": [{{"mesh": 0}}{light_node}],
+      "meshes": [{{"name": "Tri", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+      "buffers": [{{"uri": "scene.bin", "byteLength": 48}}],
+      "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 12}}],
+      "accessors": [
+        {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}},
+        {{"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"}}]}}"#,
+        ext = if with_light { light_ext } else { "" },
+        light_ref = if with_light { ",1" } else { "" },
+        light_node = if with_light { light_node } else { "" },
+    );
+    let path = dir.join("scene.gltf");
+    std::fs::write(&path, json).expect("write gltf");
+    path
+}
+
+const GOOD: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+/// Runs `relume reference` (the CPU path; no GPU needed) and checks the refusal.
+fn assert_refused(scene: &Path, expected: &[&str]) {
+    let out = scene.with_file_name("out.exr");
+    let result = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .args(["reference", "--width", "8", "--height", "8", "--spp", "1", "--out"])
+        .arg(&out)
+        .arg(scene)
+        .output()
+        .expect("run relume");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success(), "accepted {}: {stderr}", scene.display());
+    assert_eq!(result.status.code(), Some(1), "a panic exits with 101: {stderr}");
+    let lines: Vec<_> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "one error line expected, got:\n{stderr}");
+    assert!(lines[0].starts_with("error: "), "{stderr}");
+    for word in expected {
+        assert!(lines[0].contains(word), "\"{word}\" missing from: {stderr}");
+    }
+    assert!(!out.exists(), "an output file was left behind");
+    let leftovers: Vec<_> = std::fs::read_dir(scene.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("out."))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary output left behind: {leftovers:?}");
+}
+
+#[test]
+fn a_good_scene_is_accepted() {
+    let dir = temp_dir("good");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let out = dir.join("out.exr");
+    let status = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .args(["reference", "--width", "8", "--height", "8", "--spp", "1", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .status()
+        .expect("run relume");
+    assert!(status.success());
+    assert!(out.exists());
+}
+
+#[test]
+fn a_missing_file_is_refused() {
+    let dir = temp_dir("missing");
+    assert_refused(&dir.join("nowhere.gltf"), &["nowhere.gltf"]);
+}
+
+#[test]
+fn a_missing_buffer_is_refused() {
+    let dir = temp_dir("missing-bin");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    std::fs::remove_file(dir.join("scene.bin")).unwrap();
+    assert_refused(&scene, &["scene.gltf", "scene.bin"]);
+}
+
+#[test]
+fn a_truncated_buffer_is_refused() {
+    let dir = temp_dir("truncated");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let bin = std::fs::read(dir.join("scene.bin")).unwrap();
+    std::fs::write(dir.join("scene.bin"), &bin[..20]).unwrap();
+    assert_refused(&scene, &["scene.gltf", "scene.bin"]);
+}
+
+#[test]
+fn nan_positions_are_refused() {
+    let dir = temp_dir("nan");
+    let scene = write_scene(&dir, [[0.0, f32::NAN, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], [0, 1, 2], true);
+    assert_refused(&scene, &["scene.gltf", "Tri"]);
+}
+
+#[test]
+fn an_index_out_of_range_is_refused() {
+    let dir = temp_dir("index");
+    let scene = write_scene(&dir, GOOD, [0, 1, 7], true);
+    assert_refused(&scene, &["scene.gltf", "Tri", "7"]);
+}
+
+#[test]
+fn a_scene_without_lights_is_refused() {
+    let dir = temp_dir("dark");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], false);
+    assert_refused(&scene, &["scene.gltf", "light"]);
+}
+
+#[test]
+fn impossible_parameters_are_refused() {
+    let dir = temp_dir("params");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    for args in [["--spp", "0"], ["--time-limit=-3", ""], ["--threads", "0"], ["--width", "0"]] {
+        let result = Command::new(env!("CARGO_BIN_EXE_relume"))
+            .arg("reference")
+            .args(args.iter().filter(|a| !a.is_empty()))
+            .arg(&scene)
+            .current_dir(&dir)
+            .output()
+            .expect("run relume");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
+        let flag = args[0].trim_start_matches("--").split(['-', '=']).next().unwrap();
+        assert!(stderr.contains(flag), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn comparing_images_of_different_sizes_is_refused() {
+    let dir = temp_dir("compare");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    for (size, name) in [("8", "a.exr"), ("4", "b.exr")] {
+        let status = Command::new(env!("CARGO_BIN_EXE_relume"))
+            .args(["reference", "--width", size, "--height", size, "--spp", "1", "--out"])
+            .arg(dir.join(name))
+            .arg(&scene)
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+    let result = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .arg("compare")
+        .arg(dir.join("a.exr"))
+        .arg(dir.join("b.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(result.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&result.stderr).contains("8x8"));
+}
