@@ -14,6 +14,11 @@ pub struct ErrorStats {
     pub nrmse: f64,
     /// Pixels of the method image that hold a NaN or an infinity (any is a failure).
     pub non_finite_pixels: usize,
+    /// Pixels the reference leaves black (an umbra, in a direct layer).
+    pub dark_pixels: usize,
+    /// Light the image puts where the reference is black: the mean channel value over those
+    /// pixels, relative to the reference RMS. Shadow light-bleeding shows here.
+    pub dark_leak: f64,
 }
 
 fn check_sizes(image: &Image, reference: &Image) -> Result<(), ImageError> {
@@ -34,11 +39,15 @@ fn check_sizes(image: &Image, reference: &Image) -> Result<(), ImageError> {
 pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageError> {
     check_sizes(image, reference)?;
     let (mut squared_error, mut squared_reference, mut values) = (0.0f64, 0.0f64, 0usize);
-    let mut non_finite_pixels = 0;
+    let (mut non_finite_pixels, mut dark_pixels, mut dark_light) = (0, 0, 0.0f64);
     for (a, r) in image.pixels.iter().zip(&reference.pixels) {
         if !a.is_finite() {
             non_finite_pixels += 1;
             continue;
+        }
+        if *r == Vec3::ZERO {
+            dark_pixels += 1;
+            dark_light += a.as_dvec3().element_sum() / 3.0;
         }
         let d = (*a - *r).as_dvec3();
         squared_error += d.length_squared();
@@ -47,8 +56,9 @@ pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageErro
     }
     let rmse = (squared_error / values.max(1) as f64).sqrt();
     let reference_rms = (squared_reference / values.max(1) as f64).sqrt();
-    let nrmse = if reference_rms > 0.0 { rmse / reference_rms } else { f64::INFINITY };
-    Ok(ErrorStats { rmse, nrmse, non_finite_pixels })
+    let relative = |x: f64| if reference_rms > 0.0 { x / reference_rms } else { f64::INFINITY };
+    let dark_leak = relative(dark_light / dark_pixels.max(1) as f64);
+    Ok(ErrorStats { rmse, nrmse: relative(rmse), non_finite_pixels, dark_pixels, dark_leak })
 }
 
 /// A false-colour picture of the per-pixel error: the mean absolute channel error divided by
@@ -118,6 +128,18 @@ mod tests {
         let stats = compare(&a, &flat(Vec3::ONE)).unwrap();
         assert_eq!(stats.non_finite_pixels, 1);
         assert_eq!(stats.nrmse, 0.0);
+    }
+
+    #[test]
+    fn light_where_the_reference_is_black_is_measured() {
+        let mut r = flat(Vec3::splat(2.0));
+        r.pixels[0] = Vec3::ZERO;
+        let mut a = r.clone();
+        a.pixels[0] = Vec3::splat(0.5);
+        let stats = compare(&a, &r).unwrap();
+        assert_eq!(stats.dark_pixels, 1);
+        let reference_rms = (3.0f64 * 4.0 / 4.0).sqrt();
+        assert!((stats.dark_leak - 0.5 / reference_rms).abs() < 1e-9, "{stats:?}");
     }
 
     #[test]

@@ -384,6 +384,9 @@ fn compare_command(args: &CompareArgs) -> Result<()> {
     let stats = metrics::compare(&image, &reference)
         .with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
     println!("RMSE  {:.6}\nNRMSE {:.6}", stats.rmse, stats.nrmse);
+    if stats.dark_pixels > 0 {
+        println!("light where the reference is black: {:.6} of its RMS over {} pixels", stats.dark_leak, stats.dark_pixels);
+    }
     if let Some(path) = &args.error_image {
         let rgb = metrics::false_colour(&image, &reference, args.error_scale)?;
         image::write_png_rgb8(path, image.width, image.height, &rgb)?;
