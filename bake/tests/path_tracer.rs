@@ -722,23 +722,3 @@ fn bvh_matches_brute_force() {
     }
     assert!(hits > 1000, "only {hits} rays hit");
 }
-
-#[test]
-#[ignore = "benchmark: cargo test -p relume-bake --test path_tracer -- --ignored --nocapture"]
-fn paths_per_second() {
-    let s = busy_scene();
-    for threads in [1, 2] {
-        let settings = ReferenceSettings {
-            samples_per_pixel: 16,
-            width: 128,
-            height: 96,
-            threads: Some(threads),
-            ..Default::default()
-        };
-        let images = render(&s, &settings);
-        eprintln!(
-            "busy scene, {threads} thread(s): {:.0} paths/s",
-            images.paths_per_second
-        );
-    }
-}
