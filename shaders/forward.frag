@@ -7,16 +7,15 @@
 
 struct Material {
     vec4 base_color;
-    vec4 emission_texture;   // rgb emission, w base-colour texture index (-1: none)
+    vec4 emission;
+    vec4 texture;            // base-colour texture: width, height, array layer (-1: none)
 };
-
-layout(constant_id = 0) const uint TEXTURE_COUNT = 1u;
 
 layout(std430, set = 0, binding = 0) readonly buffer Lights { Light lights[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Layers { ShadowLayer layers[]; };
 layout(set = 0, binding = 2) uniform sampler2DArray shadow_moments;
 layout(std430, set = 0, binding = 3) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 4) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 4) uniform sampler2DArray textures;
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
@@ -25,18 +24,22 @@ layout(location = 0) out vec4 radiance;
 
 // Bilinear filtering with repeat wrapping done by hand from texelFetch, texel centres at
 // (i + 0.5) / size: the same arithmetic as relume_bake::scene::Texture::sample_bilinear.
-// (Mesa 22.3's llvmpipe aborts compiling a REPEAT + LINEAR sampler on RGBA32F.)
-vec4 sample_bilinear_repeat(int index, vec2 uv) {
-    ivec2 size = textureSize(textures[index], 0);
+// By hand because each texture fills only the top-left of its array layer, and because
+// Mesa 22.3's llvmpipe aborts compiling a REPEAT + LINEAR sampler on RGBA32F.
+vec4 texel_repeat(ivec2 i, ivec2 size, int layer) {
+    return texelFetch(textures, ivec3((i % size + size) % size, layer), 0);
+}
+
+vec4 sample_bilinear_repeat(vec4 texture_info, vec2 uv) {
+    ivec2 size = ivec2(texture_info.xy);
+    int layer = int(texture_info.z);
     vec2 x = uv * vec2(size) - 0.5;
     vec2 base = floor(x);
     vec2 f = x - base;
     ivec2 i = ivec2(base);
-    vec4 t00 = texelFetch(textures[index], (i % size + size) % size, 0);
-    vec4 t10 = texelFetch(textures[index], ((i + ivec2(1, 0)) % size + size) % size, 0);
-    vec4 t01 = texelFetch(textures[index], ((i + ivec2(0, 1)) % size + size) % size, 0);
-    vec4 t11 = texelFetch(textures[index], ((i + ivec2(1, 1)) % size + size) % size, 0);
-    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
+    vec4 top = mix(texel_repeat(i, size, layer), texel_repeat(i + ivec2(1, 0), size, layer), f.x);
+    vec4 bottom = mix(texel_repeat(i + ivec2(0, 1), size, layer), texel_repeat(i + ivec2(1, 1), size, layer), f.x);
+    return mix(top, bottom, f.y);
 }
 
 float visibility(Light light, vec3 p) {
@@ -53,14 +56,13 @@ void main() {
     Material m = materials[pc.material];
     vec3 to_camera = normalize(pc.camera_position.xyz - world_position);
     vec3 n = normalize(world_normal);
-    bool front = dot(n, to_camera) >= 0.0;
-    // Surfaces scatter on both sides, as in the reference path tracer; they emit from the front.
-    if (!front) n = -n;
+    // Surfaces scatter on both sides, as in the reference path tracer, which turns the
+    // shading normal towards the viewer; they emit from their front (counter-clockwise) face.
+    if (dot(n, to_camera) < 0.0) n = -n;
+    bool front = gl_FrontFacing;
     vec3 albedo = m.base_color.rgb;
-    // The texture index is uniform across the draw (one draw per mesh, material in push constants).
-    int texture_index = int(m.emission_texture.w);
-    if (texture_index >= 0) albedo *= sample_bilinear_repeat(texture_index, uv0).rgb;
-    vec3 result = front ? m.emission_texture.rgb : vec3(0.0);
+    if (m.texture.z >= 0.0) albedo *= sample_bilinear_repeat(m.texture, uv0).rgb;
+    vec3 result = front ? m.emission.rgb : vec3(0.0);
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec3 to_light;
         vec3 irradiance = incident_light(lights[i], world_position, to_light);

@@ -7,7 +7,7 @@ use crate::passes::forward::{ForwardParams, ForwardPass, DEPTH_FORMAT, RADIANCE_
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
-use crate::vk::{vk, Access, Buffer, CommandRecorder, Context, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
+use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
 use gpu_allocator::MemoryLocation;
 use relume_bake::image::Image as HdrImage;
 use relume_bake::scene::{Camera, Light, Scene};
@@ -68,41 +68,42 @@ impl RenderSettings {
 /// The passes in frame order; timestamps are written before the first and after each.
 pub const PASS_NAMES: [&str; 4] = ["vsm_moments", "vsm_blur", "forward", "tonemap"];
 
-/// GPU time of each pass of one frame, in milliseconds (empty when the device has no timestamps).
-#[derive(Clone, Debug, Default)]
+const STAMPS: usize = PASS_NAMES.len() + 1;
+
+/// GPU time of each pass of one frame, in milliseconds (None when the device has no timestamps).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct FrameTimings {
-    pub passes_ms: Vec<(&'static str, f64)>,
-    pub total_ms: f64,
+    pub passes_ms: Option<[f64; PASS_NAMES.len()]>,
 }
 
-pub struct Renderer {
+/// The renderer borrows its context: the borrow checker keeps the context alive until every
+/// resource made from it is dropped. Dropping a renderer releases everything it made; the
+/// caller must first wait for any frame it recorded and submitted itself.
+pub struct Renderer<'a> {
+    ctx: &'a Context,
     settings: RenderSettings,
     camera: Camera,
-    scene: GpuScene,
-    vsm: VsmPass,
-    blur: VsmBlurPass,
-    forward: ForwardPass,
-    tonemap: TonemapPass,
-    sampler: vk::Sampler,
+    fence: Fence<'a>,
+    cmd: CommandBuffer<'a>,
+    queries: Option<TimestampQueries<'a>>,
+    readback: (Buffer<'a>, Buffer<'a>),
+    tonemap: TonemapPass<'a>,
+    forward: ForwardPass<'a>,
+    blur: VsmBlurPass<'a>,
+    vsm: VsmPass<'a>,
     /// Linear radiance, the frame's HDR result.
-    pub radiance: Image,
-    depth: Image,
+    pub radiance: Image<'a>,
+    depth: Image<'a>,
     /// Tonemapped sRGB, the frame's display result.
-    pub display: Image,
-    readback: (Buffer, Buffer),
-    queries: Option<TimestampQueries>,
+    pub display: Image<'a>,
+    scene: GpuScene<'a>,
     tracker: Tracker,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
 }
 
-impl Renderer {
+impl<'a> Renderer<'a> {
     /// Uploads the scene and creates every pass and target. Nothing here runs per frame.
-    pub fn new(ctx: &Context, scene: &Scene, settings: &RenderSettings) -> VkResult<Renderer> {
+    pub fn new(ctx: &'a Context, scene: &Scene, settings: &RenderSettings) -> VkResult<Renderer<'a>> {
         settings.validate().map_err(VkError::Invalid)?;
-        if scene.lights.is_empty() && scene.materials.iter().all(|m| m.emission == glam::Vec3::ZERO) {
-            return Err(VkError::Invalid(format!("{}: the scene has no light", scene.source.display())));
-        }
         let (w, h) = (settings.width, settings.height);
         let target = |name, format, usage| {
             Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
@@ -111,39 +112,39 @@ impl Renderer {
         let gpu_scene = GpuScene::upload(ctx, scene)?;
         let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
         let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let sampler = ctx.create_sampler(ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
-        let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments, sampler)?;
+        let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
         let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
         let tonemap = TonemapPass::new(ctx, &radiance, &display)?;
-        let pixels = (w * h) as u64;
+        let pixels = w as u64 * h as u64;
         let readback = (
             Buffer::new(ctx, "radiance readback", pixels * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
             Buffer::new(ctx, "display readback", pixels * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
         );
-        let queries = TimestampQueries::new(ctx, PASS_NAMES.len() as u32 + 1)?;
         Ok(Renderer {
+            ctx,
             settings: settings.clone(),
             camera: scene.camera,
-            scene: gpu_scene,
-            vsm,
-            blur,
-            forward,
+            fence: Fence::new(ctx)?,
+            cmd: CommandBuffer::new(ctx)?,
+            queries: TimestampQueries::new(ctx)?,
+            readback,
             tonemap,
-            sampler,
+            forward,
+            blur,
+            vsm,
             radiance,
             depth,
             display,
-            readback,
-            queries,
+            scene: gpu_scene,
             tracker: Tracker::default(),
-            cmd: ctx.allocate_command_buffer()?,
-            fence: ctx.create_fence()?,
         })
     }
 
-    /// Moves the lights (same kinds and count as the scene had). Takes effect next frame.
+    /// Moves the lights (same kinds and count as the scene had), without allocating. The
+    /// next frame recorded carries the new data in its command buffer, so a frame still in
+    /// flight is not disturbed.
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
         self.scene.set_lights(lights)
     }
@@ -191,12 +192,14 @@ impl Renderer {
         if let Some(q) = &self.queries {
             q.reset(rec);
         }
+        self.scene.record_light_update(rec);
+        let shadows = self.settings.shadows && !self.scene.shadow_views.is_empty();
         timestamp(0);
-        if self.settings.shadows {
+        if shadows {
             self.vsm.record(rec, tracker, &self.scene);
         }
         timestamp(1);
-        if self.settings.shadows {
+        if shadows {
             self.blur.record(rec, tracker, &self.vsm.moments);
         }
         timestamp(2);
@@ -208,64 +211,40 @@ impl Renderer {
     }
 
     /// Renders one frame on the context's queue and waits for its fence (never the device).
-    pub fn render(&mut self, ctx: &Context) -> VkResult<FrameTimings> {
-        self.submit_frame(ctx, false)?;
-        self.timings(ctx)
+    pub fn render(&mut self) -> VkResult<FrameTimings> {
+        self.submit_frame(false)?;
+        self.timings()
     }
 
     /// Renders one frame and reads back its linear radiance and its display image (RGBA8).
-    pub fn render_and_read(&mut self, ctx: &Context) -> VkResult<(HdrImage, Vec<u8>)> {
-        self.submit_frame(ctx, true)?;
-        let (w, h) = (self.settings.width, self.settings.height);
-        let floats = self.readback.0.read_bytes((w * h * 16) as usize)?;
-        let mut radiance = HdrImage::new(w, h);
-        for (pixel, bytes) in radiance.pixels.iter_mut().zip(floats.chunks_exact(16)) {
-            let channel = |i: usize| f32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default());
-            *pixel = glam::Vec3::new(channel(0), channel(1), channel(2));
+    pub fn render_and_read(&mut self) -> VkResult<(HdrImage, Vec<u8>)> {
+        self.submit_frame(true)?;
+        let pixels = self.settings.width as usize * self.settings.height as usize;
+        let floats: &[f32] = bytemuck::try_cast_slice(self.readback.0.mapped_bytes(pixels * 16)?)
+            .map_err(|e| VkError::Invalid(format!("readback is not f32 data: {e}")))?;
+        let mut radiance = HdrImage::new(self.settings.width, self.settings.height);
+        for (pixel, rgba) in radiance.pixels.iter_mut().zip(floats.chunks_exact(4)) {
+            *pixel = glam::Vec3::new(rgba[0], rgba[1], rgba[2]);
         }
-        Ok((radiance, self.readback.1.read_bytes((w * h * 4) as usize)?))
+        Ok((radiance, self.readback.1.mapped_bytes(pixels * 4)?.to_vec()))
     }
 
-    fn submit_frame(&mut self, ctx: &Context, read_back: bool) -> VkResult<()> {
-        let rec = ctx.begin(self.cmd)?;
-        let mut tracker = std::mem::take(&mut self.tracker);
-        self.record_passes(&rec, &mut tracker);
+    fn submit_frame(&mut self, read_back: bool) -> VkResult<()> {
+        let rec = self.ctx.begin(self.cmd.raw)?;
+        self.record(&rec);
         if read_back {
-            tracker.use_image(&rec, &self.radiance, Access::TransferSource);
-            tracker.use_image(&rec, &self.display, Access::TransferSource);
+            self.tracker.use_image(&rec, &self.radiance, Access::TransferSource);
+            self.tracker.use_image(&rec, &self.display, Access::TransferSource);
             rec.copy_image_to_buffer(&self.radiance, self.readback.0.raw);
             rec.copy_image_to_buffer(&self.display, self.readback.1.raw);
             rec.transfer_to_host_barrier();
         }
-        self.tracker = tracker;
-        ctx.submit_and_wait(rec, self.fence)
+        self.ctx.submit_and_wait(rec, &self.fence)
     }
 
-    fn timings(&self, ctx: &Context) -> VkResult<FrameTimings> {
+    fn timings(&self) -> VkResult<FrameTimings> {
         let Some(queries) = &self.queries else { return Ok(FrameTimings::default()) };
-        let stamps = queries.read_ms(ctx, queries.capacity())?;
-        let passes_ms = PASS_NAMES.iter().zip(stamps.windows(2)).map(|(name, w)| (*name, w[1] - w[0])).collect();
-        Ok(FrameTimings { passes_ms, total_ms: stamps[stamps.len() - 1] - stamps[0] })
-    }
-
-    /// Destroys every resource, in reverse order of creation. The GPU must be done with them
-    /// (true after `render`, which waits for its fence).
-    pub fn destroy(mut self, ctx: &Context) {
-        ctx.destroy_fence(self.fence);
-        ctx.free_command_buffer(self.cmd);
-        if let Some(q) = &mut self.queries {
-            q.destroy(ctx);
-        }
-        self.readback.1.destroy(ctx);
-        self.readback.0.destroy(ctx);
-        self.tonemap.destroy(ctx);
-        self.display.destroy(ctx);
-        self.depth.destroy(ctx);
-        self.radiance.destroy(ctx);
-        self.forward.destroy(ctx);
-        ctx.destroy_sampler(self.sampler);
-        self.blur.destroy(ctx);
-        self.vsm.destroy(ctx);
-        self.scene.destroy(ctx);
+        let stamps: [f64; STAMPS] = queries.read_ms()?;
+        Ok(FrameTimings { passes_ms: Some(std::array::from_fn(|i| stamps[i + 1] - stamps[i])) })
     }
 }

@@ -1,13 +1,13 @@
 //! The scene as the GPU reads it: one vertex and index buffer for every mesh, the materials,
 //! the lights and the shadow-map layers each light renders. Layouts match `shaders/*.glsl`.
 
-use crate::vk::{vk, Access, Buffer, Context, Image, ImageDesc, Tracker, VkError, VkResult};
+use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, Tracker, VkError, VkResult};
 use glam::{Mat4, Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use relume_bake::scene::{Light, LightKind, Scene, Texture};
 
 #[repr(C)]
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct GpuVertex {
     position: [f32; 3],
     normal: [f32; 3],
@@ -27,11 +27,12 @@ pub(crate) fn vertex_attributes() -> [vk::VertexInputAttributeDescription; 3] {
 }
 
 #[repr(C)]
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuMaterial {
     base_color: Vec4,
-    /// rgb emission, w the base-colour texture index (-1: none).
-    emission_texture: Vec4,
+    emission: Vec4,
+    /// Base-colour texture: width, height, layer of the texture array (-1: none).
+    texture: Vec4,
 }
 
 /// One mesh's index range and material: a draw of the forward pass.
@@ -43,13 +44,16 @@ pub(crate) struct Draw {
 }
 
 #[repr(C)]
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuLight {
     position_kind: Vec4,
     direction_range: Vec4,
     intensity_layer: Vec4,
     cone_depth: Vec4,
 }
+
+/// vkCmdUpdateBuffer writes at most 64 KiB: 1024 lights or shadow layers of 64 bytes.
+const MAX_LIGHTS: usize = 1024;
 
 /// The shadow-map layers a light owns: six cube faces for a point light, one otherwise.
 pub fn shadow_layer_count(kind: LightKind) -> u32 {
@@ -59,100 +63,118 @@ pub fn shadow_layer_count(kind: LightKind) -> u32 {
     }
 }
 
-/// One shadow-map layer to render: which light, which layer.
+/// One shadow-map layer to render: which light, which layer, and the depth that means
+/// "nothing here" (the layer's far distance), which the moments are cleared to.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ShadowView {
     pub light: u32,
     pub layer: u32,
+    pub far: f32,
 }
 
-pub(crate) struct GpuScene {
-    pub vertices: Buffer,
-    pub indices: Buffer,
+pub(crate) struct GpuScene<'a> {
+    pub vertices: Buffer<'a>,
+    pub indices: Buffer<'a>,
     pub index_count: u32,
-    pub materials: Buffer,
-    pub lights: Buffer,
-    pub layers: Buffer,
+    pub materials: Buffer<'a>,
+    /// Device-local; every frame records its update from `light_data` (see `record_light_update`).
+    pub lights: Buffer<'a>,
+    pub layers: Buffer<'a>,
     pub draws: Vec<Draw>,
-    /// Base-colour textures in linear RGBA32F, sampled with repeat; one white texel when
-    /// the scene has none, so the shader's texture array is never empty.
-    pub textures: Vec<Image>,
-    pub light_kinds: Vec<LightKind>,
+    /// Every base-colour texture, one layer each of an RGBA32F array as large as the largest
+    /// (top-left aligned; a white texel when the scene has none). One binding serves every
+    /// material without needing descriptor indexing, which lavapipe lacks.
+    pub textures: Image<'a>,
     pub shadow_views: Vec<ShadowView>,
+    light_kinds: Vec<LightKind>,
+    light_data: Vec<GpuLight>,
+    layer_data: Vec<Mat4>,
     bounds: (Vec3, Vec3),
 }
 
-impl GpuScene {
-    pub fn upload(ctx: &Context, scene: &Scene) -> VkResult<GpuScene> {
+impl<'a> GpuScene<'a> {
+    pub fn upload(ctx: &'a Context, scene: &Scene) -> VkResult<GpuScene<'a>> {
+        let light_kinds: Vec<_> = scene.lights.iter().map(|l| l.kind).collect();
+        let layer_count: u32 = light_kinds.iter().map(|k| shadow_layer_count(*k)).sum();
+        if scene.lights.len() > MAX_LIGHTS || layer_count as usize > MAX_LIGHTS {
+            return Err(VkError::Invalid(format!(
+                "{}: {} lights ({layer_count} shadow layers); the renderer takes at most {MAX_LIGHTS} of each",
+                scene.source.display(),
+                scene.lights.len()
+            )));
+        }
         let (vertices, indices, draws) = flatten_meshes(scene);
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
             .map(|m| GpuMaterial {
                 base_color: m.base_color,
-                emission_texture: m.emission.extend(m.base_color_texture.map_or(-1.0, |t| t as f32)),
+                emission: m.emission.extend(0.0),
+                texture: match m.base_color_texture.and_then(|i| scene.textures.get(i).map(|t| (i, t))) {
+                    Some((layer, t)) => Vec4::new(t.width as f32, t.height as f32, layer as f32, 0.0),
+                    None => Vec4::new(0.0, 0.0, -1.0, 0.0),
+                },
             })
             .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let light_kinds: Vec<_> = scene.lights.iter().map(|l| l.kind).collect();
-        let shadow_views: Vec<_> = light_kinds
-            .iter()
-            .enumerate()
-            .flat_map(|(i, kind)| (0..shadow_layer_count(*kind)).map(move |face| (i as u32, face)))
-            .enumerate()
-            .map(|(layer, (light, _))| ShadowView { light, layer: layer as u32 })
-            .collect();
+        let per_frame = storage | vk::BufferUsageFlags::TRANSFER_DST;
+        let device_buffer = |name, count: usize| Buffer::new(ctx, name, 64 * count.max(1) as u64, per_frame, MemoryLocation::GpuOnly);
         let mut gpu = GpuScene {
             vertices: Buffer::with_data(ctx, "vertices", vk::BufferUsageFlags::VERTEX_BUFFER, &vertices)?,
             indices: Buffer::with_data(ctx, "indices", vk::BufferUsageFlags::INDEX_BUFFER, &indices)?,
             index_count: indices.len() as u32,
             materials: Buffer::with_data(ctx, "materials", storage, &materials)?,
-            lights: Buffer::with_data(ctx, "lights", storage, &vec![GpuLight::default(); scene.lights.len().max(1)])?,
-            layers: Buffer::with_data(ctx, "shadow layers", storage, &vec![Mat4::ZERO; shadow_views.len().max(1)])?,
+            lights: device_buffer("lights", scene.lights.len())?,
+            layers: device_buffer("shadow layers", layer_count as usize)?,
             draws,
             textures: upload_textures(ctx, &scene.textures)?,
+            shadow_views: Vec::with_capacity(layer_count as usize),
             light_kinds,
-            shadow_views,
+            light_data: vec![GpuLight::default(); scene.lights.len()],
+            layer_data: vec![Mat4::ZERO; layer_count as usize],
             bounds: scene.bounds(),
         };
         gpu.set_lights(&scene.lights)?;
         Ok(gpu)
     }
 
-    /// Rewrites the light and shadow-layer buffers; the caller makes sure no frame that reads
-    /// them is in flight. The lights' kinds must be those the scene was uploaded with.
+    /// Recomputes the lights and their shadow layers, without allocating; the GPU buffers
+    /// change when the next recorded frame runs. The lights' kinds and count must be those
+    /// the scene was uploaded with.
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
-        let kinds: Vec<_> = lights.iter().map(|l| l.kind).collect();
-        let same_kinds = kinds.len() == self.light_kinds.len()
-            && kinds.iter().zip(&self.light_kinds).all(|(a, b)| std::mem::discriminant(a) == std::mem::discriminant(b));
+        let same_kinds = lights.len() == self.light_kinds.len()
+            && lights.iter().zip(&self.light_kinds).all(|(l, k)| std::mem::discriminant(&l.kind) == std::mem::discriminant(k));
         if !same_kinds {
             return Err(VkError::Invalid(
                 "lights changed kind or count since upload; create the renderer again for a new light set".into(),
             ));
         }
-        let mut gpu_lights = Vec::with_capacity(lights.len());
-        let mut layers = Vec::with_capacity(self.shadow_views.len());
-        for light in lights {
-            let first_layer = layers.len() as f32;
-            let (matrices, depth_origin) = shadow_matrices(light, self.bounds);
-            layers.extend(matrices);
-            gpu_lights.push(gpu_light(light, first_layer, depth_origin));
+        self.shadow_views.clear();
+        let mut first_layer = 0;
+        for (index, light) in lights.iter().enumerate() {
+            let count = shadow_layer_count(light.kind) as usize;
+            let layers = &mut self.layer_data[first_layer..first_layer + count];
+            let (depth_origin, far) = fill_shadow_layers(light, self.bounds, layers);
+            self.light_data[index] = gpu_light(light, first_layer as f32, depth_origin);
+            self.shadow_views.extend(
+                (first_layer..first_layer + count).map(|layer| ShadowView { light: index as u32, layer: layer as u32, far }),
+            );
+            first_layer += count;
         }
-        self.lights.write(&gpu_lights)?;
-        self.layers.write(&layers)
+        Ok(())
+    }
+
+    /// Records this frame's light and shadow-layer data into the device-local buffers, with
+    /// the barriers that order it against the previous frame's reads and this frame's passes.
+    pub fn record_light_update(&self, rec: &CommandRecorder) {
+        if !self.light_data.is_empty() {
+            rec.update_buffer(self.lights.raw, bytemuck::cast_slice(&self.light_data));
+            rec.update_buffer(self.layers.raw, bytemuck::cast_slice(&self.layer_data));
+        }
     }
 
     pub fn light_count(&self) -> u32 {
         self.light_kinds.len() as u32
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        for buffer in [&mut self.vertices, &mut self.indices, &mut self.materials, &mut self.lights, &mut self.layers] {
-            buffer.destroy(ctx);
-        }
-        for texture in &mut self.textures {
-            texture.destroy(ctx);
-        }
     }
 }
 
@@ -176,50 +198,35 @@ fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
     (vertices, indices, draws)
 }
 
-/// Uploads every texture through one staging buffer and one submission, at creation.
-fn upload_textures(ctx: &Context, textures: &[Texture]) -> VkResult<Vec<Image>> {
+/// Uploads every texture into its layer of one array image, through one staging buffer and
+/// one submission, at creation.
+fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image<'a>> {
     let white = Texture { name: "white".into(), width: 1, height: 1, texels: vec![Vec4::ONE] };
     let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
-    let texel_count: usize = textures.iter().map(|t| t.texels.len()).sum();
-    let staging = Buffer::new(ctx, "texture staging", (texel_count * 16) as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
-    let mut images = Vec::with_capacity(textures.len());
-    let result = (|| {
-        let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
-        staging.write(&all_texels)?;
-        let cmd = ctx.allocate_command_buffer()?;
-        let fence = ctx.create_fence()?;
-        let rec = ctx.begin(cmd)?;
-        let mut tracker = Tracker::default();
-        let mut offset = 0u64;
-        for texture in textures {
-            let image = Image::new(ctx, &texture.name, ImageDesc {
-                width: texture.width,
-                height: texture.height,
-                layers: 1,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-                view_type: vk::ImageViewType::TYPE_2D,
-            })?;
-            tracker.use_image(&rec, &image, Access::TransferDestination);
-            rec.copy_buffer_to_image_at(staging.raw, offset, &image);
-            tracker.use_image(&rec, &image, Access::FragmentSampled);
-            offset += texture.texels.len() as u64 * 16;
-            images.push(image);
-        }
-        let submitted = ctx.submit_and_wait(rec, fence);
-        ctx.destroy_fence(fence);
-        ctx.free_command_buffer(cmd);
-        submitted
-    })();
-    let mut staging = staging;
-    staging.destroy(ctx);
-    match result {
-        Ok(()) => Ok(images),
-        Err(e) => {
-            images.iter_mut().for_each(|i| i.destroy(ctx));
-            Err(e)
-        }
+    let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
+    let staging = Buffer::with_data(ctx, "texture staging", vk::BufferUsageFlags::TRANSFER_SRC, &all_texels)?;
+    let array = Image::new(ctx, "base colour textures", ImageDesc {
+        width: textures.iter().map(|t| t.width).max().unwrap_or(1),
+        height: textures.iter().map(|t| t.height).max().unwrap_or(1),
+        layers: textures.len() as u32,
+        format: vk::Format::R32G32B32A32_SFLOAT,
+        usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+    })?;
+    let cmd = CommandBuffer::new(ctx)?;
+    let fence = Fence::new(ctx)?;
+    let rec = ctx.begin(cmd.raw)?;
+    let mut tracker = Tracker::default();
+    tracker.use_image(&rec, &array, Access::TransferDestination);
+    let mut offset = 0u64;
+    for (layer, texture) in textures.iter().enumerate() {
+        let extent = vk::Extent2D { width: texture.width, height: texture.height };
+        rec.copy_buffer_to_image_layer(staging.raw, offset, &array, layer as u32, extent);
+        offset += texture.texels.len() as u64 * 16;
     }
+    tracker.use_image(&rec, &array, Access::FragmentSampled);
+    ctx.submit_and_wait(rec, &fence)?;
+    Ok(array)
 }
 
 fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {
@@ -243,9 +250,10 @@ fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {
     }
 }
 
-/// Clip-from-world matrices of a light's shadow layers, and (directional lights) the depth
-/// origin along the light direction. Point-light faces follow `shadow_layer` in lights.glsl.
-fn shadow_matrices(light: &Light, (lo, hi): (Vec3, Vec3)) -> (Vec<Mat4>, f32) {
+/// Writes the clip-from-world matrices of a light's shadow layers into `layers`; returns the
+/// depth origin along the light direction (directional lights) and the far depth. Point-light
+/// faces follow `shadow_layer` in lights.glsl.
+fn fill_shadow_layers(light: &Light, (lo, hi): (Vec3, Vec3), layers: &mut [Mat4]) -> (f32, f32) {
     use glam::camera::rh::{proj::vulkan, view};
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-3);
@@ -256,17 +264,21 @@ fn shadow_matrices(light: &Light, (lo, hi): (Vec3, Vec3)) -> (Vec<Mat4>, f32) {
         LightKind::Point => {
             let faces = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
             let proj = vulkan::perspective(std::f32::consts::FRAC_PI_2, 1.0, near, far);
-            (faces.iter().map(|d| proj * look(*d)).collect(), 0.0)
+            for (layer, face) in layers.iter_mut().zip(faces) {
+                *layer = proj * look(face);
+            }
+            (0.0, far)
         }
         LightKind::Spot { outer_cone, .. } => {
             let fov = (2.0 * outer_cone).min(170f32.to_radians());
-            (vec![vulkan::perspective(fov, 1.0, near, far) * look(light.direction)], 0.0)
+            layers[0] = vulkan::perspective(fov, 1.0, near, far) * look(light.direction);
+            (0.0, far)
         }
         LightKind::Directional => {
             let eye = centre - light.direction * radius;
             let view = view::look_to_mat4(eye, light.direction, any_perpendicular_up(light.direction));
-            let proj = vulkan::orthographic(-radius, radius, -radius, radius, 0.0, 2.0 * radius);
-            (vec![proj * view], eye.dot(light.direction))
+            layers[0] = vulkan::orthographic(-radius, radius, -radius, radius, 0.0, 2.0 * radius) * view;
+            (eye.dot(light.direction), 2.0 * radius)
         }
     }
 }

@@ -31,8 +31,8 @@ pub fn render_validated(scene: &Scene, settings: &RenderSettings) -> Image {
     let ctx = validated_context();
     let log = ctx.message_log();
     let mut renderer = Renderer::new(&ctx, scene, settings).expect("renderer");
-    let (image, _) = renderer.render_and_read(&ctx).expect("frame");
-    renderer.destroy(&ctx);
+    let (image, _) = renderer.render_and_read().expect("frame");
+    drop(renderer);
     drop(ctx);
     assert_no_validation_messages(&log.lock().unwrap());
     image
@@ -55,6 +55,16 @@ pub fn reference_direct(scene: &Scene, width: u32, height: u32, shadows: bool) -
         ..ReferenceSettings::default()
     };
     render_reference(scene, &SceneBvh::new(scene), &settings).direct
+}
+
+/// Renders `scene` with Vulkan and the reference's direct layer at pixel centres, and
+/// returns the NRMSE of one against the other (printed, with artifacts kept under `name`).
+pub fn direct_nrmse(name: &str, scene: &Scene, settings: &RenderSettings) -> f64 {
+    let image = render_validated(scene, settings);
+    let reference = reference_direct(scene, settings.width, settings.height, settings.shadows);
+    let nrmse = nrmse_with_artifacts(name, &image, &reference);
+    println!("{name}: NRMSE {nrmse:.5}");
+    nrmse
 }
 
 /// NRMSE of `image` against `reference`; writes both and the error picture under

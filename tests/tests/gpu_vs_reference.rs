@@ -10,30 +10,18 @@ fn settings(size: u32, shadows: bool) -> RenderSettings {
 
 #[test]
 fn cornell_unshadowed_direct_light_matches_the_reference() {
-    let scene = load_scene("cornell");
-    let image = render_validated(&scene, &settings(256, false));
-    let reference = reference_direct(&scene, 256, 256, false);
-    let nrmse = nrmse_with_artifacts("cornell_unshadowed", &image, &reference);
-    println!("cornell, shadows off, 256x256: NRMSE {nrmse:.5}");
+    let nrmse = direct_nrmse("cornell_unshadowed", &load_scene("cornell"), &settings(256, false));
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
 }
 
 #[test]
 fn occluder_plane_vsm_direct_light_matches_the_reference() {
-    let scene = load_scene("occluder-plane");
-    let image = render_validated(&scene, &settings(256, true));
-    let reference = reference_direct(&scene, 256, 256, true);
-    let nrmse = nrmse_with_artifacts("occluder_plane_vsm", &image, &reference);
-    println!("occluder-plane, VSM, 256x256: NRMSE {nrmse:.5}");
+    let nrmse = direct_nrmse("occluder_plane_vsm", &load_scene("occluder-plane"), &settings(256, true));
     assert!(nrmse <= 0.05, "NRMSE {nrmse} > 0.05");
 }
 
 #[test]
 fn cornell_with_shadows_matches_the_reference_direct_layer() {
-    let scene = load_scene("cornell");
-    let image = render_validated(&scene, &settings(256, true));
-    let reference = reference_direct(&scene, 256, 256, true);
-    let nrmse = nrmse_with_artifacts("cornell_vsm", &image, &reference);
-    println!("cornell, VSM, 256x256: NRMSE {nrmse:.5}");
+    let nrmse = direct_nrmse("cornell_vsm", &load_scene("cornell"), &settings(256, true));
     assert!(nrmse <= 0.05, "NRMSE {nrmse} > 0.05");
 }

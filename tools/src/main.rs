@@ -10,7 +10,7 @@ use relume_bake::metrics;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use relume_renderer::vk::{Context, ContextOptions};
-use relume_renderer::{FrameTimings, RenderSettings, Renderer};
+use relume_renderer::{FrameTimings, RenderSettings, Renderer, PASS_NAMES};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -230,40 +230,48 @@ struct GpuRender {
 fn render_on_gpu(scene: &Scene, settings: &RenderSettings, gpu: &GpuArgs, frames: u32) -> Result<GpuRender> {
     let options = ContextOptions { validation: gpu.validation, device: gpu.device.clone() };
     let ctx = Context::headless(&options).context("Vulkan")?;
-    let mut renderer = Renderer::new(&ctx, scene, settings).context("Vulkan renderer")?;
-    let result = (|| {
-        let mut timings = Vec::with_capacity(frames as usize);
-        // The first frames warm caches and pipelines; time the rest.
-        for _ in 0..frames.min(3) {
-            renderer.render(&ctx)?;
-        }
-        for _ in 0..frames {
-            timings.push(renderer.render(&ctx)?);
-        }
-        let (radiance, display_rgba) = renderer.render_and_read(&ctx)?;
-        Ok::<_, relume_renderer::vk::VkError>(GpuRender {
-            radiance,
-            display_rgba,
-            frames: timings,
-            device: format!("{} ({})", ctx.info.name, ctx.info.driver),
-        })
-    })();
-    renderer.destroy(&ctx);
-    let messages = ctx.validation_messages();
+    let log = ctx.message_log();
+    let device = format!("{} ({})", ctx.info.name, ctx.info.driver);
+    let result = render_frames(&ctx, scene, settings, frames);
+    // Dropped first, so that messages about teardown (objects never destroyed) count too.
+    drop(ctx);
+    let messages = log.lock().map(|m| m.clone()).unwrap_or_default();
     if !messages.is_empty() {
         bail!("{} Vulkan validation message(s), first: {}", messages.len(), messages[0]);
     }
-    Ok(result?)
+    let (radiance, display_rgba, frames) = result?;
+    Ok(GpuRender { radiance, display_rgba, frames, device })
+}
+
+type Frames = (Image, Vec<u8>, Vec<FrameTimings>);
+
+fn render_frames(ctx: &Context, scene: &Scene, settings: &RenderSettings, frames: u32) -> Result<Frames> {
+    let mut renderer = Renderer::new(ctx, scene, settings).context("Vulkan renderer")?;
+    // The first frames warm caches and pipelines; the rest are timed.
+    for _ in 0..frames.min(3) {
+        renderer.render()?;
+    }
+    let timings = (0..frames).map(|_| renderer.render()).collect::<Result<Vec<_>, _>>()?;
+    let (radiance, display_rgba) = renderer.render_and_read()?;
+    Ok((radiance, display_rgba, timings))
 }
 
 fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
     rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()
 }
 
+/// Timed frames: at least one, at most a number that cannot exhaust memory.
+fn frame_count(frames: u32) -> Result<u32> {
+    if !(1..=100_000).contains(&frames) {
+        bail!("--frames {frames}: render 1..=100000 frames");
+    }
+    Ok(frames)
+}
+
 fn render_command(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let settings = render_settings(&args.scene, &args.gpu)?;
-    let frames = args.frames.max(1);
+    let frames = frame_count(args.frames)?;
     let out = render_on_gpu(&scene, &settings, &args.gpu, frames)?;
     write_render_outputs(&args.out, &out)?;
     println!("device: {}", out.device);
@@ -280,22 +288,23 @@ fn write_render_outputs(exr_path: &Path, out: &GpuRender) -> Result<()> {
     Ok(())
 }
 
-/// Median GPU time of each pass over the timed frames, then the frame total.
+/// Median GPU time of each pass over the timed frames, then the frame total (empty when
+/// the device has no timestamps).
 pub(crate) fn median_timings(frames: &[FrameTimings]) -> Vec<(String, f64)> {
-    let Some(first) = frames.first() else { return Vec::new() };
+    let passes: Vec<[f64; PASS_NAMES.len()]> = frames.iter().filter_map(|f| f.passes_ms).collect();
+    if passes.is_empty() {
+        return Vec::new();
+    }
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let mut rows: Vec<_> = first
-        .passes_ms
+    let mut rows: Vec<_> = PASS_NAMES
         .iter()
         .enumerate()
-        .map(|(i, (name, _))| (name.to_string(), median(frames.iter().map(|f| f.passes_ms[i].1).collect())))
+        .map(|(i, name)| (name.to_string(), median(passes.iter().map(|p| p[i]).collect())))
         .collect();
-    if !rows.is_empty() {
-        rows.push(("frame".into(), median(frames.iter().map(|f| f.total_ms).collect())));
-    }
+    rows.push(("frame".into(), median(passes.iter().map(|p| p.iter().sum()).collect())));
     rows
 }
 
@@ -309,6 +318,13 @@ fn print_timings(frames: &[FrameTimings]) {
     for (name, ms) in rows {
         println!("  {name:<12} {ms:>9.3} ms");
     }
+}
+
+fn positive(flag: &str, value: f32) -> Result<f32> {
+    if !(value.is_finite() && value > 0.0) {
+        bail!("{flag} {value}: give a finite number above 0");
+    }
+    Ok(value)
 }
 
 fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shadows: bool) -> Result<ReferenceSettings> {
@@ -362,6 +378,7 @@ fn write_reference(path: &Path, run: &ReferenceRun, exposure: f32) -> Result<()>
 fn reference_command(args: &ReferenceArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
+    positive("--exposure", args.exposure)?;
     let run = trace_reference(&scene, &settings);
     write_reference(&args.out, &run, args.exposure)?;
     println!(
@@ -375,6 +392,7 @@ fn reference_command(args: &ReferenceArgs) -> Result<()> {
 }
 
 fn compare_command(args: &CompareArgs) -> Result<()> {
+    positive("--error-scale", args.error_scale)?;
     let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
     let reference = match &args.reference_layer {
         Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,

@@ -7,14 +7,16 @@ use std::fmt::Write as _;
 pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let settings = render_settings(&args.scene, &args.gpu)?;
+    let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
+    let frames = frame_count(args.frames)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
     println!("rendering {} with Vulkan ({} timed frames)", args.scene.scene.display(), args.frames);
-    let gpu = render_on_gpu(&scene, &settings, &args.gpu, args.frames.max(1))?;
+    let gpu = render_on_gpu(&scene, &settings, &args.gpu, frames)?;
     write_render_outputs(&args.out.join("vulkan.exr"), &gpu)?;
 
     println!("rendering the reference ({} spp)", args.trace.spp);
-    let reference = trace_reference(&scene, &reference_settings(&args.scene, &args.trace, true)?);
+    let reference = trace_reference(&scene, &reference_settings);
     write_reference(&args.out.join("reference.exr"), &reference, settings.exposure)?;
 
     let refs = &reference.images;

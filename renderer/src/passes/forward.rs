@@ -3,7 +3,7 @@
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipeline, GraphicsPipelineDesc, Image, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, Pipeline, Sampler, Tracker, VkResult};
 use glam::{Mat4, Vec4};
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -11,7 +11,7 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// Per-frame inputs of the forward pass (push constants; layout of forward_push.glsl).
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ForwardParams {
     pub clip_from_world: Mat4,
     pub camera_position: Vec4,
@@ -24,28 +24,31 @@ pub struct ForwardParams {
     pub _pad: [u32; 3],
 }
 
-pub struct ForwardPass {
-    pipeline: GraphicsPipeline,
-    descriptors: DescriptorSet,
-    texture_sampler: vk::Sampler,
+pub struct ForwardPass<'a> {
+    pipeline: Pipeline<'a>,
+    descriptors: DescriptorSet<'a>,
+    // Held so the samplers live as long as the descriptor set that names them.
+    _shadow_sampler: Sampler<'a>,
+    _texture_sampler: Sampler<'a>,
 }
 
-impl ForwardPass {
-    pub(crate) fn new(ctx: &Context, scene: &GpuScene, moments: &Image, shadow_sampler: vk::Sampler) -> VkResult<ForwardPass> {
+impl<'a> ForwardPass<'a> {
+    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image) -> VkResult<ForwardPass<'a>> {
+        let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         // Textures are filtered by hand in the shader (texelFetch); the sampler only binds them.
-        let texture_sampler = ctx.create_sampler(false, vk::SamplerAddressMode::REPEAT)?;
+        let texture_sampler = Sampler::new(ctx, false, vk::SamplerAddressMode::REPEAT)?;
         let descriptors = DescriptorSet::new(
             ctx,
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             &[
                 Binding::StorageBuffer(scene.lights.raw),
                 Binding::StorageBuffer(scene.layers.raw),
-                Binding::SampledImages { views: vec![moments.view], sampler: shadow_sampler },
+                Binding::SampledImage { view: moments.view, sampler: shadow_sampler.raw },
                 Binding::StorageBuffer(scene.materials.raw),
-                Binding::SampledImages { views: scene.textures.iter().map(|t| t.view).collect(), sampler: texture_sampler },
+                Binding::SampledImage { view: scene.textures.view, sampler: texture_sampler.raw },
             ],
         )?;
-        let pipeline = GraphicsPipeline::new(ctx, &GraphicsPipelineDesc {
+        let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
             vertex: shaders::FORWARD_VERT,
             fragment: shaders::FORWARD_FRAG,
             vertex_stride: VERTEX_STRIDE,
@@ -56,9 +59,8 @@ impl ForwardPass {
             cull_mode: vk::CullModeFlags::NONE,
             set_layout: descriptors.layout,
             push_bytes: std::mem::size_of::<ForwardParams>() as u32,
-            fragment_constants: &[scene.textures.len() as u32],
         })?;
-        Ok(ForwardPass { pipeline, descriptors, texture_sampler })
+        Ok(ForwardPass { pipeline, descriptors, _shadow_sampler: shadow_sampler, _texture_sampler: texture_sampler })
     }
 
     /// Reads: `moments` and the textures (sampled), scene buffers. Writes: `radiance`, `depth`.
@@ -77,18 +79,12 @@ impl ForwardPass {
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
-        rec.begin_rendering(radiance.desc.extent(), radiance.view, depth.view);
+        rec.begin_rendering(radiance.desc.extent(), radiance.view, [0.0; 4], depth.view);
         rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
         for draw in &scene.draws {
             rec.push_constants(self.pipeline.layout, &ForwardParams { material: draw.material, ..*params });
             rec.draw_indexed(draw.first_index, draw.index_count);
         }
         rec.end_rendering();
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        self.pipeline.destroy(ctx);
-        self.descriptors.destroy(ctx);
-        ctx.destroy_sampler(self.texture_sampler);
     }
 }

@@ -2,23 +2,23 @@
 //! transform as relume_bake::image::tonemap_to_srgb8.
 
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, ComputePipeline, Context, DescriptorSet, Image, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Pipeline, Context, DescriptorSet, Image, Tracker, VkResult};
 
 pub const DISPLAY_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
-pub struct TonemapPass {
-    pipeline: ComputePipeline,
-    descriptors: DescriptorSet,
+pub struct TonemapPass<'a> {
+    pipeline: Pipeline<'a>,
+    descriptors: DescriptorSet<'a>,
 }
 
-impl TonemapPass {
-    pub fn new(ctx: &Context, radiance: &Image, display: &Image) -> VkResult<TonemapPass> {
+impl<'a> TonemapPass<'a> {
+    pub fn new(ctx: &'a Context, radiance: &Image, display: &Image) -> VkResult<TonemapPass<'a>> {
         let descriptors = DescriptorSet::new(
             ctx,
             vk::ShaderStageFlags::COMPUTE,
             &[Binding::StorageImage(radiance.view), Binding::StorageImage(display.view)],
         )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::TONEMAP_COMP, descriptors.layout, 4)?;
+        let pipeline = Pipeline::compute(ctx, shaders::TONEMAP_COMP, descriptors.layout, 4)?;
         Ok(TonemapPass { pipeline, descriptors })
     }
 
@@ -29,10 +29,5 @@ impl TonemapPass {
         rec.bind_compute(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
         rec.push_constants(self.pipeline.layout, &exposure);
         rec.dispatch(display.desc.width.div_ceil(8), display.desc.height.div_ceil(8), 1);
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        self.pipeline.destroy(ctx);
-        self.descriptors.destroy(ctx);
     }
 }

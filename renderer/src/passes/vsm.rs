@@ -4,28 +4,28 @@
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, ImageView, Pipeline, Tracker, VkResult};
 
 pub const MOMENTS_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 
 #[repr(C)]
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct VsmPush {
     light: u32,
     layer: u32,
 }
 
-pub struct VsmPass {
-    pipeline: GraphicsPipeline,
-    descriptors: DescriptorSet,
+pub struct VsmPass<'a> {
+    pipeline: Pipeline<'a>,
+    descriptors: DescriptorSet<'a>,
+    layer_views: Vec<ImageView<'a>>,
     /// The moments of every layer; the blur pass and the lighting passes read it.
-    pub moments: Image,
-    depth: Image,
-    layer_views: Vec<vk::ImageView>,
+    pub moments: Image<'a>,
+    depth: Image<'a>,
 }
 
-impl VsmPass {
-    pub(crate) fn new(ctx: &Context, scene: &GpuScene, size: u32) -> VkResult<VsmPass> {
+impl<'a> VsmPass<'a> {
+    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, size: u32) -> VkResult<VsmPass<'a>> {
         let layers = scene.shadow_views.len().max(1) as u32;
         let moments = Image::new(ctx, "vsm moments", ImageDesc {
             width: size,
@@ -43,13 +43,13 @@ impl VsmPass {
             usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
             view_type: vk::ImageViewType::TYPE_2D,
         })?;
-        let layer_views = (0..layers).map(|l| moments.layer_view(ctx, l)).collect::<VkResult<Vec<_>>>()?;
+        let layer_views = (0..layers).map(|l| moments.layer_view(l)).collect::<VkResult<Vec<_>>>()?;
         let descriptors = DescriptorSet::new(
             ctx,
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             &[Binding::StorageBuffer(scene.lights.raw), Binding::StorageBuffer(scene.layers.raw)],
         )?;
-        let pipeline = GraphicsPipeline::new(ctx, &GraphicsPipelineDesc {
+        let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
             vertex: shaders::VSM_MOMENTS_VERT,
             fragment: shaders::VSM_MOMENTS_FRAG,
             vertex_stride: VERTEX_STRIDE,
@@ -60,32 +60,23 @@ impl VsmPass {
             cull_mode: vk::CullModeFlags::NONE,
             set_layout: descriptors.layout,
             push_bytes: std::mem::size_of::<VsmPush>() as u32,
-            fragment_constants: &[],
         })?;
         Ok(VsmPass { pipeline, descriptors, moments, depth, layer_views })
     }
 
     /// Writes: `moments` (colour attachment), its depth buffer. Reads: scene buffers.
+    /// Texels no geometry covers keep the layer's far depth: nothing occludes there.
     pub(crate) fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, scene: &GpuScene) {
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
         for view in &scene.shadow_views {
             tracker.use_image(rec, &self.moments, Access::ColorAttachmentWrite);
             tracker.use_image(rec, &self.depth, Access::DepthAttachmentWrite);
             rec.push_constants(self.pipeline.layout, &VsmPush { light: view.light, layer: view.layer });
-            rec.begin_rendering(self.moments.desc.extent(), self.layer_views[view.layer as usize], self.depth.view);
+            let clear = [view.far, view.far * view.far, 0.0, 0.0];
+            rec.begin_rendering(self.moments.desc.extent(), self.layer_views[view.layer as usize].raw, clear, self.depth.view);
             rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
             rec.draw_indexed(0, scene.index_count);
             rec.end_rendering();
         }
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        for view in self.layer_views.drain(..) {
-            crate::vk::destroy_view(ctx, view);
-        }
-        self.pipeline.destroy(ctx);
-        self.descriptors.destroy(ctx);
-        self.depth.destroy(ctx);
-        self.moments.destroy(ctx);
     }
 }

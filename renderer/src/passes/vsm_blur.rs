@@ -3,31 +3,31 @@
 //! shadow maps soften edges without aliasing (000 §3.4).
 
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Pipeline, Context, DescriptorSet, Image, ImageDesc, Tracker, VkResult};
 
 #[repr(C)]
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct BlurPush {
     step: [i32; 2],
     radius: i32,
 }
 
-pub struct VsmBlurPass {
-    pipeline: ComputePipeline,
-    horizontal: DescriptorSet,
-    vertical: DescriptorSet,
-    scratch: Image,
+pub struct VsmBlurPass<'a> {
+    pipeline: Pipeline<'a>,
+    horizontal: DescriptorSet<'a>,
+    vertical: DescriptorSet<'a>,
+    scratch: Image<'a>,
     radius: u32,
 }
 
-impl VsmBlurPass {
+impl<'a> VsmBlurPass<'a> {
     /// `radius` in texels; 0 makes the pass record nothing.
-    pub fn new(ctx: &Context, moments: &Image, radius: u32) -> VkResult<VsmBlurPass> {
+    pub fn new(ctx: &'a Context, moments: &Image, radius: u32) -> VkResult<VsmBlurPass<'a>> {
         let scratch = Image::new(ctx, "vsm blur scratch", ImageDesc { usage: vk::ImageUsageFlags::STORAGE, ..moments.desc })?;
         let stage = vk::ShaderStageFlags::COMPUTE;
         let horizontal = DescriptorSet::new(ctx, stage, &[Binding::StorageImage(moments.view), Binding::StorageImage(scratch.view)])?;
         let vertical = DescriptorSet::new(ctx, stage, &[Binding::StorageImage(scratch.view), Binding::StorageImage(moments.view)])?;
-        let pipeline = ComputePipeline::new(ctx, shaders::VSM_BLUR_COMP, horizontal.layout, std::mem::size_of::<BlurPush>() as u32)?;
+        let pipeline = Pipeline::compute(ctx, shaders::VSM_BLUR_COMP, horizontal.layout, std::mem::size_of::<BlurPush>() as u32)?;
         Ok(VsmBlurPass { pipeline, horizontal, vertical, scratch, radius })
     }
 
@@ -46,12 +46,5 @@ impl VsmBlurPass {
             rec.push_constants(self.pipeline.layout, &BlurPush { step, radius: self.radius as i32 });
             rec.dispatch(groups.0, groups.1, groups.2);
         }
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        self.pipeline.destroy(ctx);
-        self.horizontal.destroy(ctx);
-        self.vertical.destroy(ctx);
-        self.scratch.destroy(ctx);
     }
 }

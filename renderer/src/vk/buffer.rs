@@ -1,28 +1,33 @@
-//! Buffers with their allocations. Host-visible ones are written and read through their mapping.
+//! Buffers with their allocations, freed on drop. Host-visible ones are written and read
+//! through their mapping.
 
 use super::{Context, VkError, VkResult};
 use ash::vk;
+use bytemuck::NoUninit;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-pub struct Buffer {
+pub struct Buffer<'a> {
+    ctx: &'a Context,
     pub raw: vk::Buffer,
     pub size: u64,
     allocation: Option<Allocation>,
 }
 
-impl Buffer {
+impl<'a> Buffer<'a> {
     pub fn new(
-        ctx: &Context,
+        ctx: &'a Context,
         name: &str,
         size: u64,
         usage: vk::BufferUsageFlags,
         location: MemoryLocation,
-    ) -> VkResult<Buffer> {
+    ) -> VkResult<Buffer<'a>> {
         let size = size.max(16);
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         // SAFETY: a valid create info on a live device.
         let raw = unsafe { ctx.device.create_buffer(&info, None) }?;
+        let mut buffer = Buffer { ctx, raw, size, allocation: None };
+        // SAFETY: a plain query of the buffer just made.
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -30,61 +35,62 @@ impl Buffer {
             location,
             linear: true,
             allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        });
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(e) => {
-                // SAFETY: the buffer is unused and unbound.
-                unsafe { ctx.device.destroy_buffer(raw, None) };
-                return Err(e.into());
-            }
-        };
-        // SAFETY: the allocation satisfies the buffer's requirements and is bound once.
-        unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
-        Ok(Buffer { raw, size, allocation: Some(allocation) })
+        })?;
+        // SAFETY: the allocation was made for this buffer's requirements and is bound once;
+        // it is stored first so that drop frees it if binding fails.
+        let (memory, offset) = unsafe { (allocation.memory(), allocation.offset()) };
+        buffer.allocation = Some(allocation);
+        unsafe { ctx.device.bind_buffer_memory(raw, memory, offset) }?;
+        Ok(buffer)
     }
 
-    /// A host-visible storage buffer holding `data`.
-    pub fn with_data<T: Copy>(ctx: &Context, name: &str, usage: vk::BufferUsageFlags, data: &[T]) -> VkResult<Buffer> {
+    /// A host-visible buffer holding `data`.
+    pub fn with_data<T: NoUninit>(ctx: &'a Context, name: &str, usage: vk::BufferUsageFlags, data: &[T]) -> VkResult<Self> {
         let bytes = std::mem::size_of_val(data) as u64;
         let buffer = Buffer::new(ctx, name, bytes, usage, MemoryLocation::CpuToGpu)?;
         buffer.write(data)?;
         Ok(buffer)
     }
 
-    fn mapped(&self) -> VkResult<&mut [u8]> {
-        let allocation = self.allocation.as_ref().ok_or_else(|| VkError::Invalid("buffer freed".into()))?;
+    fn mapping(&self) -> VkResult<(*mut u8, usize)> {
+        let allocation = self.allocation.as_ref().ok_or_else(|| VkError::Invalid("buffer has no memory".into()))?;
         let ptr = allocation
             .mapped_ptr()
             .ok_or_else(|| VkError::Invalid("buffer is not host visible".into()))?;
-        // SAFETY: the mapping covers `allocation.size()` bytes and lives as long as `self`;
-        // callers synchronise with the GPU (fences) before touching it.
-        Ok(unsafe { std::slice::from_raw_parts_mut(ptr.as_ptr() as *mut u8, allocation.size() as usize) })
+        Ok((ptr.as_ptr() as *mut u8, allocation.size() as usize))
     }
 
-    /// Copies `data` to the start of a host-visible buffer.
-    pub fn write<T: Copy>(&self, data: &[T]) -> VkResult<()> {
-        let bytes = std::mem::size_of_val(data);
-        let target = self.mapped()?;
-        if bytes > target.len() {
-            return Err(VkError::Invalid(format!("{bytes} bytes do not fit a {}-byte buffer", target.len())));
+    /// Copies `data` to the start of a host-visible buffer. The caller makes sure no GPU
+    /// work that reads the buffer is pending.
+    pub fn write<T: NoUninit>(&self, data: &[T]) -> VkResult<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let (ptr, len) = self.mapping()?;
+        if bytes.len() > len {
+            return Err(VkError::Invalid(format!("{} bytes do not fit a {len}-byte buffer", bytes.len())));
         }
-        // SAFETY: `data` is plain Copy data of `bytes` bytes; the ranges do not overlap.
-        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr() as *const u8, target.as_mut_ptr(), bytes) };
+        // SAFETY: the mapping holds `len` >= bytes.len() bytes and does not overlap `data`.
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
         Ok(())
     }
 
-    /// Reads the first `len` bytes of a host-visible buffer.
-    pub fn read_bytes(&self, len: usize) -> VkResult<Vec<u8>> {
-        let source = self.mapped()?;
-        source.get(..len).map(<[u8]>::to_vec).ok_or_else(|| VkError::Invalid("read past buffer".into()))
+    /// The first `len` bytes of a host-visible buffer, after the GPU's writes to it completed.
+    pub fn mapped_bytes(&self, len: usize) -> VkResult<&[u8]> {
+        let (ptr, available) = self.mapping()?;
+        if len > available {
+            return Err(VkError::Invalid(format!("read of {len} bytes past a {available}-byte buffer")));
+        }
+        // SAFETY: the mapping is valid for `available` bytes as long as `self` lives, and the
+        // caller waited for the GPU writes (fence), so nothing writes it meanwhile.
+        Ok(unsafe { std::slice::from_raw_parts(ptr, len) })
     }
+}
 
-    pub fn destroy(&mut self, ctx: &Context) {
+impl Drop for Buffer<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the buffer (owners wait for their fences first).
+        unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
         if let Some(allocation) = self.allocation.take() {
-            // SAFETY: the caller guarantees the GPU no longer uses the buffer.
-            unsafe { ctx.device.destroy_buffer(self.raw, None) };
-            let _ = ctx.allocator().free(allocation);
+            let _ = self.ctx.allocator().free(allocation);
         }
     }
 }

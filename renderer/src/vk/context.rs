@@ -2,6 +2,7 @@
 //! own headless context, or wraps a device the caller already has.
 
 use super::device::{self, DeviceInfo};
+use super::sync::Fence;
 use super::instance::{self, MessageLog};
 use super::{VkError, VkResult};
 use ash::vk;
@@ -49,9 +50,11 @@ impl Context {
         Self::assemble(parts.entry, parts.instance, parts.debug, dev.physical, dev.device, dev.queue_family, dev.queue, dev.info, messages, true)
     }
 
-    /// Wraps a device the caller created and keeps owning (it must have Vulkan 1.3 with
-    /// dynamicRendering, synchronization2 and shaderStorageImageExtendedFormats enabled).
-    /// relume never destroys the caller's device or instance.
+    /// Wraps a device the caller created and keeps owning. The physical device must offer
+    /// what relume needs (checked here: Vulkan 1.3, dynamicRendering, synchronization2,
+    /// shaderStorageImageExtendedFormats) and the
+    /// caller must have enabled those features. relume never waits on, nor destroys, the
+    /// caller's device or instance.
     pub fn from_existing(
         entry: ash::Entry,
         instance: ash::Instance,
@@ -60,16 +63,7 @@ impl Context {
         queue_family: u32,
         queue: vk::Queue,
     ) -> VkResult<Context> {
-        // SAFETY: plain queries of the caller's live objects.
-        let props = unsafe { instance.get_physical_device_properties(physical) };
-        let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-        let info = DeviceInfo {
-            name,
-            driver: String::new(),
-            device_type: format!("{:?}", props.device_type),
-            timestamp_period_ns: (props.limits.timestamp_period > 0.0).then_some(props.limits.timestamp_period as f64),
-            linear_moments: true,
-        };
+        let info = device::check_and_describe(&instance, physical, queue_family)?;
         let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
         Self::assemble(entry, instance, None, physical, device, queue_family, queue, info, messages, false)
     }
@@ -144,7 +138,7 @@ impl Context {
         self.messages.lock().map(|m| m.clone()).unwrap_or_default()
     }
 
-    pub fn allocate_command_buffer(&self) -> VkResult<vk::CommandBuffer> {
+    pub(super) fn allocate_command_buffer(&self) -> VkResult<vk::CommandBuffer> {
         let info = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -153,19 +147,9 @@ impl Context {
         Ok(unsafe { self.device.allocate_command_buffers(&info) }?[0])
     }
 
-    pub fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
+    pub(super) fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller guarantees the buffer is not pending.
         unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
-    }
-
-    pub fn create_fence(&self) -> VkResult<vk::Fence> {
-        // SAFETY: a valid create info.
-        Ok(unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }?)
-    }
-
-    pub fn destroy_fence(&self, fence: vk::Fence) {
-        // SAFETY: the caller guarantees the fence is not pending.
-        unsafe { self.device.destroy_fence(fence, None) };
     }
 
     /// Begins recording `cmd` for one submission.
@@ -180,7 +164,8 @@ impl Context {
     }
 
     /// Ends `rec`, submits it signalling `fence`, and waits for that fence (not the device).
-    pub fn submit_and_wait(&self, rec: CommandRecorder, fence: vk::Fence) -> VkResult<()> {
+    pub fn submit_and_wait(&self, rec: CommandRecorder, fence: &Fence) -> VkResult<()> {
+        let fence = fence.raw;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(rec.cmd)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
         // SAFETY: the buffer was fully recorded; the fence is unsignalled and reset after use.
@@ -193,25 +178,6 @@ impl Context {
         Ok(())
     }
 
-    /// A sampler without mipmaps: clamp-to-edge for shadow maps, repeat for material
-    /// textures (glTF's default wrap, as the path tracer samples them).
-    pub fn create_sampler(&self, linear: bool, address: vk::SamplerAddressMode) -> VkResult<vk::Sampler> {
-        let filter = if linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(filter)
-            .min_filter(filter)
-            .address_mode_u(address)
-            .address_mode_v(address)
-            .address_mode_w(address)
-            .max_lod(0.0);
-        // SAFETY: a valid create info.
-        Ok(unsafe { self.device.create_sampler(&info, None) }?)
-    }
-
-    pub fn destroy_sampler(&self, sampler: vk::Sampler) {
-        // SAFETY: the caller guarantees the sampler is unused.
-        unsafe { self.device.destroy_sampler(sampler, None) };
-    }
 }
 
 fn destroy_instance(
@@ -231,9 +197,12 @@ impl Drop for Context {
     /// Teardown in reverse order of creation: pool, allocator, then (when relume made them)
     /// device, messenger and instance. Every resource made from this context must be destroyed first.
     fn drop(&mut self) {
-        // SAFETY: every object made from this context was destroyed by its owner before.
+        // SAFETY: every object made from this context borrows it, so all were dropped before;
+        // the wait covers submissions a caller made on relume's own device.
         unsafe {
-            let _ = self.device.device_wait_idle();
+            if self.owns_device {
+                let _ = self.device.device_wait_idle();
+            }
             self.device.destroy_command_pool(self.command_pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owns_device {
@@ -278,9 +247,9 @@ impl<'a> CommandRecorder<'a> {
         }
     }
 
-    pub fn push_constants<T: Copy>(&self, layout: vk::PipelineLayout, value: &T) {
-        // SAFETY: T is plain data; the layout's range covers ALL stages from offset 0.
-        let bytes = unsafe { std::slice::from_raw_parts(value as *const T as *const u8, std::mem::size_of::<T>()) };
+    pub fn push_constants<T: bytemuck::NoUninit>(&self, layout: vk::PipelineLayout, value: &T) {
+        let bytes = bytemuck::bytes_of(value);
+        // SAFETY: recording state; the layout's range covers ALL stages from offset 0.
         unsafe { self.device.cmd_push_constants(self.cmd, layout, vk::ShaderStageFlags::ALL, 0, bytes) };
     }
 
@@ -289,15 +258,15 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_dispatch(self.cmd, x, y, z) };
     }
 
-    /// Begins dynamic rendering into `color` (cleared to zero) and `depth` (cleared to far),
-    /// with viewport and scissor covering `extent`.
-    pub fn begin_rendering(&self, extent: vk::Extent2D, color: vk::ImageView, depth: vk::ImageView) {
+    /// Begins dynamic rendering into `color` (cleared to `clear`) and `depth` (cleared to
+    /// far), with viewport and scissor covering `extent`.
+    pub fn begin_rendering(&self, extent: vk::Extent2D, color: vk::ImageView, clear: [f32; 4], depth: vk::ImageView) {
         let colors = [vk::RenderingAttachmentInfo::default()
             .image_view(color)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })];
+            .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: clear } })];
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(depth)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -350,15 +319,41 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
     }
 
-    /// Fills layer 0 of an image (in TRANSFER_DST_OPTIMAL) from tightly packed buffer data
-    /// starting at `offset` bytes.
-    pub fn copy_buffer_to_image_at(&self, buffer: vk::Buffer, offset: u64, image: &super::Image) {
+    /// Fills the top-left `extent` of one layer of an image (in TRANSFER_DST_OPTIMAL) from
+    /// tightly packed buffer data starting at `offset` bytes.
+    pub fn copy_buffer_to_image_layer(&self, buffer: vk::Buffer, offset: u64, image: &super::Image, layer: u32, extent: vk::Extent2D) {
         let region = vk::BufferImageCopy::default()
             .buffer_offset(offset)
-            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(1))
-            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).base_array_layer(layer).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
         // SAFETY: the image is in TRANSFER_DST_OPTIMAL (tracker) and the buffer holds its texels.
         unsafe { self.device.cmd_copy_buffer_to_image(self.cmd, buffer, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]) };
+    }
+
+    /// Writes `data` into a device-local buffer inside the command stream (vkCmdUpdateBuffer:
+    /// at most 65536 bytes, a multiple of 4), between two barriers: earlier shader reads of the
+    /// buffer finish first, and the vertex and fragment stages that follow see the new data.
+    pub fn update_buffer(&self, buffer: vk::Buffer, data: &[u8]) {
+        let shader_stages = vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let barrier = |src_stage, src_access, dst_stage, dst_access| {
+            vk::BufferMemoryBarrier2::default()
+                .src_stage_mask(src_stage)
+                .src_access_mask(src_access)
+                .dst_stage_mask(dst_stage)
+                .dst_access_mask(dst_access)
+                .buffer(buffer)
+                .size(vk::WHOLE_SIZE)
+        };
+        let before = [barrier(shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ, vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE)];
+        let after = [barrier(vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ)];
+        // SAFETY: recording state outside rendering; the caller keeps `data` within the limits.
+        unsafe {
+            self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&before));
+            self.device.cmd_update_buffer(self.cmd, buffer, 0, data);
+            self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&after));
+        }
     }
 
     /// Makes the transfer writes of this submission visible to the host after its fence.
@@ -372,3 +367,4 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().memory_barriers(&barrier)) };
     }
 }
+

@@ -7,8 +7,7 @@ use ash::vk;
 /// One binding and the resource it points at.
 pub enum Binding {
     StorageBuffer(vk::Buffer),
-    /// An array of sampled images, all read through one sampler (one view: a single image).
-    SampledImages { views: Vec<vk::ImageView>, sampler: vk::Sampler },
+    SampledImage { view: vk::ImageView, sampler: vk::Sampler },
     StorageImage(vk::ImageView),
 }
 
@@ -16,46 +15,33 @@ impl Binding {
     fn kind(&self) -> vk::DescriptorType {
         match self {
             Binding::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Binding::SampledImages { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::SampledImage { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
 
-    fn count(&self) -> u32 {
-        match self {
-            Binding::SampledImages { views, .. } => views.len() as u32,
-            _ => 1,
-        }
-    }
-
-    fn image_infos(&self) -> Vec<vk::DescriptorImageInfo> {
-        match self {
-            Binding::SampledImages { views, sampler } => views
-                .iter()
-                .map(|view| {
-                    vk::DescriptorImageInfo::default()
-                        .image_view(*view)
-                        .sampler(*sampler)
-                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
-                })
-                .collect(),
-            Binding::StorageImage(view) => {
-                vec![vk::DescriptorImageInfo::default().image_view(*view).image_layout(vk::ImageLayout::GENERAL)]
+    fn image_info(&self) -> [vk::DescriptorImageInfo; 1] {
+        let info = vk::DescriptorImageInfo::default();
+        [match self {
+            Binding::SampledImage { view, sampler } => {
+                info.image_view(*view).sampler(*sampler).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
             }
-            Binding::StorageBuffer(_) => Vec::new(),
-        }
+            Binding::StorageImage(view) => info.image_view(*view).image_layout(vk::ImageLayout::GENERAL),
+            Binding::StorageBuffer(_) => info,
+        }]
     }
 }
 
-pub struct DescriptorSet {
+pub struct DescriptorSet<'a> {
+    ctx: &'a Context,
     pub layout: vk::DescriptorSetLayout,
     pub set: vk::DescriptorSet,
     pool: vk::DescriptorPool,
 }
 
-impl DescriptorSet {
+impl<'a> DescriptorSet<'a> {
     /// Creates a set whose binding i is `bindings[i]`, visible to `stages`.
-    pub fn new(ctx: &Context, stages: vk::ShaderStageFlags, bindings: &[Binding]) -> VkResult<DescriptorSet> {
+    pub fn new(ctx: &'a Context, stages: vk::ShaderStageFlags, bindings: &[Binding]) -> VkResult<DescriptorSet<'a>> {
         let layout_bindings: Vec<_> = bindings
             .iter()
             .enumerate()
@@ -63,37 +49,38 @@ impl DescriptorSet {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
                     .descriptor_type(b.kind())
-                    .descriptor_count(b.count())
+                    .descriptor_count(1)
                     .stage_flags(stages)
             })
             .collect();
         let pool_sizes: Vec<_> = bindings
             .iter()
-            .map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: b.count() })
+            .map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: 1 })
             .collect();
         let device = &ctx.device;
-        // SAFETY: create infos refer to locals alive for each call; objects are destroyed in
-        // `destroy` in reverse order.
+        let mut descriptors =
+            DescriptorSet { ctx, layout: vk::DescriptorSetLayout::null(), set: vk::DescriptorSet::null(), pool: vk::DescriptorPool::null() };
+        // SAFETY: create infos refer to locals alive for each call; whatever was made before
+        // a failure is destroyed by drop.
         unsafe {
-            let layout = device.create_descriptor_set_layout(
+            descriptors.layout = device.create_descriptor_set_layout(
                 &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
                 None,
             )?;
-            let pool = device.create_descriptor_pool(
+            descriptors.pool = device.create_descriptor_pool(
                 &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes),
                 None,
             )?;
-            let layouts = [layout];
-            let set = device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
+            let layouts = [descriptors.layout];
+            descriptors.set = device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(descriptors.pool).set_layouts(&layouts),
             )?[0];
-            let descriptors = DescriptorSet { layout, set, pool };
-            descriptors.write(ctx, bindings);
-            Ok(descriptors)
         }
+        descriptors.write(bindings);
+        Ok(descriptors)
     }
 
-    fn write(&self, ctx: &Context, bindings: &[Binding]) {
+    fn write(&self, bindings: &[Binding]) {
         let buffer_infos: Vec<_> = bindings
             .iter()
             .map(|b| match b {
@@ -101,7 +88,7 @@ impl DescriptorSet {
                 _ => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
-        let image_infos: Vec<_> = bindings.iter().map(Binding::image_infos).collect();
+        let image_infos: Vec<_> = bindings.iter().map(Binding::image_info).collect();
         let writes: Vec<_> = bindings
             .iter()
             .enumerate()
@@ -117,14 +104,16 @@ impl DescriptorSet {
             })
             .collect();
         // SAFETY: the set is not in use by the GPU yet; every info outlives the call.
-        unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
+        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
     }
+}
 
-    pub fn destroy(&mut self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the set.
+impl Drop for DescriptorSet<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the set; null handles are no-ops.
         unsafe {
-            ctx.device.destroy_descriptor_pool(self.pool, None);
-            ctx.device.destroy_descriptor_set_layout(self.layout, None);
+            self.ctx.device.destroy_descriptor_pool(self.pool, None);
+            self.ctx.device.destroy_descriptor_set_layout(self.layout, None);
         }
     }
 }

@@ -24,40 +24,50 @@ pub(super) struct DeviceParts {
     pub info: DeviceInfo,
 }
 
-/// `selector` is a device index or a case-insensitive part of its name.
+/// `selector` is a device index or a case-insensitive part of its name. Without one, the
+/// best suitable device: a discrete GPU, then integrated, virtual, CPU (lavapipe).
 pub(super) fn create(instance: &ash::Instance, selector: Option<&str>) -> VkResult<DeviceParts> {
     // SAFETY: plain queries of a live instance.
     let physicals = unsafe { instance.enumerate_physical_devices() }?;
-    let candidates: Vec<_> = physicals
-        .iter()
-        .enumerate()
-        .filter_map(|(index, &pd)| {
-            let props = unsafe { instance.get_physical_device_properties(pd) };
-            let name = props.device_name_as_c_str().ok()?.to_string_lossy().into_owned();
-            let family = graphics_compute_family(instance, pd)?;
-            Some((index, pd, props, name, family))
-        })
-        .collect();
-    let chosen = match selector {
-        Some(sel) => candidates.iter().find(|(index, _, _, name, _)| {
-            sel.parse::<usize>().ok() == Some(*index) || name.to_lowercase().contains(&sel.to_lowercase())
-        }),
-        None => candidates.iter().min_by_key(|(_, _, props, _, _)| type_rank(props.device_type)),
-    };
-    let Some((_, physical, props, name, family)) = chosen else {
-        let names: Vec<_> = candidates.iter().map(|c| format!("{}: {}", c.0, c.3)).collect();
-        let wanted = selector.map_or("any graphics+compute queue".into(), |s| format!("\"{s}\""));
-        return Err(VkError::NoDevice(format!("{wanted} (devices: {})", names.join(", "))));
-    };
-    if props.api_version < vk::API_VERSION_1_3 {
-        return Err(VkError::MissingFeature { device: name.clone(), missing: "Vulkan 1.3".into() });
+    let mut listed = Vec::new();
+    let mut suitable = Vec::new();
+    for (index, &pd) in physicals.iter().enumerate() {
+        // SAFETY: plain query of an enumerated device.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        let wanted = selector.is_none_or(|sel| {
+            sel.parse::<usize>().ok() == Some(index) || name.to_lowercase().contains(&sel.to_lowercase())
+        });
+        let verdict = graphics_compute_family(instance, pd)
+            .ok_or_else(|| VkError::MissingFeature { device: name.clone(), missing: "a graphics+compute queue".into() })
+            .and_then(|family| check_and_describe(instance, pd, family).map(|info| (family, info)));
+        match verdict {
+            Ok((family, info)) if wanted => suitable.push((type_rank(props.device_type), pd, family, info)),
+            Ok(_) => listed.push(format!("{index}: {name}")),
+            Err(e) => listed.push(format!("{index}: {name} (unsuitable: {e})")),
+        }
     }
-    check_features(instance, *physical, name)?;
-    let device = create_logical(instance, *physical, *family)?;
+    suitable.sort_by_key(|candidate| candidate.0);
+    let Some((_, physical, family, info)) = suitable.into_iter().next() else {
+        let wanted = selector.map_or("a suitable device".into(), |s| format!("\"{s}\""));
+        return Err(VkError::NoDevice(format!("{wanted} (devices: {})", listed.join(", "))));
+    };
+    let device = create_logical(instance, physical, family)?;
     // SAFETY: the queue family and index were requested at device creation.
-    let queue = unsafe { device.get_device_queue(*family, 0) };
-    let info = describe(instance, *physical, props, name, *family);
-    Ok(DeviceParts { physical: *physical, device, queue_family: *family, queue, info })
+    let queue = unsafe { device.get_device_queue(family, 0) };
+    Ok(DeviceParts { physical, device, queue_family: family, queue, info })
+}
+
+/// Checks that a device has everything relume needs and describes it.
+pub(super) fn check_and_describe(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> VkResult<DeviceInfo> {
+    // SAFETY: plain query.
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err(VkError::MissingFeature { device: name, missing: "Vulkan 1.3".into() });
+    }
+    check_features(instance, pd, &name)?;
+    Ok(describe(instance, pd, &props, &name, family))
 }
 
 fn type_rank(kind: vk::PhysicalDeviceType) -> u32 {
@@ -120,16 +130,21 @@ fn describe(
 ) -> DeviceInfo {
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
-    // SAFETY: plain queries.
-    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
-    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    let format = unsafe { instance.get_physical_device_format_properties(pd, vk::Format::R32G32_SFLOAT) };
+    // SAFETY: plain queries of a live physical device into structures alive for the calls.
+    let (families, format) = unsafe {
+        instance.get_physical_device_properties2(pd, &mut props2);
+        (
+            instance.get_physical_device_queue_family_properties(pd),
+            instance.get_physical_device_format_properties(pd, vk::Format::R32G32_SFLOAT),
+        )
+    };
     let driver = format!(
         "{} {}",
         driver_props.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
         driver_props.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default()
     );
-    let timestamps = families[family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
+    let timestamps = families.get(family as usize).is_some_and(|f| f.timestamp_valid_bits > 0)
+        && props.limits.timestamp_period > 0.0;
     DeviceInfo {
         name: name.to_string(),
         driver: driver.trim().to_string(),

@@ -1,4 +1,5 @@
-//! Images (2D or 2D arrays) with one view over all their layers.
+//! Images (2D or 2D arrays) with their memory and one view over all their layers, freed on
+//! drop; and views of single layers.
 
 use super::{Context, VkResult};
 use ash::vk;
@@ -16,13 +17,6 @@ pub struct ImageDesc {
     pub view_type: vk::ImageViewType,
 }
 
-pub struct Image {
-    pub raw: vk::Image,
-    pub view: vk::ImageView,
-    pub desc: ImageDesc,
-    allocation: Option<Allocation>,
-}
-
 impl ImageDesc {
     pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
@@ -36,15 +30,28 @@ impl ImageDesc {
     }
 
     pub fn all_layers(&self) -> vk::ImageSubresourceRange {
+        self.layers(0, self.layers)
+    }
+
+    fn layers(&self, first: u32, count: u32) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange::default()
             .aspect_mask(self.aspect())
             .level_count(1)
-            .layer_count(self.layers)
+            .base_array_layer(first)
+            .layer_count(count)
     }
 }
 
-impl Image {
-    pub fn new(ctx: &Context, name: &str, desc: ImageDesc) -> VkResult<Image> {
+pub struct Image<'a> {
+    ctx: &'a Context,
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub desc: ImageDesc,
+    allocation: Option<Allocation>,
+}
+
+impl<'a> Image<'a> {
+    pub fn new(ctx: &'a Context, name: &str, desc: ImageDesc) -> VkResult<Image<'a>> {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
@@ -57,6 +64,8 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: a valid create info on a live device.
         let raw = unsafe { ctx.device.create_image(&info, None) }?;
+        let mut image = Image { ctx, raw, view: vk::ImageView::null(), desc, allocation: None };
+        // SAFETY: a plain query of the image just made.
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -64,70 +73,58 @@ impl Image {
             location: MemoryLocation::GpuOnly,
             linear: false,
             allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        });
-        let mut image = Image { raw, view: vk::ImageView::null(), desc, allocation: None };
-        match allocation {
-            Ok(a) => image.allocation = Some(a),
-            Err(e) => {
-                // SAFETY: the image is unused and unbound.
-                unsafe { ctx.device.destroy_image(raw, None) };
-                return Err(e.into());
-            }
-        }
-        // SAFETY: the allocation was just made for this image's requirements and is bound once.
-        let bound = image.allocation.as_ref().map(|a| unsafe { (a.memory(), a.offset()) }).unwrap_or_default();
-        let result = unsafe { ctx.device.bind_image_memory(raw, bound.0, bound.1) }
-            .map_err(Into::into)
-            .and_then(|_| image.create_view(ctx));
-        if let Err(e) = result {
-            image.destroy(ctx);
-            return Err(e);
-        }
+        })?;
+        // SAFETY: the allocation was made for this image's requirements and is bound once;
+        // it is stored first so that drop frees it if binding fails.
+        let (memory, offset) = unsafe { (allocation.memory(), allocation.offset()) };
+        image.allocation = Some(allocation);
+        unsafe { ctx.device.bind_image_memory(raw, memory, offset) }?;
+        image.view = create_view(ctx, raw, &desc, desc.view_type, desc.all_layers())?;
         Ok(image)
     }
 
-    fn create_view(&mut self, ctx: &Context) -> VkResult<()> {
-        let info = vk::ImageViewCreateInfo::default()
-            .image(self.raw)
-            .view_type(self.desc.view_type)
-            .format(self.desc.format)
-            .subresource_range(self.desc.all_layers());
-        // SAFETY: the image is bound to memory and the range lies inside it.
-        self.view = unsafe { ctx.device.create_image_view(&info, None) }?;
-        Ok(())
+    /// A 2D view of one layer, for rendering into it.
+    pub fn layer_view(&self, layer: u32) -> VkResult<ImageView<'a>> {
+        let range = self.desc.layers(layer, 1);
+        let raw = create_view(self.ctx, self.raw, &self.desc, vk::ImageViewType::TYPE_2D, range)?;
+        Ok(ImageView { ctx: self.ctx, raw })
     }
+}
 
-    /// A view of one layer, for rendering into it; the caller destroys it with `destroy_view`.
-    pub fn layer_view(&self, ctx: &Context, layer: u32) -> VkResult<vk::ImageView> {
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(self.desc.aspect())
-            .level_count(1)
-            .base_array_layer(layer)
-            .layer_count(1);
-        let info = vk::ImageViewCreateInfo::default()
-            .image(self.raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(self.desc.format)
-            .subresource_range(range);
-        // SAFETY: the layer exists in the bound image.
-        Ok(unsafe { ctx.device.create_image_view(&info, None) }?)
-    }
+fn create_view(
+    ctx: &Context,
+    image: vk::Image,
+    desc: &ImageDesc,
+    view_type: vk::ImageViewType,
+    range: vk::ImageSubresourceRange,
+) -> VkResult<vk::ImageView> {
+    let info = vk::ImageViewCreateInfo::default().image(image).view_type(view_type).format(desc.format).subresource_range(range);
+    // SAFETY: the image is bound to memory and the range lies inside it.
+    Ok(unsafe { ctx.device.create_image_view(&info, None) }?)
+}
 
-    pub fn destroy(&mut self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the image or its view.
+impl Drop for Image<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the image; destroying a null view is a no-op.
         unsafe {
-            if self.view != vk::ImageView::null() {
-                ctx.device.destroy_image_view(self.view, None);
-            }
+            self.ctx.device.destroy_image_view(self.view, None);
+            self.ctx.device.destroy_image(self.raw, None);
         }
         if let Some(allocation) = self.allocation.take() {
-            unsafe { ctx.device.destroy_image(self.raw, None) };
-            let _ = ctx.allocator().free(allocation);
+            let _ = self.ctx.allocator().free(allocation);
         }
     }
 }
 
-pub fn destroy_view(ctx: &Context, view: vk::ImageView) {
-    // SAFETY: the caller guarantees the GPU no longer uses the view.
-    unsafe { ctx.device.destroy_image_view(view, None) };
+/// A view owned apart from its image (one layer of an array), destroyed on drop.
+pub struct ImageView<'a> {
+    ctx: &'a Context,
+    pub raw: vk::ImageView,
+}
+
+impl Drop for ImageView<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the view.
+        unsafe { self.ctx.device.destroy_image_view(self.raw, None) };
+    }
 }

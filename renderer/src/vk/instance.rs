@@ -98,10 +98,9 @@ unsafe extern "system" fn on_message(
         let text = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned());
         (text.unwrap_or_default(), &*(user_data as *const Mutex<Vec<String>>))
     };
-    let line = format!("[{severity:?}] {message}");
-    eprintln!("vulkan validation: {line}");
+    // Logged, not printed: the library never writes to stderr; callers report the messages.
     if let Ok(mut messages) = log.lock() {
-        messages.push(line);
+        messages.push(format!("[{severity:?}] {message}"));
     }
     vk::FALSE
 }

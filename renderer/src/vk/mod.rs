@@ -10,6 +10,7 @@ mod image;
 mod instance;
 mod pipeline;
 mod query;
+mod sync;
 
 pub use ash::vk;
 pub use barrier::{Access, Tracker};
@@ -17,10 +18,10 @@ pub use buffer::Buffer;
 pub use context::{CommandRecorder, Context, ContextOptions};
 pub use descriptor::{Binding, DescriptorSet};
 pub use device::DeviceInfo;
-pub use image::{Image, ImageDesc};
-pub use pipeline::{ComputePipeline, GraphicsPipeline, GraphicsPipelineDesc};
+pub use image::{Image, ImageDesc, ImageView};
+pub use pipeline::{GraphicsPipelineDesc, Pipeline};
 pub use query::TimestampQueries;
-pub use image::destroy_view;
+pub use sync::{CommandBuffer, Fence, Sampler};
 
 /// Everything that can go wrong in the backend, each with what to do about it.
 #[derive(Debug, thiserror::Error)]

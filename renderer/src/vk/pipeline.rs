@@ -1,54 +1,38 @@
-//! Compute and graphics pipelines from embedded SPIR-V, with their layouts. Graphics pipelines
-//! use dynamic rendering (no render passes) and dynamic viewport and scissor.
+//! Compute and graphics pipelines from embedded SPIR-V, with their layouts, destroyed on drop.
+//! Graphics pipelines use dynamic rendering (no render passes) and dynamic viewport and scissor.
 
 use super::{Context, VkError, VkResult};
 use ash::vk;
 
-fn shader_module(ctx: &Context, spirv: &[u8]) -> VkResult<vk::ShaderModule> {
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
-        .map_err(|e| VkError::Invalid(format!("embedded SPIR-V is malformed: {e}")))?;
-    // SAFETY: the words are SPIR-V produced by shaderc at build time.
-    Ok(unsafe { ctx.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }?)
+/// A shader module that lives only while a pipeline is created from it.
+struct ShaderModule<'a> {
+    ctx: &'a Context,
+    raw: vk::ShaderModule,
 }
 
-fn pipeline_layout(ctx: &Context, set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<vk::PipelineLayout> {
-    let set_layouts = [set_layout];
-    let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
-    let info = vk::PipelineLayoutCreateInfo::default()
-        .set_layouts(&set_layouts)
-        .push_constant_ranges(if push_bytes > 0 { &ranges } else { &[] });
-    // SAFETY: a valid create info on a live device.
-    Ok(unsafe { ctx.device.create_pipeline_layout(&info, None) }?)
+impl<'a> ShaderModule<'a> {
+    fn new(ctx: &'a Context, spirv: &[u8]) -> VkResult<Self> {
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+            .map_err(|e| VkError::Invalid(format!("embedded SPIR-V is malformed: {e}")))?;
+        // SAFETY: the words are SPIR-V produced by shaderc at build time.
+        let raw = unsafe { ctx.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }?;
+        Ok(ShaderModule { ctx, raw })
+    }
 }
 
-pub struct ComputePipeline {
+impl Drop for ShaderModule<'_> {
+    fn drop(&mut self) {
+        // SAFETY: a module may be destroyed once pipelines are created from it.
+        unsafe { self.ctx.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// A compute or graphics pipeline with its layout (one descriptor set, push constants
+/// visible to every stage).
+pub struct Pipeline<'a> {
+    ctx: &'a Context,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
-}
-
-impl ComputePipeline {
-    pub fn new(ctx: &Context, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
-        let layout = pipeline_layout(ctx, set_layout, push_bytes)?;
-        let module = shader_module(ctx, spirv)?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
-        // SAFETY: module and layout are live; the module may be destroyed once the pipeline exists.
-        let result = unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
-        unsafe { ctx.device.destroy_shader_module(module, None) };
-        let raw = result.map_err(|(_, e)| e)?[0];
-        Ok(ComputePipeline { raw, layout })
-    }
-
-    pub fn destroy(&mut self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the pipeline.
-        unsafe {
-            ctx.device.destroy_pipeline(self.raw, None);
-            ctx.device.destroy_pipeline_layout(self.layout, None);
-        }
-    }
 }
 
 pub struct GraphicsPipelineDesc<'a> {
@@ -61,32 +45,42 @@ pub struct GraphicsPipelineDesc<'a> {
     pub cull_mode: vk::CullModeFlags,
     pub set_layout: vk::DescriptorSetLayout,
     pub push_bytes: u32,
-    /// Fragment specialization constants: `constant_id = i` takes `fragment_constants[i]`.
-    pub fragment_constants: &'a [u32],
 }
 
-pub struct GraphicsPipeline {
-    pub raw: vk::Pipeline,
-    pub layout: vk::PipelineLayout,
-}
+impl<'a> Pipeline<'a> {
+    /// The pipeline layout alone; the pipeline is filled in by the caller (drop cleans up both).
+    fn with_layout(ctx: &'a Context, set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
+        let set_layouts = [set_layout];
+        let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(if push_bytes > 0 { &ranges } else { &[] });
+        // SAFETY: a valid create info on a live device.
+        let layout = unsafe { ctx.device.create_pipeline_layout(&info, None) }?;
+        Ok(Pipeline { ctx, raw: vk::Pipeline::null(), layout })
+    }
 
-impl GraphicsPipeline {
-    pub fn new(ctx: &Context, desc: &GraphicsPipelineDesc) -> VkResult<Self> {
-        let layout = pipeline_layout(ctx, desc.set_layout, desc.push_bytes)?;
-        let vertex = shader_module(ctx, desc.vertex)?;
-        let fragment = shader_module(ctx, desc.fragment)?;
-        let entries: Vec<_> = (0..desc.fragment_constants.len())
-            .map(|i| vk::SpecializationMapEntry { constant_id: i as u32, offset: 4 * i as u32, size: 4 })
-            .collect();
-        let constant_bytes: Vec<u8> = desc.fragment_constants.iter().flat_map(|c| c.to_ne_bytes()).collect();
-        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(&constant_bytes);
+    pub fn compute(ctx: &'a Context, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
+        let mut pipeline = Pipeline::with_layout(ctx, set_layout, push_bytes)?;
+        let module = ShaderModule::new(ctx, spirv)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout)];
+        // SAFETY: module and layout are live for the call.
+        let created = unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        pipeline.raw = created.map_err(|(_, e)| e)?[0];
+        Ok(pipeline)
+    }
+
+    pub fn graphics(ctx: &'a Context, desc: &GraphicsPipelineDesc) -> VkResult<Self> {
+        let mut pipeline = Pipeline::with_layout(ctx, desc.set_layout, desc.push_bytes)?;
+        let vertex = ShaderModule::new(ctx, desc.vertex)?;
+        let fragment = ShaderModule::new(ctx, desc.fragment)?;
         let stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex).name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fragment)
-                .name(c"main")
-                .specialization_info(&specialization),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex.raw).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fragment.raw).name(c"main"),
         ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)
@@ -128,23 +122,21 @@ impl GraphicsPipeline {
             .depth_stencil_state(&depth)
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
-            .layout(layout)
+            .layout(pipeline.layout)
             .push_next(&mut rendering)];
-        // SAFETY: every state struct outlives the call; modules are destroyed after it.
-        let result = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-        unsafe {
-            ctx.device.destroy_shader_module(vertex, None);
-            ctx.device.destroy_shader_module(fragment, None);
-        }
-        let raw = result.map_err(|(_, e)| e)?[0];
-        Ok(GraphicsPipeline { raw, layout })
+        // SAFETY: every state struct and both modules outlive the call.
+        let created = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+        pipeline.raw = created.map_err(|(_, e)| e)?[0];
+        Ok(pipeline)
     }
+}
 
-    pub fn destroy(&mut self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the pipeline.
+impl Drop for Pipeline<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the pipeline; a null pipeline is a no-op.
         unsafe {
-            ctx.device.destroy_pipeline(self.raw, None);
-            ctx.device.destroy_pipeline_layout(self.layout, None);
+            self.ctx.device.destroy_pipeline(self.raw, None);
+            self.ctx.device.destroy_pipeline_layout(self.layout, None);
         }
     }
 }

@@ -1,31 +1,29 @@
-//! Timestamp queries: two per pass, read back after the frame's fence.
+//! Timestamp queries: one before the first pass and one after each, read after the frame's fence.
 
 use super::{CommandRecorder, Context, VkResult};
 use ash::vk;
 
-pub struct TimestampQueries {
+pub struct TimestampQueries<'a> {
+    ctx: &'a Context,
     pool: vk::QueryPool,
-    capacity: u32,
     period_ns: f64,
 }
 
-impl TimestampQueries {
+impl<'a> TimestampQueries<'a> {
+    pub const CAPACITY: usize = 8;
+
     /// None when the device cannot write timestamps (the frame then reports no pass times).
-    pub fn new(ctx: &Context, capacity: u32) -> VkResult<Option<Self>> {
+    pub fn new(ctx: &'a Context) -> VkResult<Option<Self>> {
         let Some(period_ns) = ctx.info.timestamp_period_ns else { return Ok(None) };
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(Self::CAPACITY as u32);
         // SAFETY: a valid create info on a live device.
         let pool = unsafe { ctx.device.create_query_pool(&info, None) }?;
-        Ok(Some(TimestampQueries { pool, capacity, period_ns }))
-    }
-
-    pub fn capacity(&self) -> u32 {
-        self.capacity
+        Ok(Some(TimestampQueries { ctx, pool, period_ns }))
     }
 
     pub fn reset(&self, rec: &CommandRecorder) {
         // SAFETY: recording state; the range lies in the pool.
-        unsafe { rec.device.cmd_reset_query_pool(rec.cmd, self.pool, 0, self.capacity) };
+        unsafe { rec.device.cmd_reset_query_pool(rec.cmd, self.pool, 0, Self::CAPACITY as u32) };
     }
 
     /// Writes timestamp `index` once all earlier commands have finished.
@@ -34,16 +32,20 @@ impl TimestampQueries {
         unsafe { rec.device.cmd_write_timestamp2(rec.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index) };
     }
 
-    /// The first `count` timestamps in milliseconds, after the frame's fence has signalled.
-    pub fn read_ms(&self, ctx: &Context, count: u32) -> VkResult<Vec<f64>> {
-        let mut ticks = vec![0u64; count as usize];
+    /// The first N timestamps in milliseconds, after the frame's fence has signalled.
+    pub fn read_ms<const N: usize>(&self) -> VkResult<[f64; N]> {
+        let mut ticks = [0u64; N];
         // SAFETY: the queries were written by a submission that has completed.
-        unsafe { ctx.device.get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }?;
-        Ok(ticks.iter().map(|t| *t as f64 * self.period_ns * 1e-6).collect())
+        unsafe {
+            self.ctx.device.get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+        }?;
+        Ok(ticks.map(|t| t as f64 * self.period_ns * 1e-6))
     }
+}
 
-    pub fn destroy(&mut self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the pool.
-        unsafe { ctx.device.destroy_query_pool(self.pool, None) };
+impl Drop for TimestampQueries<'_> {
+    fn drop(&mut self) {
+        // SAFETY: no pending GPU work uses the pool.
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
     }
 }
