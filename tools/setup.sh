@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs what relume needs from Debian when it is missing: Mesa's lavapipe (software
 # Vulkan), the Vulkan loader and validation layers, and shaderc with the glslang and
-# SPIRV-Tools static libraries it links against. Safe to run again: it installs nothing
+# SPIRV-Tools static libraries it links against (and g++ for libstdc++, which they need).
+# Safe to run again: it installs nothing
 # that is already there.
 set -euo pipefail
 
-packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
+packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers g++
           libshaderc-dev glslang-dev spirv-tools)
 missing=()
 for p in "${packages[@]}"; do
