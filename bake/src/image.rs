@@ -98,6 +98,7 @@ pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), Im
 pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
     use exr::prelude::*;
     type RgbImage = crate::image::Image;
+    check_exr_size(path)?;
     let file = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -119,6 +120,23 @@ pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> 
             (name.unwrap_or_else(|| "rgb".into()), layer.channel_data.pixels)
         })
         .collect())
+}
+
+/// The largest image relume reads: 16384 x 16384, the renderer's own limit.
+const MAX_PIXELS: usize = 16384 * 16384;
+
+/// Refuses a file whose header claims a size no relume image has, before anything is
+/// allocated for it (a corrupt header must not become a huge allocation or an overflow).
+fn check_exr_size(path: &Path) -> Result<(), ImageError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
+    for header in meta.headers.iter() {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        if w.checked_mul(h).is_none_or(|pixels| pixels > MAX_PIXELS) {
+            return Err(io_error(path, format!("a layer claims {w}x{h} pixels, more than relume reads (16384x16384); the file is corrupt or not one of relume's")));
+        }
+    }
+    Ok(())
 }
 
 /// Reads one layer of an EXR file: the named one, or the first when `layer` is None.
@@ -181,4 +199,71 @@ pub fn write_png_tonemapped(path: &Path, image: &Image, exposure: f32) -> Result
     let rgb: Vec<u8> =
         image.pixels.iter().flat_map(|p| tonemap_to_srgb8(*p, exposure)).collect();
     write_png_rgb8(path, image.width, image.height, &rgb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_path(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("relume-image-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir.join(name)
+    }
+
+    fn gradient(width: u32, height: u32, scale: f32) -> Image {
+        let mut image = Image::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                image.set(x, y, Vec3::new(x as f32, y as f32, 1.0 + x as f32 * y as f32) * scale);
+            }
+        }
+        image
+    }
+
+    #[test]
+    fn exr_layers_round_trip_exactly_and_deterministically() {
+        let (a, b) = (gradient(7, 5, 0.1), gradient(7, 5, 1e3));
+        let path = temp_path("round-trip.exr");
+        write_exr_layers(&path, &[("direct", &a), ("combined", &b)]).unwrap();
+        let first = std::fs::read(&path).unwrap();
+        write_exr_layers(&path, &[("direct", &a), ("combined", &b)]).unwrap();
+        assert_eq!(first, std::fs::read(&path).unwrap(), "same image, same bytes");
+        assert_eq!(read_exr_layer(&path, Some("combined")).unwrap(), b);
+        assert_eq!(read_exr_layer(&path, None).unwrap(), a);
+        let missing = read_exr_layer(&path, Some("indirect")).unwrap_err().to_string();
+        assert!(missing.contains("direct, combined"), "{missing}");
+    }
+
+    #[test]
+    fn a_file_that_is_not_exr_is_refused_by_name() {
+        let path = temp_path("garbage.exr");
+        std::fs::write(&path, b"not an image").unwrap();
+        let error = read_exr_layers(&path).unwrap_err().to_string();
+        assert!(error.contains("garbage.exr") && error.contains("EXR"), "{error}");
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_file() {
+        let path = temp_path("never.png");
+        let result = write_atomically(&path, |_| Err("disk full".into()));
+        assert!(result.unwrap_err().to_string().contains("disk full"));
+        assert!(!path.exists());
+        let leftovers = std::fs::read_dir(path.parent().unwrap())
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains("never.png"))
+            .count();
+        assert_eq!(leftovers, 0, "temporary file left behind");
+    }
+
+    #[test]
+    fn the_display_transform_is_monotonic_and_srgb_encoded() {
+        assert_eq!(tonemap_to_srgb8(Vec3::ZERO, 1.0), [0, 0, 0]);
+        assert_eq!(tonemap_to_srgb8(Vec3::splat(1e6), 1.0), [255, 255, 255]);
+        let levels: Vec<u8> = (0..50).map(|i| tonemap_to_srgb8(Vec3::splat(i as f32 * 0.1), 1.0)[0]).collect();
+        assert!(levels.windows(2).all(|w| w[0] <= w[1]), "{levels:?}");
+        for c in [0.0, 0.001, 0.2, 0.5, 1.0] {
+            assert!((srgb_to_linear(linear_to_srgb(c)) - c).abs() < 1e-6);
+        }
+    }
 }

@@ -133,3 +133,20 @@ fn base_colour_textures_match_the_reference() {
     let nrmse = direct_nrmse("textured", &scene, &RenderSettings { shadows: false, ..settings() });
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
 }
+
+#[test]
+fn the_gpu_tonemap_matches_the_cpu_display_transform() {
+    let scene = load_scene("cornell");
+    let ctx = validated_context();
+    let settings = RenderSettings { exposure: 1.7, ..settings() };
+    let mut renderer = Renderer::new(&ctx, &scene, &settings).expect("renderer");
+    let (radiance, display) = renderer.render_and_read().expect("frame");
+    let mut worst = 0;
+    for (pixel, rgba) in radiance.pixels.iter().zip(display.chunks_exact(4)) {
+        let cpu = relume_bake::image::tonemap_to_srgb8(*pixel, settings.exposure);
+        for c in 0..3 {
+            worst = worst.max((cpu[c] as i32 - rgba[c] as i32).abs());
+        }
+    }
+    assert!(worst <= 1, "GPU and CPU display values differ by up to {worst} levels");
+}
