@@ -47,7 +47,8 @@ float visibility(Light light, vec3 p) {
     uint layer = shadow_layer(light, p);
     vec4 clip = layers[layer].clip_from_world * vec4(p, 1.0);
     vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
-    vec2 moments = texture(shadow_moments, vec3(uv, float(layer))).xy;
+    // Explicit LOD: this runs in non-uniform control flow, where implicit derivatives are undefined.
+    vec2 moments = textureLod(shadow_moments, vec3(uv, float(layer)), 0.0).xy;
     return chebyshev_visibility(moments, light_depth(light, p), pc.min_variance,
                                 pc.bleeding_reduction);
 }

@@ -219,6 +219,23 @@ impl<'a> Renderer<'a> {
     /// Renders one frame and reads back its linear radiance and its display image (RGBA8).
     pub fn render_and_read(&mut self) -> VkResult<(HdrImage, Vec<u8>)> {
         self.submit_frame(true)?;
+        self.read_back()
+    }
+
+    /// Records copies of this frame's `radiance` and `display` into the renderer's readback
+    /// buffers, after [`Renderer::record`] in the same command buffer; once the caller has
+    /// waited for it, [`Renderer::read_back`] returns the pixels.
+    pub fn record_readback(&mut self, rec: &CommandRecorder) {
+        self.tracker.use_image(rec, &self.radiance, Access::TransferSource);
+        self.tracker.use_image(rec, &self.display, Access::TransferSource);
+        rec.copy_image_to_buffer(&self.radiance, self.readback.0.raw);
+        rec.copy_image_to_buffer(&self.display, self.readback.1.raw);
+        rec.transfer_to_host_barrier();
+    }
+
+    /// The linear radiance and display pixels of the last frame recorded with
+    /// [`Renderer::record_readback`] (the caller has waited for its submission).
+    pub fn read_back(&self) -> VkResult<(HdrImage, Vec<u8>)> {
         let pixels = self.settings.width as usize * self.settings.height as usize;
         let floats: &[f32] = bytemuck::try_cast_slice(self.readback.0.mapped_bytes(pixels * 16)?)
             .map_err(|e| VkError::Invalid(format!("readback is not f32 data: {e}")))?;
@@ -229,17 +246,24 @@ impl<'a> Renderer<'a> {
         Ok((radiance, self.readback.1.mapped_bytes(pixels * 4)?.to_vec()))
     }
 
+    /// Forgets what the renderer's images were last used for, after a recorded frame was
+    /// never submitted or its submission failed. Safe because every frame rewrites every
+    /// image it uses; the next frame transitions them from UNDEFINED.
+    pub fn forget_image_states(&mut self) {
+        self.tracker = Tracker::default();
+    }
+
     fn submit_frame(&mut self, read_back: bool) -> VkResult<()> {
         let rec = self.ctx.begin(self.cmd.raw)?;
         self.record(&rec);
         if read_back {
-            self.tracker.use_image(&rec, &self.radiance, Access::TransferSource);
-            self.tracker.use_image(&rec, &self.display, Access::TransferSource);
-            rec.copy_image_to_buffer(&self.radiance, self.readback.0.raw);
-            rec.copy_image_to_buffer(&self.display, self.readback.1.raw);
-            rec.transfer_to_host_barrier();
+            self.record_readback(&rec);
         }
-        self.ctx.submit_and_wait(rec, &self.fence)
+        let submitted = self.ctx.submit_and_wait(rec, &self.fence);
+        if submitted.is_err() {
+            self.forget_image_states();
+        }
+        submitted
     }
 
     fn timings(&self) -> VkResult<FrameTimings> {

@@ -31,6 +31,9 @@ pub struct Context {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: MessageLog,
     owns_device: bool,
+    /// Not Sync: the command pool and the queue need external synchronization, and the
+    /// context gives none, so it may move between threads but not be shared by them.
+    _not_sync: std::marker::PhantomData<std::cell::Cell<()>>,
 }
 
 impl Context {
@@ -120,6 +123,7 @@ impl Context {
             debug,
             messages,
             owns_device,
+            _not_sync: std::marker::PhantomData,
         })
     }
 
@@ -346,8 +350,11 @@ impl<'a> CommandRecorder<'a> {
                 .buffer(buffer)
                 .size(vk::WHOLE_SIZE)
         };
-        let before = [barrier(shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ, vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE)];
-        let after = [barrier(vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ)];
+        // vkCmdUpdateBuffer is a clear command: ALL_TRANSFER covers its stage under every
+        // reading of synchronization2 (older validation layers call it COPY, newer CLEAR).
+        let transfer = vk::PipelineStageFlags2::ALL_TRANSFER;
+        let before = [barrier(shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ, transfer, vk::AccessFlags2::TRANSFER_WRITE)];
+        let after = [barrier(transfer, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ)];
         // SAFETY: recording state outside rendering; the caller keeps `data` within the limits.
         unsafe {
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&before));
