@@ -257,51 +257,27 @@ struct WatertightRay {
     shear: Mat3A,
 }
 
+/// Rows of the shear for dominant axis `kz` (direction component, unit axis) and the other
+/// two axes `kx`, `ky` in cyclic order, swapped when the dominant component is negative so
+/// the winding is kept. Written without indexed stores.
+#[inline(always)]
+fn axis_shear((dz, ez): (f32, Vec3A), kx: (f32, Vec3A), ky: (f32, Vec3A)) -> [Vec3A; 3] {
+    let ((dx, ex), (dy, ey)) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
+    [ex - ez * (dx / dz), ey - ez * (dy / dz), ez / dz]
+}
+
 impl WatertightRay {
     #[inline]
     fn new(origin: Vec3, dir: Vec3) -> Self {
-        // kz: the dominant axis; kx, ky the other two, swapped when dir[kz] < 0 to keep the
-        // winding. Each row of the shear written out per case, no indexed stores.
+        // kz: the dominant axis; kx, ky the other two in cyclic order.
         let a = dir.abs();
         let (x, y, z) = (dir.x, dir.y, dir.z);
         let shear = if a.z >= a.x && a.z >= a.y {
-            let (sx, sy) = if z < 0.0 {
-                (y / z, x / z)
-            } else {
-                (x / z, y / z)
-            };
-            let (ex, ey) = if z < 0.0 {
-                (Vec3A::Y, Vec3A::X)
-            } else {
-                (Vec3A::X, Vec3A::Y)
-            };
-            [ex - Vec3A::Z * sx, ey - Vec3A::Z * sy, Vec3A::Z / z]
+            axis_shear((z, Vec3A::Z), (x, Vec3A::X), (y, Vec3A::Y))
         } else if a.x >= a.y {
-            // kz = x: (kx, ky) = (y, z).
-            let (sx, sy) = if x < 0.0 {
-                (z / x, y / x)
-            } else {
-                (y / x, z / x)
-            };
-            let (ex, ey) = if x < 0.0 {
-                (Vec3A::Z, Vec3A::Y)
-            } else {
-                (Vec3A::Y, Vec3A::Z)
-            };
-            [ex - Vec3A::X * sx, ey - Vec3A::X * sy, Vec3A::X / x]
+            axis_shear((x, Vec3A::X), (y, Vec3A::Y), (z, Vec3A::Z))
         } else {
-            // kz = y: (kx, ky) = (z, x).
-            let (sx, sy) = if y < 0.0 {
-                (x / y, z / y)
-            } else {
-                (z / y, x / y)
-            };
-            let (ex, ey) = if y < 0.0 {
-                (Vec3A::X, Vec3A::Z)
-            } else {
-                (Vec3A::Z, Vec3A::X)
-            };
-            [ex - Vec3A::Y * sx, ey - Vec3A::Y * sy, Vec3A::Y / y]
+            axis_shear((y, Vec3A::Y), (z, Vec3A::Z), (x, Vec3A::X))
         };
         WatertightRay {
             origin: origin.into(),
