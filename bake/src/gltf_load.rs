@@ -18,6 +18,7 @@
 
 use crate::image::srgb_to_linear;
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene, Texture};
+use crate::settings::LightingSettings;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use std::borrow::Cow;
 use std::fmt;
@@ -518,6 +519,7 @@ impl<'a> Loader<'a> {
                 textures: Vec::new(),
                 lights: Vec::new(),
                 camera: placeholder_camera,
+                settings: LightingSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
             },
             warnings: Vec::new(),
             material_map,
@@ -619,21 +621,31 @@ impl<'a> Loader<'a> {
                 "add meshes with triangles to the scene's nodes",
             ));
         }
+        let bounds = self.scene.bounds();
+        let defaults = LightingSettings::defaults_for(bounds);
+        self.scene.settings = match gltf_scene.extras() {
+            Some(raw) => serde_json::from_str(raw.get())
+                .map_err(|e| e.to_string())
+                .and_then(|extras| LightingSettings::from_extras(&extras, defaults))
+                .map_err(|problem| {
+                    ctx.fail(ErrorKind::Invalid, scene_item.clone(), problem, "fix the scene's extras.relume block (docs/FORMATS.md)")
+                })?,
+            None => defaults,
+        };
         let emissive = self
             .scene
             .materials
             .iter()
             .any(|m| m.emission.max_element() > 0.0);
-        if self.scene.lights.is_empty() && !emissive {
+        if self.scene.lights.is_empty() && !emissive && self.scene.settings.ambient.max_element() <= 0.0 {
             return Err(ctx.fail(
                 ErrorKind::NoLight,
                 scene_item,
                 "has no light",
-                "add a KHR_lights_punctual light or an emissive material",
+                "add a KHR_lights_punctual light, an emissive material or an ambient light (extras.relume.ambient)",
             ));
         }
 
-        let bounds = self.scene.bounds();
         self.scene.camera = match (camera_override, camera_node) {
             (Some(o), _) => o.camera(bounds),
             (None, Some((p, world, item))) => perspective_camera(ctx, &item, &p, world, bounds)?,

@@ -5,6 +5,7 @@ pub mod gltf_load;
 pub mod image;
 pub mod metrics;
 pub mod scene;
+pub mod settings;
 pub mod testing;
 
 #[cfg(feature = "baking")]

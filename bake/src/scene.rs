@@ -7,6 +7,7 @@
 //! linear radiance units), so the path tracer and the renderer agree by construction.
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
+use crate::settings::LightingSettings;
 use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
@@ -18,6 +19,8 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
     pub camera: Camera,
+    /// The scene's relume settings (glTF `extras.relume`), defaults where it states none.
+    pub settings: LightingSettings,
 }
 
 /// One glTF primitive with its node transform applied: positions and normals are in world space.

@@ -7,6 +7,7 @@
 //! builder checks each triangle's winding against the side it must face and flips it if
 //! needed.
 
+use crate::settings::LightingSettings;
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::PathBuf;
@@ -36,14 +37,17 @@ pub fn scene(
     lights: Vec<Light>,
     camera: Camera,
 ) -> Scene {
-    Scene {
+    let mut scene = Scene {
         source: PathBuf::from(format!("<built in code: {name}>")),
         meshes,
         materials,
         textures: Vec::new(),
         lights,
         camera,
-    }
+        settings: LightingSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
+    };
+    scene.settings = LightingSettings::defaults_for(scene.bounds());
+    scene
 }
 
 /// A camera at `eye` looking at `target`, `up` roughly up, vertical field of view `yfov`.
