@@ -204,7 +204,7 @@ fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image
     let white = Texture { name: "white".into(), width: 1, height: 1, texels: vec![Vec4::ONE] };
     let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
     let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
-    let staging = Buffer::with_data(ctx, "texture staging", vk::BufferUsageFlags::TRANSFER_SRC, &all_texels)?;
+    let extents: Vec<_> = textures.iter().map(|t| vk::Extent2D { width: t.width, height: t.height }).collect();
     let array = Image::new(ctx, "base colour textures", ImageDesc {
         width: textures.iter().map(|t| t.width).max().unwrap_or(1),
         height: textures.iter().map(|t| t.height).max().unwrap_or(1),
@@ -213,20 +213,47 @@ fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image
         usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
         view_type: vk::ImageViewType::TYPE_2D_ARRAY,
     })?;
+    upload_array_layers(ctx, &array, &all_texels, &extents, |_, _| {})?;
+    Ok(array)
+}
+
+/// Fills the top-left `extents[i]` of layer i of an RGBA32F array image from `texels` (the
+/// layers one after another, each tightly packed) through one staging buffer, records
+/// `then` (with the image in TransferDestination), and leaves the image ready for
+/// FragmentSampled reads; one submission, waited for.
+pub(crate) fn upload_array_layers(
+    ctx: &Context,
+    image: &Image,
+    texels: &[Vec4],
+    extents: &[vk::Extent2D],
+    then: impl FnOnce(&CommandRecorder, &mut Tracker),
+) -> VkResult<()> {
+    let area = |e: &vk::Extent2D| e.width as u64 * e.height as u64;
+    let expected: u64 = extents.iter().map(area).sum();
+    if expected != texels.len() as u64 {
+        return Err(VkError::Invalid(format!("{} texels given for layers that hold {expected}", texels.len())));
+    }
+    let staging = Buffer::with_data(ctx, "upload staging", vk::BufferUsageFlags::TRANSFER_SRC, texels)?;
+    submit_once(ctx, |rec, tracker| {
+        tracker.use_image(rec, image, Access::TransferDestination);
+        let mut offset = 0;
+        for (layer, extent) in extents.iter().enumerate() {
+            rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
+            offset += area(extent) * 16;
+        }
+        then(rec, tracker);
+        tracker.use_image(rec, image, Access::FragmentSampled);
+    })
+}
+
+/// Records `work` into a fresh command buffer with a fresh tracker, submits it and waits for
+/// its fence: the one-time submissions made at creation (uploads) and by test read-backs.
+pub(crate) fn submit_once(ctx: &Context, work: impl FnOnce(&CommandRecorder, &mut Tracker)) -> VkResult<()> {
     let cmd = CommandBuffer::new(ctx)?;
     let fence = Fence::new(ctx)?;
     let rec = ctx.begin(cmd.raw)?;
-    let mut tracker = Tracker::default();
-    tracker.use_image(&rec, &array, Access::TransferDestination);
-    let mut offset = 0u64;
-    for (layer, texture) in textures.iter().enumerate() {
-        let extent = vk::Extent2D { width: texture.width, height: texture.height };
-        rec.copy_buffer_to_image_layer(staging.raw, offset, &array, layer as u32, extent);
-        offset += texture.texels.len() as u64 * 16;
-    }
-    tracker.use_image(&rec, &array, Access::FragmentSampled);
-    ctx.submit_and_wait(rec, &fence)?;
-    Ok(array)
+    work(&rec, &mut Tracker::default());
+    ctx.submit_and_wait(rec, &fence)
 }
 
 fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {

@@ -3,10 +3,11 @@
 //! ([`vk::Context::from_existing`]); [`Renderer::render`] is the headless driver.
 //!
 //! Layers: `vk` owns every unsafe Vulkan call; `passes` are safe code, one file per pass;
-//! `frame` wires them in order.
+//! `frame` wires them in order; `lightmap` uploads a baked lightmap and pads it once.
 
 pub mod frame;
 pub mod gpu_scene;
+pub mod lightmap;
 pub mod passes;
 pub mod vk;
 

@@ -3,6 +3,7 @@
 //! to the tracker, which records the barriers.
 
 pub mod forward;
+pub mod padding;
 pub mod tonemap;
 pub mod vsm;
 pub mod vsm_blur;

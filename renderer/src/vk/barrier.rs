@@ -16,6 +16,9 @@ pub enum Access {
     FragmentSampled,
     ComputeStorageRead,
     ComputeStorageWrite,
+    /// Read and written by one dispatch (or by a shader that could write it, which is how
+    /// synchronization validation counts every dispatch of a module that stores to it).
+    ComputeStorageReadWrite,
     TransferSource,
     TransferDestination,
 }
@@ -36,6 +39,9 @@ impl Access {
             Access::FragmentSampled => (S::FRAGMENT_SHADER, A::SHADER_SAMPLED_READ, L::SHADER_READ_ONLY_OPTIMAL),
             Access::ComputeStorageRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
             Access::ComputeStorageWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
+            Access::ComputeStorageReadWrite => {
+                (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL)
+            }
             Access::TransferSource => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
             Access::TransferDestination => (S::COPY, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         }
@@ -47,6 +53,7 @@ impl Access {
             Access::ColorAttachmentWrite
                 | Access::DepthAttachmentWrite
                 | Access::ComputeStorageWrite
+                | Access::ComputeStorageReadWrite
                 | Access::TransferDestination
         )
     }
@@ -62,6 +69,13 @@ impl Tracker {
     /// How `image` was last used: what the frame leaves it in, for the caller.
     pub fn state(&self, image: &Image) -> Access {
         self.last.get(&image.raw).copied().unwrap_or(Access::Undefined)
+    }
+
+    /// Takes `access` as the last use of `image`, made by work outside this tracker that has
+    /// completed or comes earlier in submission order (an upload), so that the next use
+    /// here keeps its contents instead of transitioning from UNDEFINED.
+    pub fn assume(&mut self, image: &Image, access: Access) {
+        self.last.insert(image.raw, access);
     }
 
     /// Records the barrier that makes `image` ready for `next`.

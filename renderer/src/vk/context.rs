@@ -314,10 +314,11 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_draw_indexed(self.cmd, count, 1, first, 0, 0) };
     }
 
-    /// Copies an image (one layer, tightly packed) into a buffer.
+    /// Copies an image into a buffer, tightly packed, layer after layer.
     pub fn copy_image_to_buffer(&self, image: &super::Image, buffer: vk::Buffer) {
+        let layers = vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(image.desc.layers);
         let region = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(1))
+            .image_subresource(layers)
             .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (tracker) and the buffer is large enough.
         unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
