@@ -9,6 +9,20 @@
 //! - `occluder-stacked`: two plates stacked under one spot light: the variance-shadow-map
 //!   light-bleeding case (Donnelly & Lauritzen), where the upper plate's shadow edge shows
 //!   through the lower plate's shadow.
+//! - `table-chair`: a room with a table and a chair, about the size (180 triangles) of the
+//!   scene of Table 1 of Iones et al., "Fast realistic lighting for video games" (2003), the
+//!   obscurance paper: small furniture gaps next to big open surfaces.
+//! - `classroom`: a classroom with sixteen desk and chair pairs, about the size (1,244
+//!   triangles) of that paper's Table 2 scene: many repeated occluders, so bake cost and
+//!   obscurance range show at scale.
+//! - `cornell-wall-light`: the `cornell` geometry with its spot light 5 cm from the red wall,
+//!   pointing at it: that paper's Fig. 9 failure case. Nearly all light reaches the room
+//!   only after a bounce off the wall, while the method's indirect term (a share beta of
+//!   each light's own unshadowed irradiance at the point) is zero outside the light's cone.
+//!
+//! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
+//! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
+//! of a committed scene never depends on the defaults sized from its bounds.
 //!
 //! Geometry is flat shaded: every triangle has its own three vertices carrying its face
 //! normal, so shading normals equal geometric normals and the path tracer and the renderer
@@ -22,7 +36,14 @@ use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 3] = ["cornell", "occluder-plane", "occluder-stacked"];
+pub const SCENE_NAMES: [&str; 6] = [
+    "cornell",
+    "occluder-plane",
+    "occluder-stacked",
+    "table-chair",
+    "classroom",
+    "cornell-wall-light",
+];
 
 /// Writes every generated scene into `out_dir` (created if missing) and returns the files
 /// written, `.gltf` then `.bin` for each scene.
@@ -52,6 +73,9 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "cornell" => cornell(),
         "occluder-plane" => occluder_plane(),
         "occluder-stacked" => occluder_stacked(),
+        "table-chair" => table_chair(),
+        "classroom" => classroom(),
+        "cornell-wall-light" => cornell_wall_light(),
         _ => return None,
     };
     Some(builder.finish(name))
@@ -71,25 +95,89 @@ fn cornell_point(x: f64, y: f64, z: f64) -> DVec3 {
     DVec3::new((278.0 - x) * 0.001, y * 0.001, -z * 0.001)
 }
 
+/// The Cornell box scene: [`cornell_box`] with the published area light (130 x 105 mm at
+/// the ceiling centre) turned into a spot light 1 cm under the ceiling pointing down, inner
+/// cone 60 degrees, outer 70: it lights the floor, the blocks and the lower walls directly
+/// and leaves the ceiling to indirect light, roughly as the area light does.
+fn cornell() -> Builder {
+    let mut b = Builder::new(CORNELL_SETTINGS);
+    cornell_box(&mut b);
+    // Under the centre of the published light (x 213..343, z 227..332), 1 cm below the ceiling.
+    let light_position = cornell_point(278.0, 538.8, 279.5);
+    b.spot_light(
+        "CeilingSpot",
+        light_position,
+        DVec3::NEG_Y,
+        exposure_one_intensity(light_position.y),
+        60.0,
+        70.0,
+    );
+    cornell_camera(&mut b);
+    b
+}
+
+/// Fig. 9 of Iones et al. (2003): the Cornell box lit by a spot light 5 cm in front of the
+/// red wall at mid height and mid depth, pointing at the wall, cones 40 and 50 degrees, so
+/// its light leaves only a spot about 12 cm wide on the wall and everything else is lit by
+/// light that bounced off that spot. Obscurance's indirect term follows each light's own
+/// unshadowed irradiance, which is zero outside the cone: the method's worst case, and a
+/// test that a bake which claims to do better really does.
+///
+/// The aim point is the middle of the wall quad's diagonal, which both of its triangles
+/// contain, and the light sits on the mean of their normals (they differ by half a degree:
+/// the published wall is not quite planar), so the wall straight in front is exactly
+/// 5 cm away. So close, the light emits about 1/230 of the power of `cornell`'s (0.0136
+/// against 3.17 W), and the red wall passes on 63% of its red and 5 to 7% of its green
+/// and blue: views of the room need a far higher exposure than 1.
+fn cornell_wall_light() -> Builder {
+    let mut b = Builder::new(CORNELL_SETTINGS);
+    cornell_box(&mut b);
+    let wall = CORNELL_RED_WALL.map(|v| cornell_point(v[0], v[1], v[2]));
+    let centre = cornell_room_centre();
+    let inward = quad_facing(wall, |c| centre - c)
+        .iter()
+        .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
+        .sum::<DVec3>()
+        .normalize();
+    let aim = (wall[0] + wall[2]) * 0.5;
+    let distance = 0.05;
+    b.spot_light(
+        "WallSpot",
+        aim + distance * inward,
+        -inward,
+        exposure_one_intensity(distance),
+        40.0,
+        50.0,
+    );
+    cornell_camera(&mut b);
+    b
+}
+
+/// The red wall's corners (Cornell millimetres), named because `cornell-wall-light` aims at it.
+const CORNELL_RED_WALL: [[f64; 3]; 4] = [
+    [552.8, 0.0, 0.0],
+    [549.6, 0.0, 559.2],
+    [556.0, 548.8, 559.2],
+    [556.0, 548.8, 0.0],
+];
+
+/// The middle of the Cornell room's floor-to-ceiling, wall-to-wall box, in glTF metres.
+fn cornell_room_centre() -> DVec3 {
+    cornell_point(278.0, 274.4, 279.6)
+}
+
 /// The Cornell box, vertex for vertex from "Cornell Box data"
 /// (<https://www.graphics.cornell.edu/online/box/data.html>): floor, ceiling, back wall,
 /// red left wall, green right wall, and the short and tall blocks (five faces each: the
-/// published data has no bottom faces, the blocks stand on the floor).
-///
-/// Albedos are the usual linear-RGB fits to the published reflectance spectra. The published
-/// area light (130 x 105 mm at the ceiling centre) becomes a spot light 1 cm under the
-/// ceiling pointing down, inner cone 60 degrees, outer 70: it lights the floor, the blocks
-/// and the lower walls directly and leaves the ceiling to indirect light, roughly as the
-/// area light does. Camera: the published one, (278, 273, -800) looking along +z with a
-/// 35 mm lens on a 25 x 25 mm film, i.e. yfov = 2 atan(12.5 / 35) ≈ 39.3 degrees, square.
-fn cornell() -> Builder {
-    let mut b = Builder::default();
+/// published data has no bottom faces, the blocks stand on the floor). Albedos are the
+/// usual linear-RGB fits to the published reflectance spectra.
+fn cornell_box(b: &mut Builder) {
     let white = b.material("white", [0.725, 0.71, 0.68]);
     let red = b.material("red", [0.63, 0.065, 0.05]);
     let green = b.material("green", [0.14, 0.45, 0.091]);
     let p = |v: [f64; 3]| cornell_point(v[0], v[1], v[2]);
 
-    let room_centre = cornell_point(278.0, 274.4, 279.6);
+    let room_centre = cornell_room_centre();
     let room: [(&str, usize, [[f64; 3]; 4]); 5] = [
         (
             "Floor",
@@ -131,16 +219,7 @@ fn cornell() -> Builder {
                 [0.0, 548.8, 559.2],
             ],
         ),
-        (
-            "LeftWall",
-            red,
-            [
-                [552.8, 0.0, 0.0],
-                [549.6, 0.0, 559.2],
-                [556.0, 548.8, 559.2],
-                [556.0, 548.8, 0.0],
-            ],
-        ),
+        ("LeftWall", red, CORNELL_RED_WALL),
     ];
     for (name, material, quad) in room {
         // Room surfaces face into the room.
@@ -224,18 +303,11 @@ fn cornell() -> Builder {
         let mesh = b.mesh(name, &tris, white);
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
+}
 
-    // Under the centre of the published light (x 213..343, z 227..332), 1 cm below the ceiling.
-    let light_position = cornell_point(278.0, 538.8, 279.5);
-    b.spot_light(
-        "CeilingSpot",
-        light_position,
-        DVec3::NEG_Y,
-        exposure_one_intensity(light_position.y),
-        60.0,
-        70.0,
-    );
-
+/// The published camera: (278, 273, -800) looking along +z with a 35 mm lens on a
+/// 25 x 25 mm film, i.e. yfov = 2 atan(12.5 / 35) ≈ 39.3 degrees, square.
+fn cornell_camera(b: &mut Builder) {
     let yfov = 2.0 * (12.5f64 / 35.0).atan();
     let eye = cornell_point(278.0, 273.0, -800.0);
     b.camera(
@@ -247,14 +319,14 @@ fn cornell() -> Builder {
         0.1,
         3.0,
     );
-    b
 }
 
-/// Intensity (cd) of a light `height` metres above a floor that gives the floor directly
-/// below it an irradiance of pi lux, so a Lambertian floor there has radiance equal to its
-/// albedo: exposure 1 shows it mid-range without clipping, whatever the light's height.
-fn exposure_one_intensity(height: f64) -> f64 {
-    std::f64::consts::PI * height * height
+/// Intensity (cd) of a light `distance` metres from the surface straight in front of it
+/// (the floor below a light pointing down) that gives that surface an irradiance of pi lux,
+/// so a Lambertian surface there has radiance equal to its albedo: exposure 1 shows it
+/// mid-range without clipping, whatever the light's distance.
+fn exposure_one_intensity(distance: f64) -> f64 {
+    std::f64::consts::PI * distance * distance
 }
 
 /// The ground shared by the occluder scenes: a 4 x 4 m quad at y = 0 facing up.
@@ -298,7 +370,7 @@ fn occluder_light_and_camera(b: &mut Builder) {
 
 /// A 0.5 m cube whose bottom is 0.75 m above the ground, centred under the light.
 fn occluder_plane() -> Builder {
-    let mut b = Builder::default();
+    let mut b = Builder::new(OCCLUDER_SETTINGS);
     ground(&mut b);
     let blue = b.material("occluder", [0.2, 0.35, 0.7]);
     let cube = b.mesh("Cube", &unit_cube(), blue);
@@ -312,7 +384,7 @@ fn occluder_plane() -> Builder {
 /// lies inside the big plate's (about 1.35 m), which is where a variance shadow map leaks
 /// light, since the depth distribution there has two far-apart occluder depths.
 fn occluder_stacked() -> Builder {
-    let mut b = Builder::default();
+    let mut b = Builder::new(OCCLUDER_SETTINGS);
     ground(&mut b);
     let blue = b.material("occluder", [0.2, 0.35, 0.7]);
     let cube = b.mesh("Cube", &unit_cube(), blue);
@@ -332,6 +404,387 @@ fn occluder_stacked() -> Builder {
     b
 }
 
+/// A stand-in for the obscurance paper's Table 1 scene (Iones et al. 2003) of its size,
+/// 180 triangles, not a copy of the paper's model. A 4 x 3 x 4 m room (each surface a
+/// 2 x 2 grid, 48 triangles), a table of five boxes and a chair of six (12 triangles each)
+/// pushed 10 cm under it: the small gaps obscurance is about (seat under table top, legs
+/// on the floor, furniture near nothing but the floor) next to large open surfaces.
+///
+/// Light: a spot 5 cm under the ceiling over free floor beside the furniture, so the floor
+/// straight below it gets pi lux, pointing down with cones 45 and 60 degrees: the whole
+/// floor and the lower walls directly, the ceiling only by bounces. Camera: at eye height
+/// in the front-left corner, looking at the furniture, so the back and right walls frame it.
+fn table_chair() -> Builder {
+    let mut b = Builder::new(TABLE_CHAIR_SETTINGS);
+    let floor = b.material("floor", [0.5, 0.42, 0.33]);
+    let wall = b.material("wall", [0.75, 0.73, 0.7]);
+    let ceiling = b.material("ceiling", [0.8, 0.8, 0.8]);
+    let wood = b.material("wood", [0.55, 0.38, 0.22]);
+    let blue = b.material("chair", [0.25, 0.38, 0.6]);
+    room(
+        &mut b,
+        DVec3::new(-2.0, 0.0, -2.0),
+        DVec3::new(2.0, 3.0, 2.0),
+        2,
+        [floor, wall, ceiling],
+    );
+    let wood_cube = b.mesh("WoodCube", &unit_cube(), wood);
+    let chair_cube = b.mesh("ChairCube", &unit_cube(), blue);
+    let table_at = DVec3::new(0.5, 0.0, -0.5);
+    add_boxes(
+        &mut b,
+        "Table",
+        wood_cube,
+        &legged_table(table_at, DVec3::new(1.2, 0.75, 0.8)),
+    );
+    // The seat's front edge 10 cm under the table top's edge (z = -0.1).
+    add_boxes(
+        &mut b,
+        "Chair",
+        chair_cube,
+        &legged_chair(DVec3::new(0.5, 0.0, 0.01)),
+    );
+
+    let light_position = DVec3::new(-0.4, 2.95, 0.4);
+    b.spot_light(
+        "CeilingSpot",
+        light_position,
+        DVec3::NEG_Y,
+        exposure_one_intensity(light_position.y),
+        45.0,
+        60.0,
+    );
+    b.camera(
+        "Camera",
+        DVec3::new(-1.7, 1.6, 1.7),
+        DVec3::new(0.5, 0.5, -0.4),
+        60f64.to_radians(),
+        None,
+        0.05,
+        20.0,
+    );
+    b
+}
+
+/// A stand-in for the obscurance paper's Table 2 scene (Iones et al. 2003), a classroom of
+/// about its size (1,244 triangles; this one has 1,260), not a copy of the paper's model:
+/// an 8 x 3 x 7 m room (2 x 2 grids, 48 triangles), four rows of four pupils' desk and
+/// chair pairs facing -Z (six boxes a pair, 1,152 triangles), a teacher's desk (four
+/// boxes) and a blackboard slab on the back wall.
+/// Pupils' furniture is made of panels rather than legs so that sixteen pairs fit the
+/// paper's count; panels also make the enclosed gaps (under a seat, between desk sides)
+/// that separate obscurance from plain distance-to-floor shading.
+///
+/// Lights: three spots 5 cm under the ceiling along the centre aisle (free floor below
+/// them, which each lights at pi lux), pointing down with cones 45 and 60 degrees. Camera:
+/// at eye height by the rear wall in the aisle, looking at the blackboard over the rows.
+fn classroom() -> Builder {
+    let mut b = Builder::new(CLASSROOM_SETTINGS);
+    let floor = b.material("floor", [0.45, 0.42, 0.38]);
+    let wall = b.material("wall", [0.75, 0.73, 0.68]);
+    let ceiling = b.material("ceiling", [0.8, 0.8, 0.8]);
+    let desk = b.material("desk", [0.6, 0.45, 0.3]);
+    let chair = b.material("chair", [0.3, 0.42, 0.55]);
+    let teacher = b.material("teacher-desk", [0.45, 0.3, 0.18]);
+    let board = b.material("blackboard", [0.06, 0.12, 0.09]);
+    let (lo, hi) = (DVec3::new(-4.0, 0.0, -3.5), DVec3::new(4.0, 3.0, 3.5));
+    room(&mut b, lo, hi, 2, [floor, wall, ceiling]);
+    let desk_cube = b.mesh("DeskCube", &unit_cube(), desk);
+    let chair_cube = b.mesh("ChairCube", &unit_cube(), chair);
+    let teacher_cube = b.mesh("TeacherDeskCube", &unit_cube(), teacher);
+    let board_cube = b.mesh("BlackboardCube", &unit_cube(), board);
+
+    // Columns 1.6 m apart leave a 0.9 m aisle on the centre line and 1.25 m by the walls.
+    for (row, z) in [-1.6, -0.4, 0.8, 2.0].into_iter().enumerate() {
+        for (column, x) in [-2.4, -0.8, 0.8, 2.4].into_iter().enumerate() {
+            let at = DVec3::new(x, 0.0, z);
+            add_boxes(
+                &mut b,
+                &format!("Desk{row}{column}"),
+                desk_cube,
+                &panel_desk(at),
+            );
+            // The seat's front edge 10 cm under the desk top's back edge.
+            let chair_at = at + DVec3::new(0.0, 0.0, 0.36);
+            add_boxes(
+                &mut b,
+                &format!("Chair{row}{column}"),
+                chair_cube,
+                &panel_chair(chair_at),
+            );
+        }
+    }
+    add_boxes(
+        &mut b,
+        "TeacherDesk",
+        teacher_cube,
+        &teacher_desk(DVec3::new(2.2, 0.0, -2.7)),
+    );
+    // 3.2 x 1.2 m, its lower edge 0.9 m up, flat on the back wall.
+    add_boxes(
+        &mut b,
+        "",
+        board_cube,
+        &[(
+            "Blackboard".to_string(),
+            DVec3::new(-1.6, 0.9, lo.z),
+            DVec3::new(1.6, 2.1, lo.z + 0.03),
+        )],
+    );
+
+    for (i, z) in [-2.3, 0.0, 2.3].into_iter().enumerate() {
+        let light_position = DVec3::new(0.0, hi.y - 0.05, z);
+        b.spot_light(
+            &format!("CeilingSpot{i}"),
+            light_position,
+            DVec3::NEG_Y,
+            exposure_one_intensity(light_position.y),
+            45.0,
+            60.0,
+        );
+    }
+    b.camera(
+        "Camera",
+        DVec3::new(0.0, 1.7, 3.3),
+        DVec3::new(0.0, 1.0, lo.z),
+        55f64.to_radians(),
+        None,
+        0.05,
+        20.0,
+    );
+    b
+}
+
+/// A box by its name and its lower and upper corners, metres.
+type Part = (String, DVec3, DVec3);
+
+/// Adds each part as a node `prefix` + name scaling the shared unit cube `cube`, so the
+/// furniture costs one mesh per material however many boxes it has; every box is closed
+/// with faces outward (the cube's), and a node transform keeps that.
+fn add_boxes(b: &mut Builder, prefix: &str, cube: usize, parts: &[Part]) {
+    for (name, lo, hi) in parts {
+        b.mesh_node(
+            &format!("{prefix}{name}"),
+            cube,
+            (*lo + *hi) * 0.5,
+            *hi - *lo,
+        );
+    }
+}
+
+/// Four boxes under the corners of the footprint `lo`..`hi` (x and z), `side` metres square
+/// and `inset` in from the edges, from y = `lo.y` up to `hi.y`.
+fn legs(lo: DVec3, hi: DVec3, side: f64, inset: f64) -> Vec<Part> {
+    let mut legs = Vec::with_capacity(4);
+    for (i, (x, z)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+        let x0 = if x == 0 {
+            lo.x + inset
+        } else {
+            hi.x - inset - side
+        };
+        let z0 = if z == 0 {
+            lo.z + inset
+        } else {
+            hi.z - inset - side
+        };
+        legs.push((
+            format!("Leg{i}"),
+            DVec3::new(x0, lo.y, z0),
+            DVec3::new(x0 + side, hi.y, z0 + side),
+        ));
+    }
+    legs
+}
+
+/// A table standing at `at` (the middle of its footprint on the floor): a `size.x` by
+/// `size.z` top 4 cm thick with its upper face at `size.y`, on four 6 cm square legs set
+/// 4 cm in from the corners. Legs end under the top rather than going through it, so no
+/// surface is hidden inside another box.
+fn legged_table(at: DVec3, size: DVec3) -> Vec<Part> {
+    let half = DVec3::new(size.x * 0.5, 0.0, size.z * 0.5);
+    let under_top = at.y + size.y - 0.04;
+    let mut parts = vec![(
+        "Top".to_string(),
+        DVec3::new(at.x - half.x, under_top, at.z - half.z),
+        DVec3::new(at.x + half.x, at.y + size.y, at.z + half.z),
+    )];
+    parts.extend(legs(
+        at - half,
+        DVec3::new(at.x + half.x, under_top, at.z + half.z),
+        0.06,
+        0.04,
+    ));
+    parts
+}
+
+/// A chair standing at `at` (the middle of its footprint), facing -Z: a 42 cm square seat
+/// 4 cm thick with its top at 45 cm, four 4 cm square legs set 2 cm in from its corners,
+/// and a 4 cm backrest standing on the seat's +Z edge up to 90 cm.
+fn legged_chair(at: DVec3) -> Vec<Part> {
+    let half = DVec3::new(0.21, 0.0, 0.21);
+    let (under_seat, seat_top) = (at.y + 0.41, at.y + 0.45);
+    let mut parts = vec![
+        (
+            "Seat".to_string(),
+            DVec3::new(at.x - half.x, under_seat, at.z - half.z),
+            DVec3::new(at.x + half.x, seat_top, at.z + half.z),
+        ),
+        (
+            "Back".to_string(),
+            DVec3::new(at.x - half.x, seat_top, at.z + half.z - 0.04),
+            DVec3::new(at.x + half.x, at.y + 0.9, at.z + half.z),
+        ),
+    ];
+    parts.extend(legs(
+        at - half,
+        DVec3::new(at.x + half.x, under_seat, at.z + half.z),
+        0.04,
+        0.02,
+    ));
+    parts
+}
+
+/// A pupil's desk at `at` (the middle of its footprint): a 70 x 50 cm top 3 cm thick with
+/// its upper face at 72 cm, on two 3 cm side panels set 3 cm in from its ends and 2 cm in
+/// from its front and back.
+fn panel_desk(at: DVec3) -> Vec<Part> {
+    let (hx, hz) = (0.35, 0.25);
+    let under_top = at.y + 0.69;
+    let mut parts = vec![(
+        "Top".to_string(),
+        DVec3::new(at.x - hx, under_top, at.z - hz),
+        DVec3::new(at.x + hx, at.y + 0.72, at.z + hz),
+    )];
+    for (i, x0) in [at.x - hx + 0.03, at.x + hx - 0.06].into_iter().enumerate() {
+        parts.push((
+            format!("Side{i}"),
+            DVec3::new(x0, at.y, at.z - hz + 0.02),
+            DVec3::new(x0 + 0.03, under_top, at.z + hz - 0.02),
+        ));
+    }
+    parts
+}
+
+/// A pupil's chair at `at` (the middle of its 40 x 42 cm footprint), facing -Z: a 40 cm
+/// square seat 3 cm thick with its top at 45 cm, resting on a 2 cm front panel under its
+/// front edge and against a 2 cm back panel behind it that rises to 85 cm as the backrest.
+fn panel_chair(at: DVec3) -> Vec<Part> {
+    let (hx, hz) = (0.2, 0.21);
+    let (front, back) = (at.z - hz, at.z + hz - 0.02);
+    let under_seat = at.y + 0.42;
+    vec![
+        (
+            "Seat".to_string(),
+            DVec3::new(at.x - hx, under_seat, front),
+            DVec3::new(at.x + hx, at.y + 0.45, back),
+        ),
+        (
+            "Front".to_string(),
+            DVec3::new(at.x - hx, at.y, front),
+            DVec3::new(at.x + hx, under_seat, front + 0.02),
+        ),
+        (
+            "Back".to_string(),
+            DVec3::new(at.x - hx, at.y, back),
+            DVec3::new(at.x + hx, at.y + 0.85, back + 0.02),
+        ),
+    ]
+}
+
+/// The teacher's desk at `at` (the middle of its footprint): a 140 x 70 cm top 4 cm thick
+/// with its upper face at 76 cm, on two 4 cm side panels under its ends, with a 2 cm
+/// modesty panel on the pupils' side (+Z) between them from 25 cm up to the top.
+fn teacher_desk(at: DVec3) -> Vec<Part> {
+    let (hx, hz) = (0.7, 0.35);
+    let under_top = at.y + 0.72;
+    let mut parts = vec![(
+        "Top".to_string(),
+        DVec3::new(at.x - hx, under_top, at.z - hz),
+        DVec3::new(at.x + hx, at.y + 0.76, at.z + hz),
+    )];
+    for (i, x0) in [at.x - hx, at.x + hx - 0.04].into_iter().enumerate() {
+        parts.push((
+            format!("Side{i}"),
+            DVec3::new(x0, at.y, at.z - hz),
+            DVec3::new(x0 + 0.04, under_top, at.z + hz),
+        ));
+    }
+    parts.push((
+        "Front".to_string(),
+        DVec3::new(at.x - hx + 0.04, at.y + 0.25, at.z + hz - 0.02),
+        DVec3::new(at.x + hx - 0.04, under_top, at.z + hz),
+    ));
+    parts
+}
+
+// --- settings --------------------------------------------------------------------------------
+
+/// A scene's relume settings, written as `scenes[0].extras.relume` (read by
+/// `relume_bake::settings`, documented in docs/FORMATS.md). Every scene states all of them,
+/// so that its bake does not move when the defaults (sized from the bounds) change.
+///
+/// The values are first picks: L_max grows with the scene (0.15 m in the 0.55 m Cornell
+/// box, 1 m in the 8 m classroom); tau is a third of L_max or a little less, so rho(L_max)
+/// is 0.95 or more and the cut at L_max is small; texel densities put 70 to 130 texels
+/// across each scene's largest surface. No scene has ambient light, so the lights are the
+/// only source and the indirect term is beta's alone (0.3 until it is tuned against the
+/// path tracer).
+#[derive(Clone, Copy)]
+struct Settings {
+    /// Ambient irradiance, lux.
+    ambient: [f64; 3],
+    beta: f64,
+    /// Lightmap texels per metre.
+    texel_density: f64,
+    /// Obscurance tau, metres.
+    tau: f64,
+    /// Obscurance L_max, metres.
+    l_max: f64,
+}
+
+impl Settings {
+    fn json(&self) -> Value {
+        json!({
+            "ambient": self.ambient.map(num),
+            "beta": num(self.beta),
+            "texel_density": num(self.texel_density),
+            "obscurance": { "tau": num(self.tau), "l_max": num(self.l_max) },
+        })
+    }
+}
+
+const CORNELL_SETTINGS: Settings = Settings {
+    ambient: [0.0; 3],
+    beta: 0.3,
+    texel_density: 128.0,
+    tau: 0.05,
+    l_max: 0.15,
+};
+
+const OCCLUDER_SETTINGS: Settings = Settings {
+    ambient: [0.0; 3],
+    beta: 0.3,
+    texel_density: 32.0,
+    tau: 0.15,
+    l_max: 0.5,
+};
+
+const TABLE_CHAIR_SETTINGS: Settings = Settings {
+    ambient: [0.0; 3],
+    beta: 0.3,
+    texel_density: 24.0,
+    tau: 0.2,
+    l_max: 0.6,
+};
+
+const CLASSROOM_SETTINGS: Settings = Settings {
+    ambient: [0.0; 3],
+    beta: 0.3,
+    texel_density: 16.0,
+    tau: 0.3,
+    l_max: 1.0,
+};
+
 // --- geometry --------------------------------------------------------------------------------
 
 /// Two triangles of the quad a, b, c, d, each wound counter-clockwise (glTF's front face)
@@ -348,6 +801,50 @@ fn quad_facing(q: [DVec3; 4], outward: impl Fn(DVec3) -> DVec3) -> Vec<[DVec3; 3
             }
         })
         .collect()
+}
+
+/// The inside of the room from `lo` to `hi`: floor, ceiling and four walls, each a
+/// `split` x `split` grid of quads facing into the room, with materials `[floor, walls,
+/// ceiling]`. Walls are named as seen by a camera looking down -Z, like `cornell`'s:
+/// BackWall at `lo.z`, FrontWall at `hi.z`, LeftWall at `lo.x`, RightWall at `hi.x`. The
+/// grid changes no surface; it brings a scene's triangle count near the paper scene's.
+fn room(b: &mut Builder, lo: DVec3, hi: DVec3, split: usize, materials: [usize; 3]) {
+    let [floor, walls, ceiling] = materials;
+    let centre = (lo + hi) * 0.5;
+    let surfaces = [
+        ("Floor", 1, lo.y, floor),
+        ("Ceiling", 1, hi.y, ceiling),
+        ("BackWall", 2, lo.z, walls),
+        ("FrontWall", 2, hi.z, walls),
+        ("LeftWall", 0, lo.x, walls),
+        ("RightWall", 0, hi.x, walls),
+    ];
+    for (name, axis, at, material) in surfaces {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        // (1 - t) lo + t hi, exact at both ends so that neighbouring surfaces share edges.
+        let corner = |i: usize, j: usize| {
+            let (s, t) = (i as f64 / split as f64, j as f64 / split as f64);
+            let mut p = DVec3::ZERO;
+            p[axis] = at;
+            p[u] = (1.0 - s) * lo[u] + s * hi[u];
+            p[v] = (1.0 - t) * lo[v] + t * hi[v];
+            p
+        };
+        let mut tris = Vec::with_capacity(2 * split * split);
+        for i in 0..split {
+            for j in 0..split {
+                let quad = [
+                    corner(i, j),
+                    corner(i + 1, j),
+                    corner(i + 1, j + 1),
+                    corner(i, j + 1),
+                ];
+                tris.extend(quad_facing(quad, |c| centre - c));
+            }
+        }
+        let mesh = b.mesh(name, &tris, material);
+        b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
+    }
 }
 
 /// A closed cube of side 1 centred on the origin, faces outward (12 triangles). Closed,
@@ -391,8 +888,8 @@ fn quat_json(q: DQuat) -> Value {
     json!([num(q.x), num(q.y), num(q.z), num(q.w)])
 }
 
-#[derive(Default)]
 struct Builder {
+    settings: Settings,
     bin: Vec<u8>,
     buffer_views: Vec<Value>,
     accessors: Vec<Value>,
@@ -409,6 +906,21 @@ const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 
 impl Builder {
+    /// An empty scene; its settings are required up front so that no scene can lack them.
+    fn new(settings: Settings) -> Self {
+        Builder {
+            settings,
+            bin: Vec::new(),
+            buffer_views: Vec::new(),
+            accessors: Vec::new(),
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            nodes: Vec::new(),
+            lights: Vec::new(),
+            cameras: Vec::new(),
+        }
+    }
+
     /// A diffuse material: metallic 0 and roughness 1, so that viewers other than relume
     /// (whose surfaces are all Lambertian) show it the same way.
     fn material(&mut self, name: &str, rgb: [f64; 3]) -> usize {
@@ -569,7 +1081,11 @@ impl Builder {
             "extensionsUsed": ["KHR_lights_punctual"],
             "extensions": { "KHR_lights_punctual": { "lights": self.lights } },
             "scene": 0,
-            "scenes": [{ "name": name, "nodes": (0..self.nodes.len()).collect::<Vec<_>>() }],
+            "scenes": [{
+                "name": name,
+                "nodes": (0..self.nodes.len()).collect::<Vec<_>>(),
+                "extras": { "relume": self.settings.json() },
+            }],
             "nodes": self.nodes,
             "meshes": self.meshes,
             "materials": self.materials,
@@ -648,6 +1164,26 @@ mod tests {
     fn generated_scenes_load() {
         let dir = temp_dir("load");
         write_all(&dir).unwrap();
+
+        // Every scene: loads without warnings, has a light, and its stored normals agree
+        // with its winding (flat shading, front faces counter-clockwise).
+        for name in SCENE_NAMES {
+            let scene = load(&dir, name);
+            assert!(!scene.lights.is_empty(), "{name}");
+            for m in &scene.meshes {
+                for tri in m.indices.chunks_exact(3) {
+                    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| m.positions[i as usize]);
+                    let n = (b - a).cross(c - a).normalize();
+                    for i in tri {
+                        assert!(
+                            (n - m.normals[*i as usize]).length() < 1e-5,
+                            "{name}: {}: winding and normal disagree",
+                            m.name
+                        );
+                    }
+                }
+            }
+        }
 
         let cornell = load(&dir, "cornell");
         // 5 room quads and 2 blocks of 5 quads, 2 triangles each.
@@ -742,6 +1278,344 @@ mod tests {
                     );
                 }
             }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn settings(s: Settings) -> relume_bake::settings::LightingSettings {
+        relume_bake::settings::LightingSettings {
+            ambient: Vec3::from_array(s.ambient.map(|x| x as f32)),
+            beta: s.beta as f32,
+            texel_density: s.texel_density as f32,
+            tau: s.tau as f32,
+            l_max: s.l_max as f32,
+        }
+    }
+
+    #[test]
+    fn every_scene_states_its_settings() {
+        let dir = temp_dir("settings");
+        write_all(&dir).unwrap();
+        for (name, expected) in [
+            ("cornell", CORNELL_SETTINGS),
+            ("occluder-plane", OCCLUDER_SETTINGS),
+            ("occluder-stacked", OCCLUDER_SETTINGS),
+            ("table-chair", TABLE_CHAIR_SETTINGS),
+            ("classroom", CLASSROOM_SETTINGS),
+            ("cornell-wall-light", CORNELL_SETTINGS),
+        ] {
+            assert_eq!(load(&dir, name).settings, settings(expected), "{name}");
+        }
+        // The values the brief set, spelled out once rather than only through the constants.
+        let table_chair = load(&dir, "table-chair").settings;
+        assert_eq!(
+            (
+                table_chair.texel_density,
+                table_chair.tau,
+                table_chair.l_max
+            ),
+            (24.0, 0.2, 0.6)
+        );
+        let cornell = load(&dir, "cornell").settings;
+        assert_eq!(
+            (cornell.ambient, cornell.beta, cornell.texel_density),
+            (Vec3::ZERO, 0.3, 128.0)
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Nearest hit of a ray (Möller-Trumbore) on the meshes `keep` accepts: distance, mesh
+    /// name and the triangle.
+    fn cast_on(
+        scene: &Scene,
+        origin: Vec3,
+        dir: Vec3,
+        keep: impl Fn(&str) -> bool,
+    ) -> Option<(f32, String, [Vec3; 3])> {
+        let mut best: Option<(f32, String, [Vec3; 3])> = None;
+        for m in scene.meshes.iter().filter(|m| keep(&m.name)) {
+            for tri in m.indices.chunks_exact(3) {
+                let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| m.positions[i as usize]);
+                let (e1, e2) = (b - a, c - a);
+                let p = dir.cross(e2);
+                let det = e1.dot(p);
+                if det.abs() < 1e-12 {
+                    continue;
+                }
+                let t_vec = origin - a;
+                let u = t_vec.dot(p) / det;
+                let q = t_vec.cross(e1);
+                let v = dir.dot(q) / det;
+                let t = e2.dot(q) / det;
+                if u < 0.0 || v < 0.0 || u + v > 1.0 || t <= 1e-6 {
+                    continue;
+                }
+                if best.as_ref().is_none_or(|(d, _, _)| t < *d) {
+                    best = Some((t, m.name.clone(), [a, b, c]));
+                }
+            }
+        }
+        best
+    }
+
+    fn cast(scene: &Scene, origin: Vec3, dir: Vec3) -> Option<(f32, String, [Vec3; 3])> {
+        cast_on(scene, origin, dir, |_| true)
+    }
+
+    /// The README's convention: the floor, ground or wall a light points straight at
+    /// receives pi lux there, from the front, as if no occluder stood in between.
+    #[test]
+    fn every_light_gives_the_surface_in_front_of_it_pi_lux() {
+        let dir = temp_dir("pi-lux");
+        write_all(&dir).unwrap();
+        for name in SCENE_NAMES {
+            let scene = load(&dir, name);
+            for light in &scene.lights {
+                let receiver = |mesh: &str| ROOM_SURFACES.contains(&mesh) || mesh == "Ground";
+                let (t, hit, [a, b, c]) =
+                    cast_on(&scene, light.position, light.direction, receiver)
+                        .unwrap_or_else(|| panic!("{name}: {} points at nothing", light.name));
+                let point = light.position + t * light.direction;
+                let incident = light.incident(point);
+                let n = (b - a).cross(c - a).normalize();
+                let cosine = n.dot(incident.to_light);
+                assert!(
+                    cosine > 0.99,
+                    "{name}: {} lights the back of {hit}",
+                    light.name
+                );
+                let e = incident.irradiance * cosine;
+                assert!(
+                    (e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-3,
+                    "{name}: {} gives {hit} {e} lux",
+                    light.name
+                );
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    const ROOM_SURFACES: [&str; 6] = [
+        "Floor",
+        "Ceiling",
+        "BackWall",
+        "FrontWall",
+        "LeftWall",
+        "RightWall",
+    ];
+
+    fn mesh_bounds(m: &relume_bake::scene::Mesh) -> (Vec3, Vec3) {
+        m.positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            })
+    }
+
+    /// Room surfaces face the room's inside, every piece of furniture is a closed box facing
+    /// outward, no two boxes overlap, and everything (lights and camera too) is in the room.
+    fn check_furnished_room(scene: &Scene, name: &str, lo: Vec3, hi: Vec3) {
+        let inside = [
+            (lo + hi) * 0.5,
+            lo + (hi - lo) * 0.1,
+            lo + (hi - lo) * Vec3::new(0.9, 0.5, 0.2),
+        ];
+        let mut boxes = Vec::new();
+        for m in &scene.meshes {
+            let triangles: Vec<[Vec3; 3]> = m
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]].map(|i| m.positions[i as usize]))
+                .collect();
+            let (mlo, mhi) = mesh_bounds(m);
+            assert!(
+                mlo.cmpge(lo - 1e-5).all() && mhi.cmple(hi + 1e-5).all(),
+                "{name}: {} leaves the room",
+                m.name
+            );
+            if ROOM_SURFACES.contains(&m.name.as_str()) {
+                for [a, b, c] in &triangles {
+                    let n = (*b - *a).cross(*c - *a);
+                    for p in inside {
+                        assert!(n.dot(p - *a) > 0.0, "{name}: {} faces out", m.name);
+                    }
+                }
+                continue;
+            }
+            assert_eq!(triangles.len(), 12, "{name}: {}", m.name);
+            let centre = (mlo + mhi) * 0.5;
+            for [a, b, c] in &triangles {
+                let n = (*b - *a).cross(*c - *a);
+                assert!(
+                    n.dot((*a + *b + *c) / 3.0 - centre) > 0.0,
+                    "{name}: {} faces in",
+                    m.name
+                );
+            }
+            // Closed and consistently wound: each directed edge once, and its reverse once.
+            let key = |p: Vec3| p.to_array().map(f32::to_bits);
+            let mut edges = std::collections::BTreeMap::new();
+            for [a, b, c] in &triangles {
+                for (p, q) in [(a, b), (b, c), (c, a)] {
+                    *edges.entry((key(*p), key(*q))).or_insert(0) += 1;
+                }
+            }
+            for ((p, q), count) in &edges {
+                assert_eq!(*count, 1, "{name}: {}: an edge used twice", m.name);
+                assert_eq!(edges.get(&(*q, *p)), Some(&1), "{name}: {} is open", m.name);
+            }
+            boxes.push((m.name.clone(), mlo, mhi));
+        }
+        // Boxes may touch, never overlap (1 mm of slack for f32 corners).
+        for (i, (na, alo, ahi)) in boxes.iter().enumerate() {
+            for (nb, blo, bhi) in &boxes[i + 1..] {
+                let overlap = ahi.min(*bhi) - alo.max(*blo);
+                assert!(
+                    overlap.min_element() < 1e-3,
+                    "{name}: {na} and {nb} overlap"
+                );
+            }
+        }
+        // Some furniture stands on the floor.
+        assert!(boxes.iter().any(|(_, blo, _)| blo.y.abs() < 1e-6));
+        for light in &scene.lights {
+            assert!(
+                light.position.cmpgt(lo).all() && light.position.cmplt(hi).all(),
+                "{name}: {} is outside the room",
+                light.name
+            );
+        }
+        let eye = scene.camera.position();
+        assert!(eye.cmpgt(lo).all() && eye.cmplt(hi).all(), "{name}: camera");
+    }
+
+    fn in_view(scene: &Scene, p: Vec3) -> bool {
+        let q = ndc(scene, p);
+        q.x.abs() < 1.0 && q.y.abs() < 1.0 && q.z > 0.0 && q.z < 1.0
+    }
+
+    fn centre(scene: &Scene, mesh: &str) -> Vec3 {
+        let m = scene
+            .meshes
+            .iter()
+            .find(|m| m.name == mesh)
+            .unwrap_or_else(|| panic!("no mesh {mesh}"));
+        let (lo, hi) = mesh_bounds(m);
+        (lo + hi) * 0.5
+    }
+
+    #[test]
+    fn furnished_rooms_match_the_papers_sizes_and_face_the_right_way() {
+        let dir = temp_dir("rooms");
+        write_all(&dir).unwrap();
+        for (name, paper_triangles) in [("table-chair", 180.0), ("classroom", 1244.0)] {
+            let count = load(&dir, name).triangle_count() as f64;
+            assert!(
+                (count / paper_triangles - 1.0).abs() <= 0.1,
+                "{name}: {count} triangles, the paper's scene has {paper_triangles}"
+            );
+        }
+
+        let scene = load(&dir, "table-chair");
+        assert_eq!(scene.triangle_count(), 180);
+        check_furnished_room(
+            &scene,
+            "table-chair",
+            Vec3::new(-2.0, 0.0, -2.0),
+            Vec3::new(2.0, 3.0, 2.0),
+        );
+        assert_eq!(scene.meshes.len(), 6 + 5 + 6);
+        // The camera sees the table, the chair, the floor and two walls.
+        for mesh in [
+            "TableTop",
+            "TableLeg0",
+            "ChairSeat",
+            "ChairBack",
+            "Floor",
+            "BackWall",
+            "RightWall",
+        ] {
+            assert!(
+                in_view(&scene, centre(&scene, mesh)),
+                "table-chair: {mesh} is out of view"
+            );
+        }
+        // The chair is pushed under the table: seat below the top, overlapping it in z.
+        let seat = mesh_bounds(scene.meshes.iter().find(|m| m.name == "ChairSeat").unwrap());
+        let top = mesh_bounds(scene.meshes.iter().find(|m| m.name == "TableTop").unwrap());
+        assert!(seat.1.y < top.0.y && seat.0.z < top.1.z && seat.1.z > top.1.z);
+
+        let scene = load(&dir, "classroom");
+        check_furnished_room(
+            &scene,
+            "classroom",
+            Vec3::new(-4.0, 0.0, -3.5),
+            Vec3::new(4.0, 3.0, 3.5),
+        );
+        assert_eq!(scene.lights.len(), 3);
+        let pairs = scene
+            .meshes
+            .iter()
+            .filter(|m| m.name.ends_with("Seat"))
+            .count();
+        assert_eq!(pairs, 16);
+        // From the back of the room: the blackboard, the teacher's desk and the front row.
+        for mesh in [
+            "Blackboard",
+            "TeacherDeskTop",
+            "Desk00Top",
+            "Desk03Top",
+            "Desk21Top",
+            "BackWall",
+        ] {
+            assert!(
+                in_view(&scene, centre(&scene, mesh)),
+                "classroom: {mesh} is out of view"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn cornell_wall_light_is_cornell_lit_from_5_cm_off_the_red_wall() {
+        let dir = temp_dir("wall-light");
+        write_all(&dir).unwrap();
+        let (cornell, scene) = (load(&dir, "cornell"), load(&dir, "cornell-wall-light"));
+        assert_eq!(cornell.meshes.len(), scene.meshes.len());
+        for (a, b) in cornell.meshes.iter().zip(&scene.meshes) {
+            assert_eq!((&a.name, &a.positions), (&b.name, &b.positions));
+        }
+        assert_eq!(
+            cornell.camera.world_from_camera,
+            scene.camera.world_from_camera
+        );
+        assert_eq!(scene.lights.len(), 1);
+        let light = &scene.lights[0];
+        assert_eq!(
+            light.kind,
+            LightKind::Spot {
+                inner_cone: 40f32.to_radians(),
+                outer_cone: 50f32.to_radians()
+            }
+        );
+        let (t, hit, _) = cast(&scene, light.position, light.direction).unwrap();
+        assert_eq!(hit, "LeftWall");
+        assert!((t - 0.05).abs() < 1e-5, "{t}");
+        // At mid height and mid depth.
+        let aim = light.position + t * light.direction;
+        assert!(
+            (aim.y - 0.2744).abs() < 1e-4 && (aim.z + 0.2796).abs() < 1e-4,
+            "{aim}"
+        );
+        // Its whole cone lands on the red wall: no direct light anywhere else.
+        let (u, v) = light.direction.any_orthonormal_pair();
+        for k in 0..16 {
+            let phi = k as f32 * std::f32::consts::TAU / 16.0;
+            let edge = 50f32.to_radians();
+            let dir = (light.direction * edge.cos() + (u * phi.cos() + v * phi.sin()) * edge.sin())
+                .normalize();
+            let (_, hit, _) = cast(&scene, light.position, dir).unwrap();
+            assert_eq!(hit, "LeftWall", "cone edge at {k}/16 of a turn");
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
