@@ -1,6 +1,7 @@
 //! relume's CPU side: the scene, images and error metrics (plain data the renderer reads too)
 //! and, behind the `baking` feature, the BVH and the reference path tracer.
 
+pub mod artifact;
 pub mod gltf_load;
 pub mod image;
 pub mod metrics;
@@ -14,3 +15,9 @@ pub mod bvh;
 pub mod sampling;
 #[cfg(feature = "baking")]
 pub mod reference;
+#[cfg(feature = "baking")]
+pub mod work;
+#[cfg(feature = "baking")]
+pub mod atlas;
+#[cfg(feature = "baking")]
+pub mod obscurance;

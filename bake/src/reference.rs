@@ -34,7 +34,7 @@ use crate::image::Image;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
 use glam::{Vec2, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::work::{progress_bar, with_threads};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::time::{Duration, Instant};
@@ -116,17 +116,7 @@ pub fn render_reference(
     let mut sums = vec![[0.0f64; 6]; pixel_count];
     let mut nonfinite = vec![0u64; height as usize];
 
-    let progress = if settings.progress {
-        let bar = ProgressBar::new(settings.samples_per_pixel as u64 * height as u64);
-        if let Ok(style) = ProgressStyle::with_template(
-            "reference {bar:40} {percent:>3}% {elapsed_precise} (eta {eta})",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let progress = progress_bar(settings.samples_per_pixel as u64 * height as u64, "reference", settings.progress);
 
     let start = Instant::now();
     let mut taken = 0u32;
@@ -588,14 +578,3 @@ impl<'a> Integrator<'a> {
     }
 }
 
-/// Runs `f` on a local pool of `threads` workers, or on rayon's global pool when None.
-fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
-    match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .expect("could not start the path tracer's worker threads")
-            .install(f),
-        None => f(),
-    }
-}

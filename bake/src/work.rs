@@ -1,0 +1,45 @@
+//! What every long bake stage shares: its worker threads, its progress bar and the peak
+//! memory it reached.
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Runs `f` on a pool of `threads` workers, or on rayon's global pool (all cores) for None.
+pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+    match threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("could not start the worker threads")
+            .install(f),
+        None => f(),
+    }
+}
+
+/// A progress bar of `len` steps labelled `label` on stderr, or a hidden one.
+pub fn progress_bar(len: u64, label: &str, visible: bool) -> ProgressBar {
+    if !visible {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    let template = format!("{label} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// The process's peak resident memory in bytes since it started or since the last
+/// [`reset_peak_memory`] (Linux `VmHWM`); None where the kernel does not say.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Starts a new peak-memory measurement (writing 5 to `clear_refs` resets `VmHWM` to the
+/// current resident size); false where that is not possible, and the peak then counts from
+/// the start of the process.
+pub fn reset_peak_memory() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
