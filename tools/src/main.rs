@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+mod bake;
 mod report;
 
 #[derive(Parser)]
@@ -26,6 +27,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Precompute a method's data for a scene into a bake artifact folder.
+    Bake(bake::BakeArgs),
     /// Render a scene with the Vulkan renderer (headless) to EXR and PNG.
     Render(RenderArgs),
     /// Render the ground truth with the CPU path tracer to a layered EXR (direct, indirect, combined).
@@ -179,6 +182,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Bake(args) => bake::bake_command(&args),
         Command::Render(args) => render_command(&args),
         Command::Reference(args) => reference_command(&args),
         Command::Compare(args) => compare_command(&args),

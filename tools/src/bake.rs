@@ -1,0 +1,218 @@
+//! `relume bake`: precompute a method's data for a scene into a bake artifact folder
+//! (format: docs/FORMATS.md). Today's method: obscurance (Iones et al. 2003), with its
+//! ambient-occlusion and spectral (Umenhoffer et al. §3.3) variants.
+
+use super::*;
+use relume_bake::artifact::{BakeOutput, PageLayout};
+use relume_bake::atlas::{Atlas, AtlasSettings};
+use relume_bake::obscurance::{bake_obscurance, ObscuranceMap, ObscuranceSettings, Variant};
+use relume_bake::settings::LightingSettings;
+use relume_bake::work::{peak_memory_bytes, reset_peak_memory};
+use serde_json::{json, Value};
+
+#[derive(Args)]
+pub(crate) struct BakeArgs {
+    /// A glTF 2.0 scene (.gltf or .glb).
+    scene: PathBuf,
+    /// The method to bake.
+    #[arg(long, value_parser = ["obscurance"])]
+    method: String,
+    /// obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3).
+    #[arg(long, default_value = "obscurance")]
+    variant: String,
+    /// tau of rho(L) = 1 - exp(-L / tau), metres (default: the scene's).
+    #[arg(long)]
+    tau: Option<f32>,
+    /// L_max, metres (default: the scene's).
+    #[arg(long)]
+    l_max: Option<f32>,
+    /// Rays per texel, spread over the texel's patch.
+    #[arg(long, default_value_t = 256)]
+    rays: u32,
+    /// Lightmap texels per metre (default: the scene's).
+    #[arg(long, conflicts_with = "patches")]
+    texel_density: Option<f32>,
+    /// Aim for this many covered texels (patches) instead of a texel density.
+    #[arg(long)]
+    patches: Option<u32>,
+    /// Empty texels between charts.
+    #[arg(long, default_value_t = 2)]
+    gutter: u32,
+    /// Largest atlas page side in texels; more pages when the charts do not fit one.
+    #[arg(long, default_value_t = 4096)]
+    atlas_max: u32,
+    /// Largest angle between faces of one chart, degrees.
+    #[arg(long, default_value_t = 60.0)]
+    discontinuity_angle: f32,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Stop tracing after this many seconds, at a whole pass of 32 rays per texel.
+    #[arg(long)]
+    time_limit: Option<f64>,
+    /// The artifact folder (default: out/<scene>/<method>).
+    #[arg(long, short)]
+    out: Option<PathBuf>,
+}
+
+/// One stage's cost, as stats.json records it.
+struct Stage {
+    name: &'static str,
+    seconds: f64,
+    peak_memory_bytes: Option<u64>,
+}
+
+fn timed<R>(name: &'static str, stages: &mut Vec<Stage>, work: impl FnOnce() -> R) -> R {
+    reset_peak_memory();
+    let start = Instant::now();
+    let result = work();
+    stages.push(Stage { name, seconds: start.elapsed().as_secs_f64(), peak_memory_bytes: peak_memory_bytes() });
+    result
+}
+
+/// The artifact folder `relume bake` writes for a scene and method when no --out is given.
+pub(crate) fn default_bake_dir(scene: &Path, method: &str) -> PathBuf {
+    let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+    PathBuf::from("out").join(stem).join(method)
+}
+
+pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
+    let loaded = load_with_camera(&args.scene, None)?;
+    for warning in &loaded.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let scene = loaded.scene;
+    let lighting = lighting_settings(&scene.settings, args)?;
+    let atlas_settings = AtlasSettings {
+        texel_density: lighting.texel_density,
+        gutter: args.gutter,
+        max_size: args.atlas_max,
+        discontinuity_angle: args.discontinuity_angle.to_radians(),
+    };
+    atlas_settings.validate().map_err(|e| anyhow::anyhow!("{e} (--texel-density, --gutter, --atlas-max, --discontinuity-angle)"))?;
+    let obscurance = obscurance_settings(&lighting, args)?;
+    obscurance.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --rays, --threads)"))?;
+
+    let mut stages = Vec::new();
+    let atlas = timed("atlas", &mut stages, || match args.patches {
+        Some(0) => Err(anyhow::anyhow!("--patches 0: ask for at least one patch")),
+        Some(patches) => Ok(Atlas::build_for_patch_count(&scene, &atlas_settings, patches)?),
+        None => Ok(Atlas::build(&scene, &atlas_settings)?),
+    })?;
+    let bvh = timed("bvh", &mut stages, || SceneBvh::new(&scene));
+    let map = timed("obscurance", &mut stages, || bake_obscurance(&scene, &bvh, &atlas, &obscurance)).map_err(anyhow::Error::msg)?;
+
+    let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, &args.method));
+    let output = BakeOutput {
+        method: &args.method,
+        scene: &scene,
+        parameters: parameters(&obscurance, &atlas_settings, args),
+        atlas_summary: atlas_summary(&atlas, &atlas_settings),
+        layout: PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages },
+        meshes: &atlas.meshes,
+        texels: &atlas.texels,
+        lightmap: &map.values,
+        stats: stats(&stages, &map, &obscurance),
+    };
+    output.write(&out)?;
+    print_summary(&atlas, &map, &stages, &out);
+    Ok(())
+}
+
+fn lighting_settings(scene: &LightingSettings, args: &BakeArgs) -> Result<LightingSettings> {
+    let s = LightingSettings {
+        tau: args.tau.unwrap_or(scene.tau),
+        l_max: args.l_max.unwrap_or(scene.l_max),
+        texel_density: args.texel_density.unwrap_or(scene.texel_density),
+        ..*scene
+    };
+    s.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --texel-density or the scene's extras.relume)"))?;
+    Ok(s)
+}
+
+fn obscurance_settings(lighting: &LightingSettings, args: &BakeArgs) -> Result<ObscuranceSettings> {
+    let Some(variant) = Variant::parse(&args.variant) else {
+        bail!("--variant {}: use obscurance, ao or spectral", args.variant);
+    };
+    let time_limit = match args.time_limit {
+        Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
+        s => s.map(Duration::from_secs_f64),
+    };
+    Ok(ObscuranceSettings {
+        variant,
+        tau: lighting.tau,
+        l_max: lighting.l_max,
+        rays_per_texel: args.rays,
+        seed: args.seed,
+        threads: args.threads,
+        time_limit,
+        progress: true,
+    })
+}
+
+fn parameters(o: &ObscuranceSettings, a: &AtlasSettings, args: &BakeArgs) -> Value {
+    json!({
+        "variant": o.variant.name(),
+        "tau": o.tau,
+        "l_max": o.l_max,
+        "rays_per_texel": o.rays_per_texel,
+        "seed": o.seed,
+        "texel_density": a.texel_density,
+        "patches": args.patches,
+        "gutter": a.gutter,
+        "atlas_max": a.max_size,
+        "discontinuity_angle_degrees": args.discontinuity_angle,
+    })
+}
+
+fn atlas_summary(atlas: &Atlas, settings: &AtlasSettings) -> Value {
+    json!({
+        "width": atlas.width,
+        "height": atlas.height,
+        "pages": atlas.pages,
+        "charts": atlas.charts.len(),
+        "covered_texels": atlas.covered_texels(),
+        "utilization": atlas.utilization(),
+        "too_small_triangles": atlas.too_small,
+        "texel_density": settings.texel_density,
+    })
+}
+
+fn stats(stages: &[Stage], map: &ObscuranceMap, o: &ObscuranceSettings) -> Value {
+    let bake_seconds = stages.iter().find(|s| s.name == "obscurance").map_or(0.0, |s| s.seconds);
+    json!({
+        "stages": stages.iter().map(|s| json!({ "name": s.name, "seconds": s.seconds, "peak_memory_bytes": s.peak_memory_bytes })).collect::<Vec<_>>(),
+        "rays_per_texel": map.rays_per_texel,
+        "rays_per_texel_asked": o.rays_per_texel,
+        "rays_traced": map.rays_traced,
+        "rays_per_second": map.rays_traced as f64 / bake_seconds.max(1e-9),
+        "threads": o.threads.unwrap_or_else(rayon_threads),
+    })
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+fn print_summary(atlas: &Atlas, map: &ObscuranceMap, stages: &[Stage], out: &Path) {
+    println!(
+        "atlas: {} charts, {} x {} x {} page(s), {} patches, utilization {:.1}%",
+        atlas.charts.len(),
+        atlas.width,
+        atlas.height,
+        atlas.pages,
+        atlas.covered_texels(),
+        100.0 * atlas.utilization()
+    );
+    if !atlas.too_small.is_empty() {
+        println!("warning: {} triangle(s) too small to cover a texel measurably: {:?}", atlas.too_small.len(), atlas.too_small);
+    }
+    for s in stages {
+        let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64));
+        println!("  {:<11} {:>8.3} s, peak memory {memory}", s.name, s.seconds);
+    }
+    println!("{} rays per texel, {} rays in {:.3} s ({:.2} M rays/s)", map.rays_per_texel, map.rays_traced, map.seconds, map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6);
+    println!("wrote {}", out.display());
+}
