@@ -155,16 +155,21 @@ fn obscurance_settings(lighting: &LightingSettings, args: &BakeArgs) -> Result<O
 fn parameters(o: &ObscuranceSettings, a: &AtlasSettings, args: &BakeArgs) -> Value {
     json!({
         "variant": o.variant.name(),
-        "tau": o.tau,
-        "l_max": o.l_max,
+        "tau": short(o.tau),
+        "l_max": short(o.l_max),
         "rays_per_texel": o.rays_per_texel,
         "seed": o.seed,
-        "texel_density": a.texel_density,
+        "texel_density": short(a.texel_density),
         "patches": args.patches,
         "gutter": a.gutter,
         "atlas_max": a.max_size,
-        "discontinuity_angle_degrees": args.discontinuity_angle,
+        "discontinuity_angle_degrees": short(args.discontinuity_angle),
     })
+}
+
+/// An f32 as JSON in its shortest round-trip form (0.15, not 0.15000000596046448).
+fn short(x: f32) -> Value {
+    x.to_string().parse::<f64>().map_or(Value::Null, |v| json!(v))
 }
 
 fn atlas_summary(atlas: &Atlas, settings: &AtlasSettings) -> Value {
@@ -176,7 +181,7 @@ fn atlas_summary(atlas: &Atlas, settings: &AtlasSettings) -> Value {
         "covered_texels": atlas.covered_texels(),
         "utilization": atlas.utilization(),
         "too_small_triangles": atlas.too_small,
-        "texel_density": settings.texel_density,
+        "texel_density": short(settings.texel_density),
     })
 }
 
