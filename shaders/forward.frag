@@ -1,9 +1,26 @@
 #version 450
-// Lambertian direct light from every punctual light, visibility from the variance shadow
-// maps, plus emission. Output is linear radiance.
+// The obscurance illumination model of Iones et al., "Fast realistic lighting for video
+// games" (001) eq. (5)-(7), I = (I_A + I'_S) k_A W + k_D I_S, in relume's radiometric terms.
+// Output is linear radiance of a Lambertian surface:
+//
+//   L = emission + albedo / pi * ( (I_A + I'_S) * W + E_direct )
+//
+//   E_direct = sum_j E_j cos(theta_j) V_j   eq. (6)'s I_S: every punctual light's irradiance
+//              (glTF falloff, lights.glsl) times the receiver's cosine and its visibility from
+//              the variance shadow maps (000 §3.4);
+//   I'_S     = beta * sum_j E_j             eq. (7): every light's unshadowed irradiance on a
+//              surface facing it, with the same range window and spot cone but no cosine and
+//              no visibility (the lux of a directional light);
+//   I_A      = the ambient irradiance (lux), constant over the scene;
+//   W        = the obscurance (rgb; grey except for the spectral variant), bilinear from the
+//              lightmap through uv1, 1 where there is no lightmap;
+//   k_A = k_D = albedo, the /pi turning irradiance into Lambertian radiance.
+//
+// I_A = beta = 0 (the default) skips the ambient term: direct light and emission alone.
 #extension GL_GOOGLE_include_directive : require
 #include "lights.glsl"
 #include "forward_push.glsl"
+#include "bilinear.glsl"
 
 struct Material {
     vec4 base_color;
@@ -16,31 +33,17 @@ layout(std430, set = 0, binding = 1) readonly buffer Layers { ShadowLayer layers
 layout(set = 0, binding = 2) uniform sampler2DArray shadow_moments;
 layout(std430, set = 0, binding = 3) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 4) uniform sampler2DArray textures;
+// The obscurance W in rgb, one layer per atlas page, padded (lightmap.rs); a single texel
+// of 1 when the renderer has no lightmap.
+layout(set = 0, binding = 5) uniform sampler2DArray lightmap;
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
 layout(location = 2) in vec2 uv0;
+layout(location = 3) in vec2 uv1;
 layout(location = 0) out vec4 radiance;
 
-// Bilinear filtering with repeat wrapping done by hand from texelFetch, texel centres at
-// (i + 0.5) / size: the same arithmetic as relume_bake::scene::Texture::sample_bilinear.
-// By hand because each texture fills only the top-left of its array layer, and because
-// Mesa 22.3's llvmpipe aborts compiling a REPEAT + LINEAR sampler on RGBA32F.
-vec4 texel_repeat(ivec2 i, ivec2 size, int layer) {
-    return texelFetch(textures, ivec3((i % size + size) % size, layer), 0);
-}
-
-vec4 sample_bilinear_repeat(vec4 texture_info, vec2 uv) {
-    ivec2 size = ivec2(texture_info.xy);
-    int layer = int(texture_info.z);
-    vec2 x = uv * vec2(size) - 0.5;
-    vec2 base = floor(x);
-    vec2 f = x - base;
-    ivec2 i = ivec2(base);
-    vec4 top = mix(texel_repeat(i, size, layer), texel_repeat(i + ivec2(1, 0), size, layer), f.x);
-    vec4 bottom = mix(texel_repeat(i + ivec2(0, 1), size, layer), texel_repeat(i + ivec2(1, 1), size, layer), f.x);
-    return mix(top, bottom, f.y);
-}
+const float PI = 3.14159265358979;
 
 float visibility(Light light, vec3 p) {
     if (pc.shadows == 0u) return 1.0;
@@ -53,6 +56,15 @@ float visibility(Light light, vec3 p) {
                                 pc.bleeding_reduction);
 }
 
+// W at uv1 (relume_bake::atlas's convention): page = floor(u), the page's own u = fract(u),
+// v in [0, 1] with row 0 at the top; filtered within the page, clamped to its edge.
+vec3 obscurance(vec2 uv) {
+    ivec3 size = textureSize(lightmap, 0);
+    float page = floor(uv.x);
+    int layer = clamp(int(page), 0, size.z - 1);
+    return sample_bilinear(lightmap, layer, size.xy, vec2(uv.x - page, uv.y), WRAP_CLAMP).rgb;
+}
+
 void main() {
     Material m = materials[pc.material];
     vec3 to_camera = normalize(pc.camera_position.xyz - world_position);
@@ -62,15 +74,24 @@ void main() {
     if (dot(n, to_camera) < 0.0) n = -n;
     bool front = gl_FrontFacing;
     vec3 albedo = m.base_color.rgb;
-    if (m.texture.z >= 0.0) albedo *= sample_bilinear_repeat(m.texture, uv0).rgb;
+    if (m.texture.z >= 0.0) {
+        ivec2 size = ivec2(m.texture.xy);
+        albedo *= sample_bilinear(textures, int(m.texture.z), size, uv0, WRAP_REPEAT).rgb;
+    }
     vec3 result = front ? m.emission.rgb : vec3(0.0);
+    vec3 unshadowed = vec3(0.0);    // sum_j E_j, for I'_S
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec3 to_light;
         vec3 irradiance = incident_light(lights[i], world_position, to_light);
+        unshadowed += irradiance;
         float cos_theta = dot(n, to_light);
         if (cos_theta <= 0.0) continue;
-        result += albedo / 3.14159265358979 * irradiance * cos_theta
+        result += albedo / PI * irradiance * cos_theta
                   * visibility(lights[i], world_position);
+    }
+    if (pc.ambient_beta != vec4(0.0)) {
+        vec3 ambient = pc.ambient_beta.rgb + pc.ambient_beta.w * unshadowed;   // I_A + I'_S
+        result += albedo / PI * ambient * obscurance(uv1);
     }
     radiance = vec4(result, 1.0);
 }

@@ -1,13 +1,20 @@
 //! The frame, top to bottom: VSM moments -> moments blur -> forward lighting -> tonemap.
-//! `Renderer::record` writes it into any command buffer (the caller's, for integrators);
+//! Forward lighting is the obscurance illumination model (001 eq. (5)-(7)): direct light with
+//! variance shadow maps, plus the ambient term (I_A + I'_S) times the obscurance W, read from
+//! the lightmap through each vertex's uv1 (see shaders/forward.frag). The lightmap is
+//! uploaded and padded once, at creation ([`Renderer::with_lightmap`]); without one a single
+//! texel of W = 1 stands in (constant ambient). Nothing is uploaded per frame but the lights.
+//! `Renderer::record` writes a frame into any command buffer (the caller's, for integrators);
 //! `Renderer::render` is the headless driver relume's own tools use.
 
 use crate::gpu_scene::GpuScene;
+use crate::lightmap::{check_uv1, GpuLightmap, LightmapData};
 use crate::passes::forward::{ForwardParams, ForwardPass, DEPTH_FORMAT, RADIANCE_FORMAT};
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
 use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
+use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use relume_bake::image::Image as HdrImage;
 use relume_bake::scene::{Camera, Light, Scene};
@@ -29,6 +36,17 @@ pub struct RenderSettings {
     pub shadows: bool,
     /// Exposure multiplier of the display transform.
     pub exposure: f32,
+    /// I_A of 001 eq. (5): the ambient irradiance (lux, rgb, each at least 0) an unoccluded
+    /// surface receives. The forward pass outputs the radiance
+    /// `L = emission + albedo / pi * ((I_A + I'_S) * W + E_direct)`: k_A = k_D = albedo,
+    /// I_A and I'_S irradiances, W the obscurance from the lightmap (1 without one), E_direct
+    /// the shadowed direct irradiance (eq. (6) with the receiver's cosine). Default 0.
+    pub ambient: Vec3,
+    /// beta of 001 eq. (7), in [0, 1): I'_S = beta * the sum over all lights of each light's
+    /// unshadowed irradiance on a surface facing it (range window and spot cone included, no
+    /// cosine, no visibility; a directional light's lux). Default 0. With ambient and beta
+    /// both 0 the frame is direct light and emission alone, and the lightmap is not read.
+    pub beta: f32,
 }
 
 impl Default for RenderSettings {
@@ -42,6 +60,8 @@ impl Default for RenderSettings {
             bleeding_reduction: 0.2,
             shadows: true,
             exposure: 1.0,
+            ambient: Vec3::ZERO,
+            beta: 0.0,
         }
     }
 }
@@ -57,6 +77,8 @@ impl RenderSettings {
             (self.min_variance.is_finite() && self.min_variance >= 0.0, "minimum variance must be finite and >= 0"),
             ((0.0..1.0).contains(&self.bleeding_reduction), "light-bleeding reduction must be in [0, 1)"),
             (self.exposure.is_finite() && self.exposure > 0.0, "exposure must be finite and > 0"),
+            (self.ambient.is_finite() && self.ambient.min_element() >= 0.0, "ambient must be three finite values >= 0 (lux)"),
+            (self.beta.is_finite() && (0.0..1.0).contains(&self.beta), "beta must be in [0, 1)"),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some((_, message)) => Err(message.to_string()),
@@ -97,13 +119,41 @@ pub struct Renderer<'a> {
     /// Tonemapped sRGB, the frame's display result.
     pub display: Image<'a>,
     scene: GpuScene<'a>,
+    /// The lightmap given at creation, or a single texel of W = 1.
+    lightmap: GpuLightmap<'a>,
+    /// Whether `lightmap` was given (and so was padded at creation).
+    lightmap_given: bool,
     tracker: Tracker,
 }
 
 impl<'a> Renderer<'a> {
-    /// Uploads the scene and creates every pass and target. Nothing here runs per frame.
+    /// Uploads the scene and creates every pass and target, without a lightmap: W = 1
+    /// everywhere, so the ambient term (when `settings.ambient` or `beta` is > 0) is constant
+    /// ambient. Nothing here runs per frame.
     pub fn new(ctx: &'a Context, scene: &Scene, settings: &RenderSettings) -> VkResult<Renderer<'a>> {
+        Renderer::with_lightmap(ctx, scene, settings, None)
+    }
+
+    /// [`Renderer::new`] with the obscurance W read from `lightmap` through each vertex's uv1:
+    /// uploaded and padded on the GPU once, here ([`Renderer::padding_ms`] says how long the
+    /// padding took). With a lightmap every mesh of `scene` must have uv1 on one of its pages
+    /// (a bake artifact's scene after `Baked::apply_to`); a mesh without is refused by name,
+    /// as is a lightmap whose texel count is not width x height x pages.
+    pub fn with_lightmap(
+        ctx: &'a Context,
+        scene: &Scene,
+        settings: &RenderSettings,
+        lightmap: Option<&LightmapData>,
+    ) -> VkResult<Renderer<'a>> {
         settings.validate().map_err(VkError::Invalid)?;
+        if let Some(data) = lightmap {
+            check_uv1(scene, data.pages)?;
+        }
+        let lightmap_given = lightmap.is_some();
+        let lightmap = match lightmap {
+            Some(data) => GpuLightmap::upload(ctx, data.width, data.height, data.pages, data.texels)?,
+            None => GpuLightmap::upload(ctx, 1, 1, 1, &[Vec4::ONE])?,
+        };
         let (w, h) = (settings.width, settings.height);
         let target = |name, format, usage| {
             Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
@@ -112,7 +162,7 @@ impl<'a> Renderer<'a> {
         let gpu_scene = GpuScene::upload(ctx, scene)?;
         let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
         let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments)?;
+        let forward = ForwardPass::new(ctx, &gpu_scene, &vsm.moments, &lightmap.image)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
         let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
@@ -122,6 +172,8 @@ impl<'a> Renderer<'a> {
             Buffer::new(ctx, "radiance readback", pixels * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
             Buffer::new(ctx, "display readback", pixels * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
         );
+        let mut tracker = Tracker::default();
+        lightmap.register_state(&mut tracker);
         Ok(Renderer {
             ctx,
             settings: settings.clone(),
@@ -138,8 +190,25 @@ impl<'a> Renderer<'a> {
             depth,
             display,
             scene: gpu_scene,
-            tracker: Tracker::default(),
+            lightmap,
+            lightmap_given,
+            tracker,
         })
+    }
+
+    /// GPU time of padding the lightmap at creation, in milliseconds; None without a lightmap
+    /// or without timestamps.
+    pub fn padding_ms(&self) -> Option<f64> {
+        self.lightmap.padding_ms().filter(|_| self.lightmap_given)
+    }
+
+    /// Changes I_A (lux) and beta of the obscurance model (see [`RenderSettings::ambient`]) for
+    /// the frames recorded from now on, without allocating; refused like invalid settings.
+    pub fn set_ambient(&mut self, ambient: Vec3, beta: f32) -> VkResult<()> {
+        let next = RenderSettings { ambient, beta, ..self.settings.clone() };
+        next.validate().map_err(VkError::Invalid)?;
+        self.settings = next;
+        Ok(())
     }
 
     /// Moves the lights (same kinds and count as the scene had), without allocating. The
@@ -164,6 +233,7 @@ impl<'a> Renderer<'a> {
             bleeding_reduction: s.bleeding_reduction,
             material: 0,
             _pad: [0; 3],
+            ambient_beta: s.ambient.extend(s.beta),
         }
     }
 
@@ -204,7 +274,8 @@ impl<'a> Renderer<'a> {
         }
         timestamp(2);
         let targets = (&self.radiance, &self.depth);
-        self.forward.record(rec, tracker, &self.scene, &self.vsm.moments, targets, &self.forward_params());
+        let sampled = (&self.vsm.moments, &self.lightmap.image);
+        self.forward.record(rec, tracker, &self.scene, sampled, targets, &self.forward_params());
         timestamp(3);
         self.tonemap.record(rec, tracker, &self.radiance, &self.display, self.settings.exposure);
         timestamp(4);
@@ -248,9 +319,11 @@ impl<'a> Renderer<'a> {
 
     /// Forgets what the renderer's images were last used for, after a recorded frame was
     /// never submitted or its submission failed. Safe because every frame rewrites every
-    /// image it uses; the next frame transitions them from UNDEFINED.
+    /// image it uses; the next frame transitions them from UNDEFINED. The lightmap, which no
+    /// frame writes, stays known as ready for sampling (the upload left it so).
     pub fn forget_image_states(&mut self) {
         self.tracker = Tracker::default();
+        self.lightmap.register_state(&mut self.tracker);
     }
 
     fn submit_frame(&mut self, read_back: bool) -> VkResult<()> {

@@ -12,17 +12,21 @@ pub(crate) struct GpuVertex {
     position: [f32; 3],
     normal: [f32; 3],
     uv0: [f32; 2],
+    /// Lightmap coordinate (relume_bake::atlas): the page in the integer part of u; zero for
+    /// meshes without one (the renderer then has no lightmap, only a single texel of W = 1).
+    uv1: [f32; 2],
 }
 
 pub(crate) const VERTEX_STRIDE: u32 = std::mem::size_of::<GpuVertex>() as u32;
 
-/// Vertex attributes: position, normal, uv0 (locations 0-2).
-pub(crate) fn vertex_attributes() -> [vk::VertexInputAttributeDescription; 3] {
+/// Vertex attributes: position, normal, uv0, uv1 (locations 0-3).
+pub(crate) fn vertex_attributes() -> [vk::VertexInputAttributeDescription; 4] {
     let attribute = |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
     [
         attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
         attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
         attribute(2, vk::Format::R32G32_SFLOAT, 24),
+        attribute(3, vk::Format::R32G32_SFLOAT, 32),
     ]
 }
 
@@ -185,8 +189,9 @@ fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
     for mesh in &scene.meshes {
         let base = vertices.len() as u32;
         for (i, (p, n)) in mesh.positions.iter().zip(&mesh.normals).enumerate() {
-            let uv = mesh.uv0.as_ref().map_or(glam::Vec2::ZERO, |uv| uv[i]);
-            vertices.push(GpuVertex { position: p.to_array(), normal: n.to_array(), uv0: uv.to_array() });
+            let uv0 = mesh.uv0.as_ref().map_or(glam::Vec2::ZERO, |uv| uv[i]);
+            let uv1 = mesh.uv1.as_ref().map_or(glam::Vec2::ZERO, |uv| uv[i]);
+            vertices.push(GpuVertex { position: p.to_array(), normal: n.to_array(), uv0: uv0.to_array(), uv1: uv1.to_array() });
         }
         draws.push(Draw {
             first_index: indices.len() as u32,

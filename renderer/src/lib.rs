@@ -3,7 +3,8 @@
 //! ([`vk::Context::from_existing`]); [`Renderer::render`] is the headless driver.
 //!
 //! Layers: `vk` owns every unsafe Vulkan call; `passes` are safe code, one file per pass;
-//! `frame` wires them in order; `lightmap` uploads a baked lightmap and pads it once.
+//! `frame` wires them in order; `lightmap` uploads a baked lightmap and pads it once; the
+//! forward pass reads it through uv1 (the obscurance model, 001 eq. (5)-(7)).
 
 pub mod frame;
 pub mod gpu_scene;
@@ -12,6 +13,7 @@ pub mod passes;
 pub mod vk;
 
 pub use frame::{FrameTimings, RenderSettings, Renderer, PASS_NAMES};
+pub use lightmap::LightmapData;
 
 /// SPIR-V of every shader in `shaders/`, compiled by build.rs.
 pub mod shaders {

@@ -1,16 +1,64 @@
 //! A baked lightmap on the GPU: an RGBA32F 2D-array image, one layer per atlas page, rgb the
 //! value and alpha the coverage (> 0 covered by geometry, 0 empty), padded once at upload
 //! (passes/padding.rs: empty texels then hold their nearest covered texel's rgb and alpha =
-//! -distance in texels). Lighting passes read only rgb.
+//! -distance in texels). Lighting passes read only rgb, through each vertex's uv1
+//! (relume_bake::atlas: page = floor(u), the page's u = fract(u), v with row 0 at the top).
 
 use crate::gpu_scene::{submit_once, upload_array_layers};
 use crate::passes::padding::{PaddingPass, LIGHTMAP_FORMAT};
 use crate::vk::{vk, Access, Buffer, CommandRecorder, Context, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
+use relume_bake::artifact::PageLayout;
+use relume_bake::scene::Scene;
 
 /// The longest side a lightmap may have: the padding shader's squared distances fit an i32.
 pub const MAX_SIDE: u32 = 16384;
+
+/// A lightmap as the renderer takes it: `pages` layers of `width` x `height` texels, page
+/// after page, each row by row from the top (the order of relume_bake's atlas); rgb the
+/// obscurance W, alpha the coverage (> 0 covered, 0 empty: padded at upload). From a bake
+/// artifact: `LightmapData::new(baked.layout, &baked.lightmap_rgba())`, with the scene given
+/// to the renderer re-indexed by `baked.apply_to(&mut scene)` first.
+#[derive(Clone, Copy, Debug)]
+pub struct LightmapData<'d> {
+    pub width: u32,
+    pub height: u32,
+    pub pages: u32,
+    pub texels: &'d [Vec4],
+}
+
+impl<'d> LightmapData<'d> {
+    pub fn new(layout: PageLayout, texels: &'d [Vec4]) -> Self {
+        LightmapData { width: layout.width, height: layout.height, pages: layout.pages, texels }
+    }
+}
+
+/// Refuses a scene a lightmap of `pages` pages cannot light: every mesh needs a finite uv1 for
+/// every vertex, on a page the lightmap has. The error names the mesh.
+pub fn check_uv1(scene: &Scene, pages: u32) -> VkResult<()> {
+    let with_uv1 = scene.meshes.iter().filter(|m| m.uv1.is_some()).count();
+    for (index, mesh) in scene.meshes.iter().enumerate() {
+        let name = format!("{}: mesh {index} \"{}\"", scene.source.display(), mesh.name);
+        let Some(uv1) = &mesh.uv1 else {
+            return Err(VkError::Invalid(format!(
+                "{name} has no uv1 ({with_uv1} of {} meshes have one); a lightmap needs every mesh's uv1: apply the bake artifact to the scene (Baked::apply_to) before giving both to the renderer",
+                scene.meshes.len()
+            )));
+        };
+        if uv1.len() != mesh.positions.len() {
+            return Err(VkError::Invalid(format!("{name} has {} uv1 values for {} vertices", uv1.len(), mesh.positions.len())));
+        }
+        let off_atlas = uv1.iter().position(|uv| !(uv.is_finite() && uv.x >= 0.0 && uv.x.floor() < pages as f32));
+        if let Some(v) = off_atlas {
+            return Err(VkError::Invalid(format!(
+                "{name}: vertex {v} has uv1 {}, not on one of the lightmap's {pages} pages (u in [0, {pages})); was the lightmap baked for this scene?",
+                uv1[v]
+            )));
+        }
+    }
+    Ok(())
+}
 
 pub struct GpuLightmap<'a> {
     ctx: &'a Context,

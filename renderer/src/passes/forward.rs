@@ -1,5 +1,13 @@
-//! Forward lighting pass: Lambertian direct light from every punctual light with glTF
-//! falloff, visibility from the variance shadow maps (Chebyshev bound, 000 §3.4), emission.
+//! Forward lighting pass: the obscurance illumination model of 001 eq. (5)-(7) for Lambertian
+//! surfaces (shaders/forward.frag states it in radiometric terms): emission, plus direct light
+//! from every punctual light with glTF falloff and visibility from the variance shadow maps
+//! (Chebyshev bound, 000 §3.4), plus the ambient term (I_A + beta * every light's unshadowed,
+//! cosine-free irradiance) times the obscurance W, filtered by hand from the lightmap through
+//! uv1. With I_A = beta = 0 the ambient term is skipped and the lightmap is not read.
+//!
+//! Reads: the scene's vertex, index, light, shadow-layer and material buffers, `moments`, the
+//! base-colour texture array and the lightmap (sampled in the fragment shader). Writes:
+//! `radiance` (linear radiance, RGBA32F, alpha 1) and `depth`, both cleared first.
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
@@ -22,7 +30,12 @@ pub struct ForwardParams {
     /// The material of the current draw (set per draw by the pass).
     pub material: u32,
     pub _pad: [u32; 3],
+    /// rgb: I_A, the ambient irradiance (lux); w: beta (001 eq. (5), (7)).
+    pub ambient_beta: Vec4,
 }
+
+// 128 bytes: the push-constant size every Vulkan device guarantees (maxPushConstantsSize).
+const _: () = assert!(std::mem::size_of::<ForwardParams>() == 128);
 
 pub struct ForwardPass<'a> {
     pipeline: Pipeline<'a>,
@@ -33,9 +46,11 @@ pub struct ForwardPass<'a> {
 }
 
 impl<'a> ForwardPass<'a> {
-    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image) -> VkResult<ForwardPass<'a>> {
+    /// `lightmap`: the RGBA32F 2D-array image of a [`crate::lightmap::GpuLightmap`].
+    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image, lightmap: &Image) -> VkResult<ForwardPass<'a>> {
         let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
-        // Textures are filtered by hand in the shader (texelFetch); the sampler only binds them.
+        // Textures and the lightmap are filtered by hand in the shader (texelFetch, with their
+        // own wrap modes); the sampler only binds them.
         let texture_sampler = Sampler::new(ctx, false, vk::SamplerAddressMode::REPEAT)?;
         let descriptors = DescriptorSet::new(
             ctx,
@@ -46,6 +61,7 @@ impl<'a> ForwardPass<'a> {
                 Binding::SampledImage { view: moments.view, sampler: shadow_sampler.raw },
                 Binding::StorageBuffer(scene.materials.raw),
                 Binding::SampledImage { view: scene.textures.view, sampler: texture_sampler.raw },
+                Binding::SampledImage { view: lightmap.view, sampler: texture_sampler.raw },
             ],
         )?;
         let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
@@ -63,19 +79,22 @@ impl<'a> ForwardPass<'a> {
         Ok(ForwardPass { pipeline, descriptors, _shadow_sampler: shadow_sampler, _texture_sampler: texture_sampler })
     }
 
-    /// Reads: `moments` and the textures (sampled), scene buffers. Writes: `radiance`, `depth`.
-    /// One draw per mesh, so the material (and its texture) is uniform across each draw.
+    /// Reads: `sampled` = (`moments`, `lightmap`: the images given to `new`) and the textures
+    /// (sampled), scene buffers. Writes: `targets` = (`radiance`, `depth`). One draw per mesh,
+    /// so the material (and its texture) is uniform across each draw.
     pub(crate) fn record(
         &self,
         rec: &CommandRecorder,
         tracker: &mut Tracker,
         scene: &GpuScene,
-        moments: &Image,
+        sampled: (&Image, &Image),
         targets: (&Image, &Image),
         params: &ForwardParams,
     ) {
+        let (moments, lightmap) = sampled;
         let (radiance, depth) = targets;
         tracker.use_image(rec, moments, Access::FragmentSampled);
+        tracker.use_image(rec, lightmap, Access::FragmentSampled);
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);

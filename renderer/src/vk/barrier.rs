@@ -75,13 +75,13 @@ impl Tracker {
     /// completed or comes earlier in submission order (an upload), so that the next use
     /// here keeps its contents instead of transitioning from UNDEFINED.
     pub fn assume(&mut self, image: &Image, access: Access) {
-        self.last.insert(image.raw, access);
+        self.set(image, access);
     }
 
     /// Records the barrier that makes `image` ready for `next`.
     pub fn use_image(&mut self, rec: &CommandRecorder, image: &Image, next: Access) {
         let previous = self.state(image);
-        self.last.insert(image.raw, next);
+        self.set(image, next);
         if previous == next && !next.writes() {
             return;
         }
@@ -97,5 +97,17 @@ impl Tracker {
             .image(image.raw)
             .subresource_range(image.desc.all_layers());
         rec.image_barrier(barrier);
+    }
+
+    /// Updates a known image in place: `HashMap::insert` reserves room for one more entry
+    /// before it looks for the key, so on a full table even a replacing insert grows it (an
+    /// allocation in a frame loop whose images are all known already).
+    fn set(&mut self, image: &Image, access: Access) {
+        match self.last.get_mut(&image.raw) {
+            Some(last) => *last = access,
+            None => {
+                self.last.insert(image.raw, access);
+            }
+        }
     }
 }
