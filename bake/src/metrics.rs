@@ -61,6 +61,28 @@ pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageErro
     Ok(ErrorStats { rmse, nrmse: relative(rmse), non_finite_pixels, dark_pixels, dark_leak })
 }
 
+/// The scale s that makes `base + s * unit` closest to `reference` in the least-squares
+/// sense (over every channel of every pixel): how much of a term a method should add to come
+/// nearest the truth. 0 when `unit` is black.
+pub fn best_scale(base: &Image, unit: &Image, reference: &Image) -> Result<f64, ImageError> {
+    check_sizes(base, reference)?;
+    check_sizes(unit, reference)?;
+    let (mut numerator, mut denominator) = (0.0f64, 0.0f64);
+    for ((b, u), r) in base.pixels.iter().zip(&unit.pixels).zip(&reference.pixels) {
+        let (b, u, r) = (b.as_dvec3(), u.as_dvec3(), r.as_dvec3());
+        numerator += (r - b).dot(u);
+        denominator += u.length_squared();
+    }
+    Ok(if denominator > 0.0 { numerator / denominator } else { 0.0 })
+}
+
+/// `base + scale * unit`, pixel by pixel.
+pub fn add_scaled(base: &Image, unit: &Image, scale: f32) -> Result<Image, ImageError> {
+    check_sizes(base, unit)?;
+    let pixels = base.pixels.iter().zip(&unit.pixels).map(|(b, u)| *b + *u * scale).collect();
+    Ok(Image { width: base.width, height: base.height, pixels })
+}
+
 /// A false-colour picture of the per-pixel error: the mean absolute channel error divided by
 /// the reference's RMS, from black (0) through blue, cyan, green and yellow to red (>= `scale`).
 /// Non-finite pixels are magenta.
@@ -105,6 +127,15 @@ mod tests {
 
     fn flat(value: Vec3) -> Image {
         Image { width: 2, height: 2, pixels: vec![value; 4] }
+    }
+
+    #[test]
+    fn the_best_scale_recovers_a_known_mixture() {
+        let base = flat(Vec3::new(1.0, 0.5, 0.2));
+        let unit = Image { width: 2, height: 2, pixels: vec![Vec3::ONE, Vec3::X, Vec3::Y, Vec3::Z] };
+        let reference = add_scaled(&base, &unit, 0.37).unwrap();
+        assert!((best_scale(&base, &unit, &reference).unwrap() - 0.37).abs() < 1e-6);
+        assert_eq!(best_scale(&base, &flat(Vec3::ZERO), &reference).unwrap(), 0.0);
     }
 
     #[test]

@@ -78,12 +78,42 @@ pub(crate) fn default_bake_dir(scene: &Path, method: &str) -> PathBuf {
     PathBuf::from("out").join(stem).join(method)
 }
 
+impl BakeArgs {
+    /// `relume bake SCENE --method obscurance` with every other flag at its default.
+    pub(crate) fn obscurance(scene: &Path, rays: u32) -> BakeArgs {
+        BakeArgs {
+            scene: scene.to_path_buf(),
+            method: "obscurance".into(),
+            variant: "obscurance".into(),
+            tau: None,
+            l_max: None,
+            rays,
+            texel_density: None,
+            patches: None,
+            gutter: 2,
+            atlas_max: 4096,
+            discontinuity_angle: 60.0,
+            seed: 0,
+            threads: None,
+            time_limit: None,
+            out: None,
+        }
+    }
+}
+
 pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let loaded = load_with_camera(&args.scene, None)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
-    let scene = loaded.scene;
+    let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, &args.method));
+    let summary = bake_scene(&loaded.scene, args, &out)?;
+    print!("{summary}");
+    Ok(())
+}
+
+/// Bakes `scene` as `args` say into the artifact folder `out`; returns a summary to print.
+pub(crate) fn bake_scene(scene: &Scene, args: &BakeArgs, out: &Path) -> Result<String> {
     let lighting = lighting_settings(&scene.settings, args)?;
     let atlas_settings = AtlasSettings {
         texel_density: lighting.texel_density,
@@ -98,16 +128,15 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let mut stages = Vec::new();
     let atlas = timed("atlas", &mut stages, || match args.patches {
         Some(0) => Err(anyhow::anyhow!("--patches 0: ask for at least one patch")),
-        Some(patches) => Ok(Atlas::build_for_patch_count(&scene, &atlas_settings, patches)?),
-        None => Ok(Atlas::build(&scene, &atlas_settings)?),
+        Some(patches) => Ok(Atlas::build_for_patch_count(scene, &atlas_settings, patches)?),
+        None => Ok(Atlas::build(scene, &atlas_settings)?),
     })?;
-    let bvh = timed("bvh", &mut stages, || SceneBvh::new(&scene));
-    let map = timed("obscurance", &mut stages, || bake_obscurance(&scene, &bvh, &atlas, &obscurance)).map_err(anyhow::Error::msg)?;
+    let bvh = timed("bvh", &mut stages, || SceneBvh::new(scene));
+    let map = timed("obscurance", &mut stages, || bake_obscurance(scene, &bvh, &atlas, &obscurance)).map_err(anyhow::Error::msg)?;
 
-    let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, &args.method));
     let output = BakeOutput {
         method: &args.method,
-        scene: &scene,
+        scene,
         parameters: parameters(&obscurance, &atlas_settings, args),
         atlas_summary: atlas_summary(&atlas, &atlas_settings),
         layout: PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages },
@@ -116,9 +145,8 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
         lightmap: &map.values,
         stats: stats(&stages, &map, &obscurance),
     };
-    output.write(&out)?;
-    print_summary(&atlas, &map, &stages, &out);
-    Ok(())
+    output.write(out)?;
+    Ok(summary(&atlas, &map, &stages, out))
 }
 
 fn lighting_settings(scene: &LightingSettings, args: &BakeArgs) -> Result<LightingSettings> {
@@ -201,8 +229,11 @@ fn rayon_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-fn print_summary(atlas: &Atlas, map: &ObscuranceMap, stages: &[Stage], out: &Path) {
-    println!(
+fn summary(atlas: &Atlas, map: &ObscuranceMap, stages: &[Stage], out: &Path) -> String {
+    use std::fmt::Write as _;
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
         "atlas: {} charts, {} x {} x {} page(s), {} patches, utilization {:.1}%",
         atlas.charts.len(),
         atlas.width,
@@ -212,12 +243,14 @@ fn print_summary(atlas: &Atlas, map: &ObscuranceMap, stages: &[Stage], out: &Pat
         100.0 * atlas.utilization()
     );
     if !atlas.too_small.is_empty() {
-        println!("warning: {} triangle(s) too small to cover a texel measurably: {:?}", atlas.too_small.len(), atlas.too_small);
+        let _ = writeln!(text, "warning: {} triangle(s) too small to cover a texel measurably: {:?}", atlas.too_small.len(), atlas.too_small);
     }
     for s in stages {
         let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64));
-        println!("  {:<11} {:>8.3} s, peak memory {memory}", s.name, s.seconds);
+        let _ = writeln!(text, "  {:<11} {:>8.3} s, peak memory {memory}", s.name, s.seconds);
     }
-    println!("{} rays per texel, {} rays in {:.3} s ({:.2} M rays/s)", map.rays_per_texel, map.rays_traced, map.seconds, map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6);
-    println!("wrote {}", out.display());
+    let rate = map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6;
+    let _ = writeln!(text, "{} rays per texel, {} rays in {:.3} s ({rate:.2} M rays/s)", map.rays_per_texel, map.rays_traced, map.seconds);
+    let _ = writeln!(text, "wrote {}", out.display());
+    text
 }

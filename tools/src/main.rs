@@ -6,7 +6,11 @@ use clap::{Args, Parser, Subcommand};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::gltf_load::{load_with_camera, CameraOverride};
 use relume_bake::image::{self, Image};
+use relume_bake::artifact::{Baked, PageLayout};
 use relume_bake::metrics;
+use relume_bake::settings::LightingSettings;
+use glam::{Vec3, Vec4};
+use relume_renderer::LightmapData;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use relume_renderer::vk::{Context, ContextOptions};
@@ -83,6 +87,16 @@ struct GpuArgs {
     /// Turn on the Vulkan validation layers; any message fails the command.
     #[arg(long)]
     validation: bool,
+    /// Ambient irradiance I_A of the obscurance model, lux: "r,g,b" or one value
+    /// (default: the scene's extras.relume.ambient).
+    #[arg(long)]
+    ambient: Option<String>,
+    /// beta of the obscurance model's indirect term, in [0, 1) (default: the scene's).
+    #[arg(long)]
+    beta: Option<f32>,
+    /// Direct light only: no ambient term (ambient and beta 0).
+    #[arg(long, conflicts_with_all = ["ambient", "beta"])]
+    direct_only: bool,
 }
 
 #[derive(Args)]
@@ -97,6 +111,10 @@ struct RenderArgs {
     /// Render this many frames and report the median GPU time of every pass.
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// A bake artifact folder (`relume bake --out`): W from its lightmap. Without one,
+    /// W = 1 (constant ambient).
+    #[arg(long)]
+    bake: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -168,6 +186,9 @@ struct RunArgs {
     /// Frames to time the Vulkan renderer over.
     #[arg(long, default_value_t = 100)]
     frames: u32,
+    /// Obscurance rays per texel of the bake.
+    #[arg(long, default_value_t = 256)]
+    rays: u32,
 }
 
 fn main() -> ExitCode {
@@ -208,7 +229,22 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
     Ok(loaded.scene)
 }
 
-fn render_settings(scene: &SceneArgs, gpu: &GpuArgs) -> Result<RenderSettings> {
+/// `--ambient`: "r,g,b" or one value for all three channels.
+fn parse_ambient(text: &str) -> Result<Vec3> {
+    let values: Vec<f32> = text.split(',').map(|v| v.trim().parse::<f32>()).collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("--ambient {text}: give \"r,g,b\" or one number (lux)"))?;
+    match values[..] {
+        [v] => Ok(Vec3::splat(v)),
+        [r, g, b] => Ok(Vec3::new(r, g, b)),
+        _ => bail!("--ambient {text}: give \"r,g,b\" or one number (lux)"),
+    }
+}
+
+fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings) -> Result<RenderSettings> {
+    let (ambient, beta) = match gpu.direct_only {
+        true => (Vec3::ZERO, 0.0),
+        false => (gpu.ambient.as_deref().map(parse_ambient).transpose()?.unwrap_or(lighting.ambient), gpu.beta.unwrap_or(lighting.beta)),
+    };
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,
@@ -218,46 +254,77 @@ fn render_settings(scene: &SceneArgs, gpu: &GpuArgs) -> Result<RenderSettings> {
         bleeding_reduction: gpu.bleeding_reduction,
         shadows: !gpu.no_shadows,
         exposure: gpu.exposure,
+        ambient,
+        beta,
     };
     settings.validate().map_err(|e| anyhow::anyhow!("render settings: {e}"))?;
     Ok(settings)
 }
 
-/// What a Vulkan render produced: the HDR image, the display pixels, per-frame timings.
+/// One Vulkan render to make: a scene (re-indexed by its bake when it has a lightmap), the
+/// settings, the lightmap if any, and how many frames to time.
+struct GpuJob<'s> {
+    scene: &'s Scene,
+    settings: RenderSettings,
+    lightmap: Option<LightmapData<'s>>,
+    frames: u32,
+}
+
+/// What a Vulkan render produced: the HDR image, the display pixels, per-frame timings and
+/// the GPU time of padding its lightmap.
 struct GpuRender {
     radiance: Image,
     display_rgba: Vec<u8>,
     frames: Vec<FrameTimings>,
-    device: String,
+    padding_ms: Option<f64>,
 }
 
-fn render_on_gpu(scene: &Scene, settings: &RenderSettings, gpu: &GpuArgs, frames: u32) -> Result<GpuRender> {
+/// Renders every job on one headless context; returns the renders and the device's name.
+/// With `--validation`, any message (teardown included) fails the whole command.
+fn render_on_gpu(jobs: &[GpuJob], gpu: &GpuArgs) -> Result<(Vec<GpuRender>, String)> {
     let options = ContextOptions { validation: gpu.validation, device: gpu.device.clone() };
     let ctx = Context::headless(&options).context("Vulkan")?;
     let log = ctx.message_log();
     let device = format!("{} ({})", ctx.info.name, ctx.info.driver);
-    let result = render_frames(&ctx, scene, settings, frames);
+    let result: Result<Vec<GpuRender>> = jobs.iter().map(|job| render_frames(&ctx, job)).collect();
     // Dropped first, so that messages about teardown (objects never destroyed) count too.
     drop(ctx);
     let messages = log.lock().map(|m| m.clone()).unwrap_or_default();
     if !messages.is_empty() {
         bail!("{} Vulkan validation message(s), first: {}", messages.len(), messages[0]);
     }
-    let (radiance, display_rgba, frames) = result?;
-    Ok(GpuRender { radiance, display_rgba, frames, device })
+    Ok((result?, device))
 }
 
-type Frames = (Image, Vec<u8>, Vec<FrameTimings>);
-
-fn render_frames(ctx: &Context, scene: &Scene, settings: &RenderSettings, frames: u32) -> Result<Frames> {
-    let mut renderer = Renderer::new(ctx, scene, settings).context("Vulkan renderer")?;
+fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
+    let mut renderer = Renderer::with_lightmap(ctx, job.scene, &job.settings, job.lightmap.as_ref()).context("Vulkan renderer")?;
     // The first frames warm caches and pipelines; the rest are timed.
-    for _ in 0..frames.min(3) {
+    for _ in 0..job.frames.min(3) {
         renderer.render()?;
     }
-    let timings = (0..frames).map(|_| renderer.render()).collect::<Result<Vec<_>, _>>()?;
+    let frames = (0..job.frames).map(|_| renderer.render()).collect::<Result<Vec<_>, _>>()?;
     let (radiance, display_rgba) = renderer.render_and_read()?;
-    Ok((radiance, display_rgba, timings))
+    Ok(GpuRender { radiance, display_rgba, frames, padding_ms: renderer.padding_ms() })
+}
+
+/// The scene re-indexed by a bake artifact, and the artifact's lightmap as the renderer takes it.
+struct Lit {
+    scene: Scene,
+    layout: PageLayout,
+    texels: Vec<Vec4>,
+}
+
+impl Lit {
+    fn read(dir: &Path, scene: &Scene) -> Result<Lit> {
+        let baked = Baked::read(dir, scene)?;
+        let mut lit = scene.clone();
+        baked.apply_to(&mut lit);
+        Ok(Lit { scene: lit, layout: baked.layout, texels: baked.lightmap_rgba() })
+    }
+
+    fn lightmap(&self) -> Option<LightmapData<'_>> {
+        Some(LightmapData::new(self.layout, &self.texels))
+    }
 }
 
 fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
@@ -274,12 +341,20 @@ fn frame_count(frames: u32) -> Result<u32> {
 
 fn render_command(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
-    let settings = render_settings(&args.scene, &args.gpu)?;
+    let settings = render_settings(&args.scene, &args.gpu, &scene.settings)?;
     let frames = frame_count(args.frames)?;
-    let out = render_on_gpu(&scene, &settings, &args.gpu, frames)?;
-    write_render_outputs(&args.out, &out)?;
-    println!("device: {}", out.device);
-    print_timings(&out.frames);
+    let lit = args.bake.as_deref().map(|dir| Lit::read(dir, &scene)).transpose()?;
+    let job = match &lit {
+        Some(lit) => GpuJob { scene: &lit.scene, settings, lightmap: lit.lightmap(), frames },
+        None => GpuJob { scene: &scene, settings, lightmap: None, frames },
+    };
+    let (renders, device) = render_on_gpu(&[job], &args.gpu)?;
+    write_render_outputs(&args.out, &renders[0])?;
+    println!("device: {device}");
+    if let Some(ms) = renders[0].padding_ms {
+        println!("lightmap padding (once, at upload): {ms:.3} ms");
+    }
+    print_timings(&renders[0].frames);
     Ok(())
 }
 

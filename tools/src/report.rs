@@ -1,64 +1,137 @@
-//! `relume run`, the main job: render a scene with the Vulkan renderer and with the reference
-//! path tracer, compare them, and write the images and `report.md` into one folder.
+//! `relume run`, the main job: bake the scene's obscurances, render it with the Vulkan
+//! renderer three ways (direct light only, constant ambient, obscurance ambient: Iones et al.
+//! 2003, eq. 5-7) and with the reference path tracer, compare each against the reference,
+//! and write the images and `report.md` into one folder.
 
 use super::*;
 use std::fmt::Write as _;
 
+/// The three ambient models the main job compares, in the order of the report.
+const MODELS: [&str; 3] = ["direct", "constant", "obscurance"];
+
 pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
-    let settings = render_settings(&args.scene, &args.gpu)?;
+    let settings = render_settings(&args.scene, &args.gpu, &scene.settings)?;
     let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
     let frames = frame_count(args.frames)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
-    println!("rendering {} with Vulkan ({} timed frames)", args.scene.scene.display(), args.frames);
-    let gpu = render_on_gpu(&scene, &settings, &args.gpu, frames)?;
-    write_render_outputs(&args.out.join("vulkan.exr"), &gpu)?;
+    println!("baking obscurances of {} ({} rays per texel)", args.scene.scene.display(), args.rays);
+    let bake_dir = args.out.join("bake");
+    let bake_summary = bake::bake_scene(&scene, &bake::BakeArgs::obscurance(&args.scene.scene, args.rays), &bake_dir)?;
+    print!("{bake_summary}");
+    let lit = Lit::read(&bake_dir, &scene)?;
+
+    println!("rendering with Vulkan: {} ({} timed frames each)", MODELS.join(", "), frames);
+    let direct_only = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
+    let jobs = [
+        GpuJob { scene: &scene, settings: direct_only, lightmap: None, frames },
+        GpuJob { scene: &scene, settings: settings.clone(), lightmap: None, frames },
+        GpuJob { scene: &lit.scene, settings: settings.clone(), lightmap: lit.lightmap(), frames },
+    ];
+    let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
+    for (model, render) in MODELS.iter().zip(&renders) {
+        write_render_outputs(&args.out.join(format!("{model}.exr")), render)?;
+    }
 
     println!("rendering the reference ({} spp)", args.trace.spp);
     let reference = trace_reference(&scene, &reference_settings);
     write_reference(&args.out.join("reference.exr"), &reference, settings.exposure)?;
 
-    let refs = &reference.images;
-    let direct = metrics::compare(&gpu.radiance, &refs.direct)?;
-    let combined = metrics::compare(&gpu.radiance, &refs.combined)?;
-    let error_png = args.out.join("error_direct.png");
-    let rgb = metrics::false_colour(&gpu.radiance, &refs.direct, 0.5)?;
-    image::write_png_rgb8(&error_png, gpu.radiance.width, gpu.radiance.height, &rgb)?;
-
-    let report = report_text(args, &gpu, &reference, (direct, combined));
+    let rows = MODELS.iter().zip(&renders).map(|(model, render)| score(model, render, &renders[0], &reference)).collect::<Result<Vec<_>>>()?;
+    for (model, render) in MODELS.iter().zip(&renders).skip(1) {
+        let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
+        image::write_png_rgb8(&args.out.join(format!("error_{model}.png")), settings.width, settings.height, &rgb)?;
+    }
+    let report = report_text(args, &settings, &device, &renders, &rows, &reference, &bake_summary);
     let report_path = args.out.join("report.md");
     image::write_atomically(&report_path, |tmp| std::fs::write(tmp, &report).map_err(|e| e.to_string()))?;
     print!("{report}");
     println!("wrote {}", report_path.display());
-    if direct.non_finite_pixels > 0 {
-        bail!("the Vulkan image has {} NaN or infinite pixel(s)", direct.non_finite_pixels);
+    if let Some(row) = rows.iter().find(|r| r.combined.non_finite_pixels > 0) {
+        bail!("the {} image has {} NaN or infinite pixel(s)", row.model, row.combined.non_finite_pixels);
     }
     Ok(())
 }
 
+/// One model's error against the reference.
+struct Score {
+    model: &'static str,
+    combined: metrics::ErrorStats,
+    /// The model's indirect part (its image minus the direct-only image) against the
+    /// reference's indirect layer.
+    indirect: metrics::ErrorStats,
+    /// The factor on the ambient term (I_A and beta together) that fits the reference's
+    /// indirect layer best in the least-squares sense, and the NRMSE of the indirect part
+    /// and of the image at that factor: how much of the error is the model's shape rather
+    /// than its parameters.
+    best_scale: f64,
+    best_indirect_nrmse: f64,
+    best_nrmse: f64,
+}
+
+fn score(model: &'static str, render: &GpuRender, direct: &GpuRender, reference: &ReferenceRun) -> Result<Score> {
+    let refs = &reference.images;
+    let ambient = subtract(&render.radiance, &direct.radiance);
+    let black = Image::new(ambient.width, ambient.height);
+    let best_scale = metrics::best_scale(&black, &ambient, &refs.indirect)?;
+    let best_ambient = metrics::add_scaled(&black, &ambient, best_scale as f32)?;
+    let best = metrics::add_scaled(&direct.radiance, &ambient, best_scale as f32)?;
+    Ok(Score {
+        model,
+        combined: metrics::compare(&render.radiance, &refs.combined)?,
+        indirect: metrics::compare(&ambient, &refs.indirect)?,
+        best_scale,
+        best_indirect_nrmse: metrics::compare(&best_ambient, &refs.indirect)?.nrmse,
+        best_nrmse: metrics::compare(&best, &refs.combined)?.nrmse,
+    })
+}
+
+fn subtract(a: &Image, b: &Image) -> Image {
+    Image { width: a.width, height: a.height, pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect() }
+}
+
 fn report_text(
     args: &RunArgs,
-    gpu: &GpuRender,
+    settings: &RenderSettings,
+    device: &str,
+    renders: &[GpuRender],
+    rows: &[Score],
     reference: &ReferenceRun,
-    (direct, combined): (metrics::ErrorStats, metrics::ErrorStats),
+    bake_summary: &str,
 ) -> String {
     let mut r = String::new();
-    let (w, h) = (gpu.radiance.width, gpu.radiance.height);
     let _ = writeln!(r, "# relume report: {}\n", args.scene.scene.display());
-    let _ = writeln!(r, "Image {w}x{h}. Vulkan device: {}.\n", gpu.device);
-    let _ = writeln!(r, "| image | file |\n|---|---|");
-    let _ = writeln!(r, "| Vulkan, direct light with variance shadow maps | ![](vulkan.png) |");
-    let _ = writeln!(r, "| reference path tracer, combined | ![](reference.png) |");
-    let _ = writeln!(r, "| error of Vulkan against reference direct (false colour) | ![](error_direct.png) |\n");
-    let _ = writeln!(r, "## Error (NRMSE = RMSE / RMS of the reference, over all channels)\n");
-    let _ = writeln!(r, "| Vulkan direct against | RMSE | NRMSE |\n|---|---|---|");
-    let _ = writeln!(r, "| reference direct | {:.5} | {:.4} |", direct.rmse, direct.nrmse);
-    let _ = writeln!(r, "| reference combined (no indirect method yet) | {:.5} | {:.4} |\n", combined.rmse, combined.nrmse);
-    let _ = writeln!(r, "## Vulkan GPU time, median of {} frames\n", gpu.frames.len());
+    let _ = writeln!(r, "Image {}x{}. Vulkan device: {device}.", settings.width, settings.height);
+    let _ = writeln!(
+        r,
+        "Obscurance illumination model (Iones et al. 2003, eq. 5-7): ambient I_A = {:?} lux, beta = {}.\n",
+        settings.ambient.to_array(),
+        settings.beta
+    );
+    let _ = writeln!(r, "| direct only | constant ambient (W = 1) | obscurance ambient | reference |\n|---|---|---|---|");
+    let _ = writeln!(r, "| ![](direct.png) | ![](constant.png) | ![](obscurance.png) | ![](reference.png) |");
+    let _ = writeln!(r, "|  | ![](error_constant.png) | ![](error_obscurance.png) | false-colour error against the reference |\n");
+    let _ = writeln!(r, "## Error against the reference (NRMSE = RMSE / RMS of the reference, all channels)\n");
+    let _ = writeln!(r, "The indirect part of a model is its image minus the direct-only image. The best factor scales the ambient term (I_A and beta together) to fit the reference's indirect layer in the least-squares sense.\n");
+    let _ = writeln!(r, "| model | image vs combined | indirect part vs reference indirect | best factor | indirect at best factor | image at best factor |");
+    let _ = writeln!(r, "|---|---|---|---|---|---|");
+    for row in rows {
+        let _ = writeln!(
+            r,
+            "| {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            row.model, row.combined.nrmse, row.indirect.nrmse, row.best_scale, row.best_indirect_nrmse, row.best_nrmse
+        );
+    }
+    let _ = writeln!(r, "\n## Bake\n\n```\n{}```", bake_summary);
+    let obscurance = &renders[2];
+    let _ = writeln!(r, "\n## Vulkan GPU time, obscurance model, median of {} frames\n", obscurance.frames.len());
     let _ = writeln!(r, "| pass | ms |\n|---|---|");
-    for (name, ms) in median_timings(&gpu.frames) {
+    for (name, ms) in median_timings(&obscurance.frames) {
         let _ = writeln!(r, "| {name} | {ms:.3} |");
+    }
+    if let Some(ms) = obscurance.padding_ms {
+        let _ = writeln!(r, "| lightmap padding (once, at upload) | {ms:.3} |");
     }
     let i = &reference.images;
     let _ = writeln!(
