@@ -577,4 +577,3 @@ impl<'a> Integrator<'a> {
         Some(material.emission * (cos_surface * weight / light_pdf))
     }
 }
-
