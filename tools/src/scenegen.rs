@@ -1325,7 +1325,7 @@ mod tests {
         let cornell = load(&dir, "cornell").settings;
         assert_eq!(
             (cornell.ambient, cornell.beta, cornell.texel_density),
-            (Vec3::ZERO, 0.3, 128.0)
+            (Vec3::ONE, 0.0, 128.0)
         );
         let _ = std::fs::remove_dir_all(&dir);
     }
