@@ -196,13 +196,7 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
 /// returns how many pixels count, and the range of W's red channel over mesh 0.
 fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &LightmapData, padded: &[Vec4]) -> (f64, usize, (f32, f32)) {
     let ambient = Vec3::ONE;
-    let ctx = validated_context();
-    let mut renderer = Renderer::with_lightmap(&ctx, scene, &settings(), Some(lightmap)).expect("renderer");
-    let direct = render(&mut renderer);
-    renderer.set_ambient(ambient, 0.0).expect("valid ambient");
-    let gpu = difference(&render(&mut renderer), &direct);
-    drop(renderer);
-    assert_clean(ctx);
+    let gpu = gpu_ambient_term(scene, Some(lightmap), ambient, 0.0);
 
     let bvh = SceneBvh::new(scene);
     let hits = primary_hits(scene, &bvh);
@@ -286,13 +280,7 @@ fn lightmap_pages_are_clamped_at_their_edges() {
 /// floor, against albedo / pi * beta * sum_j E_j with E_j from the CPU's Light::incident at
 /// the primary hit; returns the relative error at the image centre and the worst.
 fn beta_term_errors(name: &str, scene: &Scene, beta: f32) -> (f32, f32) {
-    let ctx = validated_context();
-    let mut renderer = Renderer::new(&ctx, scene, &settings()).expect("renderer");
-    let direct = render(&mut renderer);
-    renderer.set_ambient(Vec3::ZERO, beta).expect("valid beta");
-    let gpu = difference(&render(&mut renderer), &direct);
-    drop(renderer);
-    assert_clean(ctx);
+    let gpu = gpu_ambient_term(scene, None, Vec3::ZERO, beta);
 
     let bvh = SceneBvh::new(scene);
     let hits = primary_hits(scene, &bvh);
@@ -426,4 +414,17 @@ fn bad_lightmaps_scenes_and_settings_are_refused() {
     renderer.render().expect("frame");
     drop(renderer);
     assert_clean(ctx);
+}
+
+/// The GPU's ambient term alone: a frame with `ambient` and `beta` minus the same frame
+/// without them, on one renderer (validated).
+fn gpu_ambient_term(scene: &Scene, lightmap: Option<&LightmapData>, ambient: Vec3, beta: f32) -> Image {
+    let ctx = validated_context();
+    let mut renderer = Renderer::with_lightmap(&ctx, scene, &settings(), lightmap).expect("renderer");
+    let direct = render(&mut renderer);
+    renderer.set_ambient(ambient, beta).expect("valid ambient and beta");
+    let term = difference(&render(&mut renderer), &direct);
+    drop(renderer);
+    assert_clean(ctx);
+    term
 }

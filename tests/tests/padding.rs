@@ -6,7 +6,7 @@
 
 use glam::{IVec2, Vec4};
 use relume_renderer::lightmap::GpuLightmap;
-use relume_renderer::vk::{Access, Context, ContextOptions, Tracker};
+use relume_renderer::vk::{Access, Context, Tracker};
 use relume_tests::*;
 
 const WIDTH: u32 = 64;
@@ -140,22 +140,4 @@ fn impossible_sizes_are_refused_with_their_numbers() {
         }
     }
     assert_clean(ctx);
-}
-
-/// The padding time of a 1024x1024 single-layer lightmap, without validation:
-/// `cargo test -p relume-tests --test padding -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn padding_time_of_a_1024_square_lightmap() {
-    let ctx = Context::headless(&ContextOptions::default()).expect("Vulkan context");
-    let side = 1024;
-    // Sparse coverage (3 texels in every 97, in diagonal streaks): most texels get padded.
-    let texels: Vec<Vec4> = (0..side * side)
-        .map(|i| if i % 97 < 3 { Vec4::new((i % side) as f32, (i / side) as f32, 1.0, 1.0) } else { Vec4::ZERO })
-        .collect();
-    let lightmap = GpuLightmap::upload(&ctx, side as u32, side as u32, 1, &texels).expect("upload");
-    match lightmap.padding_ms() {
-        Some(ms) => println!("padding of a {side}x{side} lightmap on {}: {ms:.2} ms", ctx.info.name),
-        None => println!("{} has no timestamps", ctx.info.name),
-    }
 }
