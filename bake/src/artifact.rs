@@ -7,10 +7,13 @@
 //! - `stats.json`: what the bake cost (seconds and peak memory per stage, rays per second).
 //! - `atlas.bin`: the re-indexed meshes with uv1, and the per-texel geometry images.
 //! - `<method>.exr`: the lightmap, pages stacked top to bottom in one RGB layer.
+//! - for methods with a large-scale transfer (light path maps), `transfer.bin` (entry points,
+//!   clusters, weights) and `transfer.exr` (cluster means and eigen-textures).
 //!
 //! Reading checks everything before anything is used: a corrupt, truncated, old or foreign
 //! artifact, or one baked for another scene, is refused with the file and the fix named.
 
+use crate::clustered_transfer::{ClusteredTransfer, EntryPoint};
 use crate::image::{read_exr_layer, write_atomically, write_exr_layers, Image};
 use crate::scene::{Mesh, Scene};
 use glam::{Vec2, Vec3, Vec4};
@@ -21,6 +24,7 @@ pub const FORMAT: &str = "relume-bake";
 /// Bumped whenever a file's layout or meaning changes; older artifacts are refused.
 pub const VERSION: u32 = 1;
 const ATLAS_MAGIC: &[u8; 8] = b"RLATLAS\0";
+const TRANSFER_MAGIC: &[u8; 8] = b"RLTRANS\0";
 
 /// The geometry image of one texel (its patch). Empty texels have coverage 0.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -92,6 +96,8 @@ pub struct BakeOutput<'a> {
     pub meshes: &'a [AtlasMesh],
     pub texels: &'a [Texel],
     pub lightmap: &'a [Vec3],
+    /// The light path maps' compressed transfer, for methods that have one.
+    pub transfer: Option<&'a ClusteredTransfer>,
     /// Timings and memory (`stats.json`; not checksummed, it differs run to run).
     pub stats: Value,
 }
@@ -104,6 +110,7 @@ pub struct Baked {
     pub meshes: Vec<AtlasMesh>,
     pub texels: Vec<Texel>,
     pub lightmap: Vec<Vec3>,
+    pub transfer: Option<ClusteredTransfer>,
 }
 
 /// Why an artifact could not be written or read: the file, what is wrong, what to do.
@@ -169,6 +176,12 @@ impl BakeOutput<'_> {
         write_exr_layers(&lightmap_path, &[("W", &image)]).map_err(|e| fail(&lightmap_path, e.to_string(), "check free space and permissions"))?;
         let lightmap_bytes = std::fs::read(&lightmap_path).map_err(|e| fail(&lightmap_path, e.to_string(), "check permissions"))?;
         let file_entry = |bytes: &[u8]| json!({ "bytes": bytes.len(), "checksum": checksum(bytes) });
+        let mut files = json!({ "atlas.bin": file_entry(&atlas_bytes), lightmap_name.clone(): file_entry(&lightmap_bytes) });
+        if let Some(transfer) = self.transfer {
+            for (name, bytes) in self.write_transfer(dir, transfer)? {
+                files[name] = file_entry(&bytes);
+            }
+        }
         let manifest = json!({
             "format": FORMAT,
             "version": VERSION,
@@ -182,11 +195,73 @@ impl BakeOutput<'_> {
             "atlas": self.atlas_summary,
             "layout": { "width": self.layout.width, "height": self.layout.height, "pages": self.layout.pages },
             "lightmap": lightmap_name,
-            "files": { "atlas.bin": file_entry(&atlas_bytes), lightmap_name.clone(): file_entry(&lightmap_bytes) },
+            "files": files,
         });
         write_json(&dir.join("stats.json"), &self.stats)?;
         write_json(&dir.join("manifest.json"), &manifest)
     }
+}
+
+impl BakeOutput<'_> {
+    /// Writes `transfer.bin` and `transfer.exr`; returns each file's name and bytes.
+    fn write_transfer(&self, dir: &Path, transfer: &ClusteredTransfer) -> Result<[(&'static str, Vec<u8>); 2], ArtifactError> {
+        let bin = encode_transfer(transfer);
+        let bin_path = dir.join(TRANSFER_BIN);
+        std::fs::write(&bin_path, &bin).map_err(|e| fail(&bin_path, format!("cannot write ({e})"), "check free space and permissions"))?;
+        let exr_path = dir.join(TRANSFER_EXR);
+        let rows = (transfer.textures.len() / self.layout.width as usize) as u32;
+        let image = Image { width: self.layout.width, height: rows, pixels: transfer.textures.clone() };
+        write_exr_layers(&exr_path, &[("T", &image)]).map_err(|e| fail(&exr_path, e.to_string(), "check free space and permissions"))?;
+        let exr = std::fs::read(&exr_path).map_err(|e| fail(&exr_path, e.to_string(), "check permissions"))?;
+        Ok([(TRANSFER_BIN, bin), (TRANSFER_EXR, exr)])
+    }
+}
+
+const TRANSFER_BIN: &str = "transfer.bin";
+const TRANSFER_EXR: &str = "transfer.exr";
+
+fn encode_transfer(t: &ClusteredTransfer) -> Vec<u8> {
+    let mut out = TRANSFER_MAGIC.to_vec();
+    let u32s = |out: &mut Vec<u8>, values: &[u32]| out.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    let f32s = |out: &mut Vec<u8>, values: &[f32]| out.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    u32s(&mut out, &[VERSION, t.entry_points.len() as u32, t.cluster_count() as u32, t.basis_count, t.texel_count as u32]);
+    f32s(&mut out, &[t.light_area]);
+    u32s(&mut out, &t.cluster_starts);
+    for e in &t.entry_points {
+        f32s(&mut out, &[e.position.x, e.position.y, e.position.z, e.normal.x, e.normal.y, e.normal.z]);
+    }
+    f32s(&mut out, &t.weights);
+    out
+}
+
+/// Reads `transfer.bin` and `transfer.exr` (checksums already checked) for an atlas of
+/// `texel_count` texels.
+fn decode_transfer(dir: &Path, bin: &[u8], layout: PageLayout) -> Result<ClusteredTransfer, ArtifactError> {
+    let path = dir.join(TRANSFER_BIN);
+    let mut r = Reader { bytes: bin, at: 0, path: &path };
+    if r.take(8, "the magic number")? != TRANSFER_MAGIC {
+        return Err(fail(&path, "not a relume transfer file (wrong magic number)", REBAKE));
+    }
+    let version = r.u32("the version")?;
+    if version != VERSION {
+        return Err(fail(&path, format!("transfer format version {version}; this relume reads version {VERSION}"), REBAKE));
+    }
+    let [entries, clusters, basis_count, texel_count] = [r.u32("the entry-point count")?, r.u32("the cluster count")?, r.u32("D")?, r.u32("the texel count")?];
+    if texel_count as usize != layout.texel_count() || entries > 1 << 24 || clusters > entries || basis_count > 1024 {
+        return Err(fail(&path, format!("{entries} entry points, {clusters} clusters, D = {basis_count}, {texel_count} texels do not fit an atlas of {} texels", layout.texel_count()), REBAKE));
+    }
+    let light_area = r.f32s(1, "the light area")?[0];
+    let cluster_starts = r.u32s(clusters + 1, "the cluster starts")?;
+    let entry_points = r.f32s(entries as usize * 6, "the entry points")?.chunks_exact(6).map(|f| EntryPoint { position: Vec3::new(f[0], f[1], f[2]), normal: Vec3::new(f[3], f[4], f[5]) }).collect();
+    let weights = r.f32s(entries as usize * basis_count as usize, "the weights")?;
+    if r.at != bin.len() {
+        return Err(fail(&path, format!("{} bytes after the weights", bin.len() - r.at), REBAKE));
+    }
+    let exr_path = dir.join(TRANSFER_EXR);
+    let image = read_exr_layer(&exr_path, Some("T")).map_err(|e| fail(&exr_path, e.to_string(), REBAKE))?;
+    let transfer = ClusteredTransfer { entry_points, cluster_starts, basis_count, weights, texel_count: texel_count as usize, textures: image.pixels, light_area };
+    transfer.validate().map_err(|e| fail(&path, e, REBAKE))?;
+    Ok(transfer)
 }
 
 fn write_json(path: &Path, value: &Value) -> Result<(), ArtifactError> {
@@ -351,7 +426,14 @@ impl Baked {
         if (image.width, image.height) != (layout.width, layout.height * layout.pages) {
             return Err(fail(&lightmap_path, format!("is {} x {}, the atlas {} x {} x {} pages", image.width, image.height, layout.width, layout.height, layout.pages), REBAKE));
         }
-        Ok(Baked { manifest, layout, meshes, texels, lightmap: image.pixels })
+        let transfer = match manifest["files"].get(TRANSFER_BIN) {
+            Some(_) => {
+                file(TRANSFER_EXR)?;
+                Some(decode_transfer(dir, &file(TRANSFER_BIN)?, layout)?)
+            }
+            None => None,
+        };
+        Ok(Baked { manifest, layout, meshes, texels, lightmap: image.pixels, transfer })
     }
 
     /// The scene with every mesh re-indexed and given its uv1.

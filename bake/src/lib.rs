@@ -2,6 +2,7 @@
 //! and, behind the `baking` feature, the BVH and the reference path tracer.
 
 pub mod artifact;
+pub mod clustered_transfer;
 pub mod gltf_load;
 pub mod image;
 pub mod metrics;
@@ -21,3 +22,7 @@ pub mod work;
 pub mod atlas;
 #[cfg(feature = "baking")]
 pub mod obscurance;
+#[cfg(feature = "baking")]
+pub mod cpca;
+#[cfg(feature = "baking")]
+pub mod light_path_maps;

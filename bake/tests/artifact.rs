@@ -33,6 +33,7 @@ fn write(scene: &Scene, dir: &Path) -> Atlas {
         meshes: &atlas.meshes,
         texels: &atlas.texels,
         lightmap: &lightmap,
+        transfer: None,
         stats: json!({ "seconds": 0.0 }),
     };
     output.write(dir).unwrap();
@@ -111,6 +112,7 @@ fn a_folder_that_is_not_an_artifact_is_never_replaced() {
         meshes: &atlas.meshes,
         texels: &atlas.texels,
         lightmap: &vec![Vec3::ONE; atlas.texels.len()],
+        transfer: None,
         stats: json!({}),
     };
     let error = output.write(&dir).unwrap_err().to_string();

@@ -74,6 +74,10 @@ pub fn nrmse_with_artifacts(name: &str, image: &Image, reference: &Image) -> f64
     std::fs::create_dir_all(&dir).expect("test output folder");
     write_exr_layers(&dir.join("actual.exr"), &[("radiance", image)]).expect("write actual");
     write_exr_layers(&dir.join("reference.exr"), &[("direct", reference)]).expect("write reference");
+    let mean = reference.pixels.iter().map(|p| p.element_sum() / 3.0).sum::<f32>() / reference.pixels.len() as f32;
+    let exposure = if mean > 0.0 { 0.18 / mean } else { 1.0 };
+    relume_bake::image::write_png_tonemapped(&dir.join("actual.png"), image, exposure).expect("write actual png");
+    relume_bake::image::write_png_tonemapped(&dir.join("reference.png"), reference, exposure).expect("write reference png");
     let rgb = metrics::false_colour(image, reference, 0.5).expect("sizes match");
     relume_bake::image::write_png_rgb8(&dir.join("error.png"), image.width, image.height, &rgb).expect("write error");
     let lit = reference.pixels.iter().filter(|p| p.max_element() > 0.0).count();

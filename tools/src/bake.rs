@@ -1,12 +1,16 @@
 //! `relume bake`: precompute a method's data for a scene into a bake artifact folder
-//! (format: docs/FORMATS.md). Today's method: obscurance (Iones et al. 2003), with its
-//! ambient-occlusion and spectral (Umenhoffer et al. §3.3) variants.
+//! (format: docs/FORMATS.md). Methods: obscurance (Iones et al. 2003), with its
+//! ambient-occlusion and spectral (Umenhoffer et al. §3.3) variants; light path maps
+//! (Umenhoffer et al. §3.2): the spectral obscurance plus entry points, transfers and their
+//! clustered PCA.
 
 use super::*;
 use relume_bake::artifact::{BakeOutput, PageLayout};
 use relume_bake::atlas::{Atlas, AtlasSettings};
+use relume_bake::bvh::SceneBvh;
+use relume_bake::light_path_maps::{self as lpm, Compressed, Compression, LightPathMapSettings};
 use relume_bake::obscurance::{bake_obscurance, ObscuranceMap, ObscuranceSettings, Variant};
-use relume_bake::settings::LightingSettings;
+use relume_bake::settings::{LightRegion, LightingSettings};
 use relume_bake::work::{peak_memory_bytes, reset_peak_memory};
 use serde_json::{json, Value};
 
@@ -15,11 +19,36 @@ pub(crate) struct BakeArgs {
     /// A glTF 2.0 scene (.gltf or .glb).
     scene: PathBuf,
     /// The method to bake.
-    #[arg(long, value_parser = ["obscurance"])]
+    #[arg(long, value_parser = ["obscurance", "light-path-maps"])]
     method: String,
-    /// obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3).
-    #[arg(long, default_value = "obscurance")]
-    variant: String,
+    /// obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3); default
+    /// obscurance, spectral for light-path-maps (000's small-scale term).
+    #[arg(long)]
+    variant: Option<String>,
+    /// Light path maps: entry points wanted (E).
+    #[arg(long, default_value_t = 4096)]
+    entry_points: u32,
+    /// Light path maps: test points sampling the scene's light region box (M; default the scene's).
+    #[arg(long)]
+    test_points: Option<u32>,
+    /// Light path maps: random walks per entry point.
+    #[arg(long, default_value_t = 1)]
+    walks: u32,
+    /// Light path maps: connections shorter than this are dropped, metres (default: L_max).
+    #[arg(long)]
+    threshold: Option<f32>,
+    /// Light path maps: clusters C (with --basis; default: chosen by --error-budget).
+    #[arg(long, requires = "basis", conflicts_with_all = ["error_budget", "uncompressed"])]
+    clusters: Option<usize>,
+    /// Light path maps: eigen-textures per cluster D.
+    #[arg(long, requires = "clusters")]
+    basis: Option<usize>,
+    /// Light path maps: the smallest C and D whose relative error of the transfers is within this.
+    #[arg(long, default_value_t = 0.1, conflicts_with = "uncompressed")]
+    error_budget: f64,
+    /// Light path maps: keep every transfer (one cluster per entry point, no PCA).
+    #[arg(long)]
+    uncompressed: bool,
     /// tau of rho(L) = 1 - exp(-L / tau), metres (default: the scene's).
     #[arg(long)]
     tau: Option<f32>,
@@ -84,7 +113,15 @@ impl BakeArgs {
         BakeArgs {
             scene: scene.to_path_buf(),
             method: "obscurance".into(),
-            variant: "obscurance".into(),
+            variant: None,
+            entry_points: 4096,
+            test_points: None,
+            walks: 1,
+            threshold: None,
+            clusters: None,
+            basis: None,
+            error_budget: 0.1,
+            uncompressed: false,
             tau: None,
             l_max: None,
             rays,
@@ -133,20 +170,113 @@ pub(crate) fn bake_scene(scene: &Scene, args: &BakeArgs, out: &Path) -> Result<S
     })?;
     let bvh = timed("bvh", &mut stages, || SceneBvh::new(scene));
     let map = timed("obscurance", &mut stages, || bake_obscurance(scene, &bvh, &atlas, &obscurance)).map_err(anyhow::Error::msg)?;
+    let layout = PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages };
+    let transfer = match args.method.as_str() {
+        "light-path-maps" => Some(bake_light_path_maps(scene, &bvh, &atlas, &lighting, args, &mut stages)?),
+        _ => None,
+    };
+    let mut parameters = parameters(&obscurance, &atlas_settings, args);
+    let mut stats = stats(&stages, &map, &obscurance);
+    if let Some((_, facts)) = &transfer {
+        parameters["light_path_maps"] = facts["parameters"].clone();
+        stats["light_path_maps"] = facts["stats"].clone();
+    }
 
     let output = BakeOutput {
         method: &args.method,
         scene,
-        parameters: parameters(&obscurance, &atlas_settings, args),
+        parameters,
         atlas_summary: atlas_summary(&atlas, &atlas_settings),
-        layout: PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages },
+        layout,
         meshes: &atlas.meshes,
         texels: &atlas.texels,
         lightmap: &map.values,
-        stats: stats(&stages, &map, &obscurance),
+        transfer: transfer.as_ref().map(|(c, _)| &c.transfer),
+        stats,
     };
     output.write(out)?;
-    Ok(summary(&atlas, &map, &stages, out))
+    let mut text = summary(&atlas, &map, &stages, out);
+    if let Some((_, facts)) = &transfer {
+        text.insert_str(text.rfind("wrote").unwrap_or(text.len()), &format!("light path maps: {}\n", facts["summary"].as_str().unwrap_or("")));
+    }
+    Ok(text)
+}
+
+/// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
+/// compressed transfer and its parameters, statistics and a one-line summary.
+fn bake_light_path_maps(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, lighting: &LightingSettings, args: &BakeArgs, stages: &mut Vec<Stage>) -> Result<(Compressed, Value)> {
+    let settings = LightPathMapSettings {
+        entry_points: args.entry_points,
+        walks: args.walks,
+        threshold: args.threshold.unwrap_or(lighting.l_max),
+        max_depth: 64,
+        seed: args.seed,
+        threads: args.threads,
+        time_limit: time_limit(args)?,
+        progress: true,
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
+    let region = match (&lighting.light_region, args.test_points) {
+        (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min: *min, max: *max, test_points: m }),
+        (_, Some(_)) => bail!("--test-points needs a scene whose extras.relume.light_path_maps.region is a box"),
+        (region, None) => region.clone(),
+    };
+    if let Some(r) = &region {
+        r.validate().map_err(|e| anyhow::anyhow!("{e} (--test-points)"))?;
+    }
+    let compression = match (args.uncompressed, args.clusters, args.basis) {
+        (true, _, _) => Compression::None,
+        (false, Some(clusters), Some(basis)) if clusters >= 1 => Compression::Fixed { clusters, basis },
+        (false, Some(_), _) => bail!("--clusters must be at least 1"),
+        _ if args.error_budget.is_finite() && args.error_budget >= 0.0 => Compression::Budget(args.error_budget),
+        _ => bail!("--error-budget {} must be a finite relative error >= 0", args.error_budget),
+    };
+    let entries = timed("entry_points", stages, || {
+        let tests = lpm::test_points(scene, region.as_ref(), args.seed)?;
+        lpm::entry_points(scene, bvh, tests, settings.entry_points, args.seed)
+    })
+    .map_err(anyhow::Error::msg)?;
+    let transfers = timed("transfer", stages, || lpm::bake_transfers(scene, bvh, atlas, &entries.entries, &settings)).map_err(anyhow::Error::msg)?;
+    let compressed = timed("cpca", stages, || lpm::compress(&transfers, &entries.entries, atlas.texels.len(), lighting.light_area, compression)).map_err(anyhow::Error::msg)?;
+    let uncompressed_bytes = transfers.values.len() * 12;
+    let summary = format!(
+        "{} entry points from {} test points, {} texels, {} virtual lights, {} connections; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB",
+        entries.entries.len(),
+        entries.test_points.len(),
+        transfers.texels.len(),
+        transfers.virtual_lights,
+        transfers.connections,
+        compressed.clusters,
+        compressed.basis,
+        compressed.relative_error,
+        uncompressed_bytes as f64 / (1 << 20) as f64,
+        compressed.transfer.size_bytes() as f64 / (1 << 20) as f64,
+    );
+    let facts = json!({
+        "parameters": {
+            "entry_points": settings.entry_points,
+            "test_points": entries.test_points.len(),
+            "walks": settings.walks,
+            "threshold": short(settings.threshold),
+            "compression": format!("{compression:?}"),
+            "seed": settings.seed,
+        },
+        "stats": {
+            "entry_points": entries.entries.len(),
+            "rays_per_test_point": entries.rays_per_test_point,
+            "covered_texels": transfers.texels.len(),
+            "walks": transfers.walks,
+            "virtual_lights": transfers.virtual_lights,
+            "connections": transfers.connections,
+            "clusters": compressed.clusters,
+            "basis": compressed.basis,
+            "relative_error": compressed.relative_error,
+            "uncompressed_bytes": uncompressed_bytes,
+            "compressed_bytes": compressed.transfer.size_bytes(),
+        },
+        "summary": summary,
+    });
+    Ok((compressed, facts))
 }
 
 fn lighting_settings(scene: &LightingSettings, args: &BakeArgs) -> Result<LightingSettings> {
@@ -154,20 +284,26 @@ fn lighting_settings(scene: &LightingSettings, args: &BakeArgs) -> Result<Lighti
         tau: args.tau.unwrap_or(scene.tau),
         l_max: args.l_max.unwrap_or(scene.l_max),
         texel_density: args.texel_density.unwrap_or(scene.texel_density),
-        ..*scene
+        ..scene.clone()
     };
     s.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --texel-density or the scene's extras.relume)"))?;
     Ok(s)
 }
 
-fn obscurance_settings(lighting: &LightingSettings, args: &BakeArgs) -> Result<ObscuranceSettings> {
-    let Some(variant) = Variant::parse(&args.variant) else {
-        bail!("--variant {}: use obscurance, ao or spectral", args.variant);
-    };
-    let time_limit = match args.time_limit {
+fn time_limit(args: &BakeArgs) -> Result<Option<Duration>> {
+    match args.time_limit {
         Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
-        s => s.map(Duration::from_secs_f64),
+        s => Ok(s.map(Duration::from_secs_f64)),
+    }
+}
+
+fn obscurance_settings(lighting: &LightingSettings, args: &BakeArgs) -> Result<ObscuranceSettings> {
+    let default = if args.method == "light-path-maps" { "spectral" } else { "obscurance" };
+    let name = args.variant.as_deref().unwrap_or(default);
+    let Some(variant) = Variant::parse(name) else {
+        bail!("--variant {name}: use obscurance, ao or spectral");
     };
+    let time_limit = time_limit(args)?;
     Ok(ObscuranceSettings {
         variant,
         tau: lighting.tau,

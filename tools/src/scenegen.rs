@@ -739,6 +739,11 @@ struct Settings {
     tau: f64,
     /// Obscurance L_max, metres.
     l_max: f64,
+    /// Where lights may move, for the light path maps (000 §3.2.1): a box (min, max corners,
+    /// metres) and its test-point count; None leaves the lights where they stand.
+    light_region: Option<([f64; 3], [f64; 3], u32)>,
+    /// Delta-l of 000 §3.4, square metres.
+    light_area: f64,
 }
 
 impl Settings {
@@ -748,7 +753,18 @@ impl Settings {
             "beta": num(self.beta),
             "texel_density": num(self.texel_density),
             "obscurance": { "tau": num(self.tau), "l_max": num(self.l_max) },
+            "light_path_maps": self.light_path_maps_json(),
         })
+    }
+
+    fn light_path_maps_json(&self) -> Value {
+        match self.light_region {
+            Some((min, max, test_points)) => json!({
+                "region": { "box": [min.map(num), max.map(num)], "test_points": test_points },
+                "light_area": num(self.light_area),
+            }),
+            None => json!({ "light_area": num(self.light_area) }),
+        }
     }
 }
 
@@ -762,6 +778,11 @@ const CORNELL_SETTINGS: Settings = Settings {
     texel_density: 128.0,
     tau: 0.05,
     l_max: 0.15,
+    // Under the ceiling around the spot (x, z within 15 cm of the published light's centre,
+    // 1 to 15 cm under the ceiling, where the spot hangs); the published light's
+    // 130 x 105 mm as its area.
+    light_region: Some(([-0.15, 0.4, -0.43], [0.15, 0.54, -0.13], 64)),
+    light_area: 0.01365,
 };
 
 /// The same fit on the Fig. 9 failure case: its light has 1/230 of `cornell`'s power.
@@ -773,6 +794,8 @@ const OCCLUDER_SETTINGS: Settings = Settings {
     texel_density: 32.0,
     tau: 0.15,
     l_max: 0.5,
+    light_region: None,
+    light_area: 0.0,
 };
 
 const TABLE_CHAIR_SETTINGS: Settings = Settings {
@@ -781,6 +804,8 @@ const TABLE_CHAIR_SETTINGS: Settings = Settings {
     texel_density: 24.0,
     tau: 0.2,
     l_max: 0.6,
+    light_region: None,
+    light_area: 0.0,
 };
 
 const CLASSROOM_SETTINGS: Settings = Settings {
@@ -789,6 +814,9 @@ const CLASSROOM_SETTINGS: Settings = Settings {
     texel_density: 16.0,
     tau: 0.3,
     l_max: 1.0,
+    // Along the centre aisle under the ceiling, where the three spots hang, 1.5 m either side.
+    light_region: Some(([-1.5, 2.5, -3.0], [1.5, 2.95, 3.0], 64)),
+    light_area: 0.0,
 };
 
 // --- geometry --------------------------------------------------------------------------------
@@ -1113,6 +1141,7 @@ mod tests {
     use glam::{Vec3, Vec4Swizzles};
     use relume_bake::gltf_load;
     use relume_bake::scene::{LightKind, Scene};
+    use relume_bake::settings::LightRegion;
 
     fn temp_dir(tag: &str) -> PathBuf {
         let nanos = std::time::SystemTime::now()
@@ -1295,6 +1324,12 @@ mod tests {
             texel_density: s.texel_density as f32,
             tau: s.tau as f32,
             l_max: s.l_max as f32,
+            light_region: s.light_region.map(|(min, max, test_points)| LightRegion::Box {
+                min: Vec3::from_array(min.map(|x| x as f32)),
+                max: Vec3::from_array(max.map(|x| x as f32)),
+                test_points,
+            }),
+            light_area: s.light_area as f32,
         }
     }
 

@@ -1,0 +1,517 @@
+//! Clustered PCA, the compression of Umenhoffer et al.'s light path maps (000 §3.2.3), after
+//! Sloan et al. 2003, "Clustered Principal Components for Precomputed Radiance Transfer".
+//!
+//! N points (rows) of P values, each with a feature vector used only to cluster (for light path
+//! maps the entry point's position and normal, scaled by the caller). Cluster c keeps its mean
+//! M^c and the D eigenvectors B^c_d of largest eigenvalue of its covariance, point e its
+//! coordinates w^e_d = (x_e - M^c) . B^c_d: x_e ~ M^c + sum_d w^e_d B^c_d. Nothing here knows
+//! about textures; per-vertex data works the same.
+//!
+//! Clustering is divisive, so the clustering for C + 1 refines the one for C and the error only
+//! falls as C grows (as it does with D). PCA works on the n_c x n_c Gram matrix of the centred
+//! points, never the P x P covariance (P ~ 50,000 texels, n_c ~ hundreds); both share their
+//! non-zero eigenvalues, and the squared residual of D basis vectors is the sum of the
+//! eigenvalues beyond D, so [`error_table`] rates every (C, D) from eigenvalues alone and
+//! [`choose`] picks the cheapest within an error budget. No randomness, and parallel results
+//! are independent serial sums: the same bytes whatever the thread count.
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Lloyd iterations per 2-means split at most; they usually settle in a handful.
+const LLOYD_ITERATIONS: usize = 100;
+/// Eigenvalues below this fraction of the largest are rounding noise: no basis vector for them.
+const RANK_TOLERANCE: f64 = 1e-12;
+/// Columns per parallel task when a basis vector is built.
+const COLUMN_CHUNK: usize = 1024;
+
+/// Row-major points of `cols` values each.
+#[derive(Clone, Copy)]
+struct Rows<'a> {
+    values: &'a [f32],
+    cols: usize,
+}
+
+impl Rows<'_> {
+    fn row(&self, e: usize) -> &[f32] {
+        &self.values[e * self.cols..][..self.cols]
+    }
+
+    fn mean(&self, members: &[u32]) -> Vec<f64> {
+        let mut sum = vec![0.0; self.cols];
+        for &e in members {
+            sum.iter_mut().zip(self.row(e as usize)).for_each(|(s, &v)| *s += v as f64);
+        }
+        sum.iter().map(|s| s / members.len() as f64).collect()
+    }
+
+    fn distance2(&self, e: u32, to: &[f64]) -> f64 {
+        self.row(e as usize).iter().zip(to).map(|(&v, &t)| (v as f64 - t).powi(2)).sum()
+    }
+
+    /// Sum of squared distances to the centroid: the cluster to split next has the largest.
+    fn scatter(&self, members: &[u32]) -> f64 {
+        let centroid = self.mean(members);
+        members.iter().map(|&e| self.distance2(e, &centroid)).sum()
+    }
+
+    /// The first member farthest from `from`.
+    fn farthest(&self, members: &[u32], from: &[f64]) -> u32 {
+        let distance = |e: u32| self.distance2(e, from);
+        members.iter().copied().reduce(|a, b| if distance(b) > distance(a) { b } else { a }).unwrap()
+    }
+
+    /// Members nearer `centres[0]` (ties included), then the others.
+    fn nearest(&self, members: &[u32], centres: &[Vec<f64>; 2]) -> (Vec<u32>, Vec<u32>) {
+        members.iter().copied().partition(|&e| self.distance2(e, &centres[0]) <= self.distance2(e, &centres[1]))
+    }
+
+    /// 2-means by Lloyd iterations, seeded with the member farthest from the centroid and the
+    /// member farthest from that (distinct whenever the scatter is positive, and each the
+    /// nearest to itself, so both halves start non-empty).
+    fn two_means(&self, members: &[u32]) -> (Vec<u32>, Vec<u32>) {
+        let widen = |e: u32| self.row(e as usize).iter().map(|&v| v as f64).collect::<Vec<_>>();
+        let a = self.farthest(members, &self.mean(members));
+        let b = self.farthest(members, &widen(a));
+        let mut halves = self.nearest(members, &[widen(a), widen(b)]);
+        for _ in 0..LLOYD_ITERATIONS {
+            let next = self.nearest(members, &[self.mean(&halves.0), self.mean(&halves.1)]);
+            // An empty half can only come from rounding; keep the last proper split then.
+            if next == halves || next.0.is_empty() || next.1.is_empty() {
+                break;
+            }
+            halves = next;
+        }
+        halves
+    }
+}
+
+/// The nested clusterings of [`divisive_clusters`]: one for every cluster count up to
+/// [`ClusterTree::max_clusters`], each refining the one before.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusterTree {
+    points: usize,
+    /// Split k (from k + 1 to k + 2 clusters) moved these points (ascending) to new cluster k + 1.
+    splits: Vec<Vec<u32>>,
+}
+
+impl ClusterTree {
+    /// The clusters asked for, or fewer where the features ran out of distinct points.
+    pub fn max_clusters(&self) -> usize {
+        self.splits.len() + 1
+    }
+
+    /// Cluster id (0..clusters) per point. Panics unless 1 <= clusters <= max_clusters().
+    pub fn assignment(&self, clusters: usize) -> Vec<u32> {
+        assert!((1..=self.max_clusters()).contains(&clusters), "no clustering into {clusters} clusters");
+        let mut ids = vec![0; self.points];
+        for (k, moved) in self.splits[..clusters - 1].iter().enumerate() {
+            moved.iter().for_each(|&e| ids[e as usize] = k as u32 + 1);
+        }
+        ids
+    }
+}
+
+/// Divisive clustering of the points `features` (row-major, `feature_dims` per point): from
+/// one cluster, the cluster of largest feature scatter is split in two by 2-means until there
+/// are `clusters` clusters or none has two distinct points. Splitting rather than plain
+/// k-means makes the clustering for C + 1 a refinement of the one for C, so the PCA error can
+/// only fall as C grows, and one tree serves every C. Panics on no points.
+pub fn divisive_clusters(features: &[f32], feature_dims: usize, clusters: usize) -> ClusterTree {
+    assert!(feature_dims > 0 && !features.is_empty() && features.len() % feature_dims == 0, "no points");
+    let points = Rows { values: features, cols: feature_dims };
+    let count = features.len() / feature_dims;
+    let mut members = vec![(0..count as u32).collect::<Vec<_>>()];
+    let mut scatter = vec![points.scatter(&members[0])];
+    let mut splits = vec![];
+    while members.len() < clusters {
+        // max_by keeps the last of equals: reversed, ties go to the lowest cluster id.
+        let (k, &widest) = scatter.iter().enumerate().rev().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
+        if widest <= 0.0 {
+            break;
+        }
+        let (stay, moved) = points.two_means(&members[k]);
+        scatter[k] = points.scatter(&stay);
+        scatter.push(points.scatter(&moved));
+        members[k] = stay;
+        members.push(moved.clone());
+        splits.push(moved);
+    }
+    ClusterTree { points: count, splits }
+}
+
+/// The PCA of one cluster (000 §3.2.3): its mean, eigen-"textures" and members' coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusterPca {
+    /// Point indices, ascending.
+    pub members: Vec<u32>,
+    /// M^c: P values.
+    pub mean: Vec<f32>,
+    /// Every eigenvalue of the centred Gram matrix (n_c of them), descending, clamped to >= 0:
+    /// the squared residual of keeping D basis vectors is the sum of those beyond D.
+    pub eigenvalues: Vec<f64>,
+    /// Always D unit P-vectors B^c_d by descending eigenvalue. Where the cluster's rank is below
+    /// D (at most D points, or points on a flatter subspace) the rest are zero vectors, so
+    /// every cluster stores the same D.
+    pub basis: Vec<Vec<f32>>,
+    /// Per member (in `members` order) its D coordinates w^e_d = (x_e - M^c) . B^c_d (0 for a
+    /// zero basis vector).
+    pub weights: Vec<Vec<f32>>,
+}
+
+/// A cluster's members minus their mean (row-major n_c x P), and the mean.
+struct Centred {
+    mean: Vec<f32>,
+    values: Vec<f32>,
+    cols: usize,
+}
+
+impl Centred {
+    fn new(data: Rows, members: &[u32]) -> Centred {
+        assert!(!members.is_empty(), "a cluster needs members");
+        let mean: Vec<f32> = data.mean(members).iter().map(|&m| m as f32).collect();
+        let values = members.iter().flat_map(|&e| data.row(e as usize).iter().zip(&mean).map(|(v, m)| v - m)).collect();
+        Centred { mean, values, cols: data.cols }
+    }
+
+    fn rows(&self) -> Rows<'_> {
+        Rows { values: &self.values, cols: self.cols }
+    }
+
+    /// G = X X^T. Each entry is its own serial dot product (cost n_c^2 P / 2 in all), so rows
+    /// run in parallel and the bytes do not depend on the thread count.
+    fn gram(&self) -> DMatrix<f64> {
+        let (rows, n) = (self.rows(), self.values.len() / self.cols);
+        let lower: Vec<Vec<f64>> =
+            (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(rows.row(i), rows.row(j))).collect()).collect();
+        DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+    }
+
+    /// X^T v normalised: an eigenvector v of G with eigenvalue lambda gives the covariance's
+    /// eigenvector X^T v / sqrt(lambda) (Sloan et al. 2003); normalising directly is the same
+    /// in exact arithmetic and keeps unit length under rounding.
+    fn basis_vector(&self, v: &[f64]) -> Vec<f32> {
+        let rows = self.rows();
+        let mut b = vec![0.0f64; self.cols];
+        b.par_chunks_mut(COLUMN_CHUNK).enumerate().for_each(|(k, chunk)| {
+            for (e, &ve) in v.iter().enumerate() {
+                let row = &rows.row(e)[k * COLUMN_CHUNK..];
+                chunk.iter_mut().zip(row).for_each(|(acc, &x)| *acc += ve * x as f64);
+            }
+        });
+        let norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+        b.iter().map(|x| (x / norm) as f32).collect()
+    }
+}
+
+/// f64 dot product of f32 vectors in four fixed lanes: vectorisable, same bytes every run.
+fn dot(a: &[f32], b: &[f32]) -> f64 {
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4.remainder().iter().zip(b4.remainder()).map(|(&x, &y)| x as f64 * y as f64).sum();
+    let mut lanes = [0.0f64; 4];
+    for (x, y) in a4.zip(b4) {
+        (0..4).for_each(|k| lanes[k] += x[k] as f64 * y[k] as f64);
+    }
+    lanes.iter().sum::<f64>() + tail
+}
+
+/// (eigenvalue clamped to >= 0, its index), by descending eigenvalue.
+fn descending(eigenvalues: &DVector<f64>) -> Vec<(f64, usize)> {
+    let mut order: Vec<(f64, usize)> = eigenvalues.iter().enumerate().map(|(i, &v)| (v.max(0.0), i)).collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    order
+}
+
+/// PCA of the rows `members` (non-empty) of `data` (row-major, `cols` per row) keeping `basis`
+/// vectors, by the Gram matrix route. The weights are projections, so a reconstruction is the
+/// orthogonal projection onto the cluster's affine subspace.
+pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> ClusterPca {
+    let centred = Centred::new(Rows { values: data, cols }, members);
+    let eigen = SymmetricEigen::new(centred.gram());
+    let order = descending(&eigen.eigenvalues);
+    let floor = RANK_TOLERANCE * order[0].0;
+    let eigenvector = |i: usize| &eigen.eigenvectors.as_slice()[i * members.len()..][..members.len()];
+    let mut basis_vectors: Vec<Vec<f32>> =
+        order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| centred.basis_vector(eigenvector(i))).collect();
+    basis_vectors.resize(basis, vec![0.0; cols]);
+    let rows = centred.rows();
+    let weights = (0..members.len()).into_par_iter()
+        .map(|e| basis_vectors.iter().map(|b| dot(rows.row(e), b) as f32).collect()).collect();
+    ClusterPca {
+        members: members.to_vec(),
+        mean: centred.mean,
+        eigenvalues: order.iter().map(|o| o.0).collect(),
+        basis: basis_vectors,
+        weights,
+    }
+}
+
+/// The descending eigenvalues of `cluster_pca` alone (no eigenvectors: cheaper).
+fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f64> {
+    let gram = Centred::new(Rows { values: data, cols }, members).gram();
+    descending(&gram.symmetric_eigenvalues()).iter().map(|o| o.0).collect()
+}
+
+/// Members (ascending) of each of `clusters` clusters.
+fn groups(assignment: &[u32], clusters: usize) -> Vec<Vec<u32>> {
+    let mut members = vec![vec![]; clusters];
+    assignment.iter().enumerate().for_each(|(e, &c)| members[c as usize].push(e as u32));
+    members
+}
+
+/// A clustered PCA of N points: C clusters of D basis vectors each.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cpca {
+    /// Cluster id per point.
+    pub assignment: Vec<u32>,
+    pub clusters: Vec<ClusterPca>,
+    /// D, the same for every cluster.
+    pub basis: usize,
+}
+
+/// Fits a clustered PCA of `data` (row-major, `cols` per row) clustered by `features`
+/// (`feature_dims` per row) into `clusters` clusters (fewer if the features have fewer distinct
+/// points) of `basis` vectors. Refuses malformed or non-finite input, naming the problem.
+pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clusters: usize, basis: usize)
+    -> Result<Cpca, String> {
+    validate(data, cols, features, feature_dims, &[clusters])?;
+    let tree = divisive_clusters(features, feature_dims, clusters);
+    let assignment = tree.assignment(tree.max_clusters());
+    let clusters = groups(&assignment, tree.max_clusters()).iter().map(|m| cluster_pca(data, cols, m, basis)).collect();
+    Ok(Cpca { assignment, clusters, basis })
+}
+
+impl Cpca {
+    /// x~_e = M^c + sum_d w^e_d B^c_d for point `row`.
+    pub fn reconstruct(&self, row: usize) -> Vec<f32> {
+        let cluster = &self.clusters[self.assignment[row] as usize];
+        let k = cluster.members.binary_search(&(row as u32)).expect("a point is a member of its cluster");
+        let mut x = cluster.mean.clone();
+        for (&w, b) in cluster.weights[k].iter().zip(&cluster.basis) {
+            x.iter_mut().zip(b).for_each(|(xi, &bi)| *xi += w * bi);
+        }
+        x
+    }
+
+    /// sqrt(sum_e |x_e - x~_e|^2 / sum_e |x_e|^2) over the fitted `data`, by reconstruction.
+    pub fn relative_error(&self, data: &[f32]) -> f64 {
+        let rows = Rows { values: data, cols: data.len() / self.assignment.len() };
+        let per_row: Vec<(f64, f64)> = (0..self.assignment.len()).into_par_iter().map(|e| {
+            let (x, r) = (rows.row(e), self.reconstruct(e));
+            (x.iter().zip(&r).map(|(&a, &b)| (a as f64 - b as f64).powi(2)).sum(), dot(x, x))
+        }).collect();
+        let (error, total) = per_row.iter().fold((0.0, 0.0), |s, r| (s.0 + r.0, s.1 + r.1));
+        relative(error, total)
+    }
+}
+
+fn relative(squared_error: f64, squared_total: f64) -> f64 {
+    if squared_total > 0.0 { (squared_error / squared_total).sqrt() } else { 0.0 }
+}
+
+/// One (C, D) configuration: its relative error and its size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    pub clusters: usize,
+    pub basis: usize,
+    /// sqrt(sum of dropped eigenvalues / sum_e |x_e|^2): what `Cpca::relative_error` measures.
+    pub relative_error: f64,
+    /// C (1 + D) textures of P values plus N D weights.
+    pub stored_values: usize,
+}
+
+/// The relative error of every (C, D) with C in `cluster_counts` (those the features allow)
+/// and D in 0..=max_basis, from one cluster tree and one eigen-decomposition per distinct
+/// cluster, without reconstructing anything. Refuses what [`fit`] refuses.
+pub fn error_table(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cluster_counts: &[usize],
+    max_basis: usize) -> Result<Vec<Candidate>, String> {
+    validate(data, cols, features, feature_dims, cluster_counts)?;
+    let tree = divisive_clusters(features, feature_dims, *cluster_counts.iter().max().unwrap());
+    let (rows, total) = (data.len() / cols, dot(data, data));
+    let mut eigenvalues: BTreeMap<Vec<u32>, Vec<f64>> = BTreeMap::new();
+    let mut table = vec![];
+    for &c in cluster_counts.iter().filter(|&&c| c <= tree.max_clusters()) {
+        let mut dropped = vec![0.0; max_basis + 1];
+        for members in groups(&tree.assignment(c), c) {
+            let values = eigenvalues.entry(members).or_insert_with_key(|m| cluster_eigenvalues(data, cols, m));
+            dropped.iter_mut().enumerate().for_each(|(d, sum)| *sum += values.iter().skip(d).sum::<f64>());
+        }
+        table.extend(dropped.iter().enumerate().map(|(d, &squared)| Candidate {
+            clusters: c,
+            basis: d,
+            relative_error: relative(squared, total),
+            stored_values: c * (1 + d) * cols + rows * d,
+        }));
+    }
+    Ok(table)
+}
+
+/// The candidate with the fewest stored values whose relative error is within `budget`, ties
+/// going to the smaller error (then the earlier entry); None if none is.
+pub fn choose(table: &[Candidate], budget: f64) -> Option<Candidate> {
+    table.iter().filter(|c| c.relative_error <= budget).copied()
+        .min_by(|a, b| a.stored_values.cmp(&b.stored_values).then(a.relative_error.total_cmp(&b.relative_error)))
+}
+
+fn validate(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cluster_counts: &[usize])
+    -> Result<(), String> {
+    if data.is_empty() || cols == 0 {
+        return Err("no data: at least one row of at least one value is needed".into());
+    }
+    if data.len() % cols != 0 {
+        return Err(format!("data holds {} values, not whole rows of {cols}", data.len()));
+    }
+    let rows = data.len() / cols;
+    if feature_dims == 0 || features.len() != rows * feature_dims {
+        return Err(format!("features hold {} values, not {rows} rows of {feature_dims} (>= 1)", features.len()));
+    }
+    if cluster_counts.is_empty() || cluster_counts.iter().any(|&c| c == 0 || c > rows) {
+        return Err(format!("cluster counts {cluster_counts:?} not all in 1..={rows} (the number of rows)"));
+    }
+    for (values, cols, what) in [(data, cols, "data"), (features, feature_dims, "features")] {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("{what} row {} holds a non-finite value ({})", i / cols, values[i]));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{hash_u32, u32_to_unit};
+    use crate::work::with_threads;
+
+    const P: usize = 300;
+    const GROUP_SIZES: [u32; 4] = [70, 60, 40, 30];
+
+    fn noise(e: u32, dim: u32) -> f32 {
+        u32_to_unit(hash_u32(7, e, dim, 0)) - 0.5
+    }
+
+    /// 200 points of P values in four groups at separate 3D positions (the features); a group's
+    /// rows are a smooth mean plus two smooth modes with random weights plus 1% noise.
+    fn grouped() -> (Vec<f32>, Vec<f32>) {
+        let (mut data, mut features, mut e) = (vec![], vec![], 0);
+        for (g, &size) in GROUP_SIZES.iter().enumerate() {
+            let g = g as f32;
+            for _ in 0..size {
+                features.extend([10.0 * g + noise(e, 0), noise(e, 1), 5.0 * g.sin() + noise(e, 2)]);
+                let (a, b) = (noise(e, 3), noise(e, 4));
+                data.extend((0..P).map(|p| {
+                    let t = p as f32 / P as f32;
+                    (t * (g + 1.0)).sin() + a * (7.0 * t + g).cos() + b * (3.0 * t * (g + 1.0)).sin()
+                        + 0.01 * noise(e, 5 + p as u32)
+                }));
+                e += 1;
+            }
+        }
+        (data, features)
+    }
+
+    fn table(counts: &[usize], max_basis: usize) -> Vec<Candidate> {
+        let (data, features) = grouped();
+        error_table(&data, P, &features, 3, counts, max_basis).unwrap()
+    }
+
+    #[test]
+    fn clusterings_are_nested_and_error_falls_with_c_and_d() {
+        let (_, features) = grouped();
+        let tree = divisive_clusters(&features, 3, 8);
+        for c in 1..tree.max_clusters() {
+            let (coarse, fine) = (tree.assignment(c), tree.assignment(c + 1));
+            let mut parent = vec![None; c + 1];
+            for (&f, &k) in fine.iter().zip(&coarse) {
+                assert_eq!(*parent[f as usize].get_or_insert(k), k, "C = {} does not refine C = {c}", c + 1);
+            }
+        }
+        let table = table(&(1..=8).collect::<Vec<_>>(), 6);
+        let error = |c: usize, d: usize| table.iter().find(|t| (t.clusters, t.basis) == (c, d)).unwrap().relative_error;
+        for c in 1..=8 {
+            for d in 0..=6 {
+                assert!(d == 0 || error(c, d) <= error(c, d - 1) * (1.0 + 1e-6), "C {c} D {d}");
+                assert!(c == 1 || error(c, d) <= error(c - 1, d) * (1.0 + 1e-6), "C {c} D {d}");
+            }
+        }
+        assert!(error(4, 2) < 0.1 * error(1, 2), "the four groups are found: {}", error(4, 2));
+    }
+
+    #[test]
+    fn predicted_error_matches_a_fit() {
+        let (data, features) = grouped();
+        let table = table(&[1, 3, 4, 7], 5);
+        for (c, d) in [(1, 0), (1, 5), (3, 2), (4, 2), (7, 5)] {
+            let predicted = table.iter().find(|t| (t.clusters, t.basis) == (c, d)).unwrap().relative_error;
+            let actual = fit(&data, P, &features, 3, c, d).unwrap().relative_error(&data);
+            assert!((predicted - actual).abs() <= 1e-4 * actual, "C {c} D {d}: {predicted} vs {actual}");
+        }
+    }
+
+    #[test]
+    fn basis_as_large_as_the_clusters_is_exact() {
+        let (data, features) = grouped();
+        let largest = fit(&data, P, &features, 3, 4, 0).unwrap().clusters.iter().map(|c| c.members.len()).max();
+        let cpca = fit(&data, P, &features, 3, 4, largest.unwrap()).unwrap();
+        assert!(cpca.relative_error(&data) < 1e-5, "{}", cpca.relative_error(&data));
+    }
+
+    #[test]
+    fn choose_takes_the_smallest_within_budget() {
+        let table = table(&[1, 2, 4, 6], 4);
+        let budget = table.iter().find(|t| (t.clusters, t.basis) == (4, 2)).unwrap().relative_error * 1.01;
+        let chosen = choose(&table, budget).unwrap();
+        assert!(chosen.relative_error <= budget);
+        assert!(table.iter().all(|t| t.relative_error > budget || t.stored_values >= chosen.stored_values));
+        assert_eq!(choose(&table, -1.0), None);
+        assert_eq!(choose(&table[..5], 1e-9), None, "C = 1 cannot hold four groups plus noise");
+        let candidate = |basis, relative_error| Candidate { clusters: 1, basis, relative_error, stored_values: 10 };
+        let tied = [candidate(1, 0.3), candidate(2, 0.2), Candidate { stored_values: 11, ..candidate(3, 0.1) }];
+        assert_eq!(choose(&tied, 0.5), Some(tied[1]));
+        assert_eq!(choose(&tied, 0.15), Some(tied[2]));
+    }
+
+    #[test]
+    fn two_lines_need_two_clusters_of_one_vector() {
+        // Points 0..4 on the line (1 + t, 2, 3), points 4..8 on (0, 5 + t, 5 + t), apart in features.
+        let data: Vec<f32> = (0..8).flat_map(|e| {
+            let t = (e % 4) as f32;
+            if e < 4 { [1.0 + t, 2.0, 3.0] } else { [0.0, 5.0 + t, 5.0 + t] }
+        }).collect();
+        let features: Vec<f32> = (0..8).flat_map(|e| [if e < 4 { 0.0 } else { 10.0 }, 0.1 * e as f32]).collect();
+        let cpca = fit(&data, 3, &features, 2, 2, 3).unwrap();
+        assert_eq!(cpca.assignment, [0, 0, 0, 0, 1, 1, 1, 1]);
+        assert!(cpca.relative_error(&data) < 1e-6);
+        let first = &cpca.clusters[0];
+        assert_eq!(first.mean, [2.5, 2.0, 3.0]);
+        let sign = first.basis[0][0].signum();
+        assert!(first.basis[0].iter().zip([1.0, 0.0, 0.0]).all(|(b, x)| (b - sign * x).abs() < 1e-6));
+        for (k, w) in first.weights.iter().enumerate() {
+            assert!((w[0] - sign * (k as f32 - 1.5)).abs() < 1e-6 && w[1..] == [0.0, 0.0], "{w:?}");
+        }
+        assert!(first.basis[1..].iter().all(|b| b == &[0.0; 3]), "rank 1: the rest are zero vectors");
+        let half = std::f32::consts::FRAC_1_SQRT_2;
+        assert!(cpca.clusters[1].basis[0].iter().zip([0.0, half, half]).all(|(b, x)| (b.abs() - x).abs() < 1e-6));
+    }
+
+    #[test]
+    fn same_bytes_whatever_the_thread_count() {
+        let (data, features) = grouped();
+        let run = |threads| with_threads(Some(threads), || fit(&data, P, &features, 3, 5, 3).unwrap());
+        assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn refuses_bad_input() {
+        let (data, features) = ([1.0, 2.0, 3.0, 4.0], [0.0, 1.0]);
+        let refusal = |data: &[f32], features: &[f32], clusters| fit(data, 2, features, 1, clusters, 1).unwrap_err();
+        assert!(refusal(&[], &[], 1).contains("no data"));
+        assert!(refusal(&data[..3], &features, 1).contains("not whole rows"));
+        assert!(refusal(&data, &features[..1], 1).contains("features hold 1"));
+        assert!(refusal(&data, &features, 0).contains("cluster counts [0]"));
+        assert!(refusal(&data, &features, 3).contains("cluster counts [3]"));
+        assert!(refusal(&[1.0, 2.0, 3.0, f32::NAN], &features, 1).contains("data row 1"));
+        assert!(refusal(&data, &[0.0, f32::INFINITY], 1).contains("features row 1"));
+        assert!(error_table(&data, 2, &features, 1, &[], 1).unwrap_err().contains("cluster counts []"));
+    }
+}
