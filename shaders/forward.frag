@@ -1,9 +1,10 @@
 #version 450
 // The obscurance illumination model of Iones et al., "Fast realistic lighting for video
-// games" (001) eq. (5)-(7), I = (I_A + I'_S) k_A W + k_D I_S, in relume's radiometric terms.
-// Output is linear radiance of a Lambertian surface:
+// games" (001) eq. (5)-(7), I = (I_A + I'_S) k_A W + k_D I_S, in relume's radiometric terms,
+// plus the large-scale indirect light of the light path maps (000 §3.4) when the renderer has
+// them. Output is linear radiance of a Lambertian surface:
 //
-//   L = emission + albedo / pi * ( (I_A + I'_S) * W + E_direct )
+//   L = emission + albedo / pi * ( (I_A + I'_S) * W + E_direct + LPM )
 //
 //   E_direct = sum_j E_j cos(theta_j) V_j   eq. (6)'s I_S: every punctual light's irradiance
 //              (glTF falloff, lights.glsl) times the receiver's cosine and its visibility from
@@ -14,7 +15,11 @@
 //   I_A      = the ambient irradiance (lux), constant over the scene;
 //   W        = the obscurance (rgb; grey except for the spectral variant), bilinear from the
 //              lightmap through uv1, 1 where there is no lightmap;
-//   k_A = k_D = albedo, the /pi turning irradiance into Lambertian radiance.
+//   k_A = k_D = albedo, the /pi turning irradiance into Lambertian radiance;
+//   LPM      = by pc.lpm_mode (frame.rs's Composition), with I the indirect irradiance the
+//              light path maps reconstructed (bilinear from `indirect` through uv1, as W):
+//              LPM_NONE 0 (no light path maps); LPM_PLAIN I; LPM_TIMES_OBSCURANCE W * I;
+//              LPM_TIMES_OBSCURANCE_WITH_DIRECT W * (I + E_direct).
 //
 // I_A = beta = 0 (the default) skips the ambient term: direct light and emission alone.
 #extension GL_GOOGLE_include_directive : require
@@ -36,6 +41,9 @@ layout(set = 0, binding = 4) uniform sampler2DArray textures;
 // The obscurance W in rgb, one layer per atlas page, padded (lightmap.rs); a single texel
 // of 1 when the renderer has no lightmap.
 layout(set = 0, binding = 5) uniform sampler2DArray lightmap;
+// The light path maps' indirect irradiance I (lux) in rgb, alpha coverage, laid out as the
+// lightmap and padded every frame (light_path_maps.rs); a single texel of 0 without them.
+layout(set = 0, binding = 6) uniform sampler2DArray indirect;
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
@@ -43,26 +51,22 @@ layout(location = 2) in vec2 uv0;
 layout(location = 3) in vec2 uv1;
 layout(location = 0) out vec4 radiance;
 
+#include "vsm_visibility.glsl"
+
 const float PI = 3.14159265358979;
+const uint LPM_NONE = 0u;
+const uint LPM_PLAIN = 1u;
+const uint LPM_TIMES_OBSCURANCE = 2u;
+const uint LPM_TIMES_OBSCURANCE_WITH_DIRECT = 3u;
 
-float visibility(Light light, vec3 p) {
-    if (pc.shadows == 0u) return 1.0;
-    uint layer = shadow_layer(light, p);
-    vec4 clip = layers[layer].clip_from_world * vec4(p, 1.0);
-    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
-    // Explicit LOD: this runs in non-uniform control flow, where implicit derivatives are undefined.
-    vec2 moments = textureLod(shadow_moments, vec3(uv, float(layer)), 0.0).xy;
-    return chebyshev_visibility(moments, light_depth(light, p), pc.min_variance,
-                                pc.bleeding_reduction);
-}
-
-// W at uv1 (relume_bake::atlas's convention): page = floor(u), the page's own u = fract(u),
-// v in [0, 1] with row 0 at the top; filtered within the page, clamped to its edge.
-vec3 obscurance(vec2 uv) {
-    ivec3 size = textureSize(lightmap, 0);
+// An atlas image (the lightmap's W, the indirect I) at uv1 (relume_bake::atlas's convention):
+// page = floor(u), the page's own u = fract(u), v in [0, 1] with row 0 at the top; filtered
+// within the page, clamped to its edge.
+vec3 atlas_sample(sampler2DArray image, vec2 uv) {
+    ivec3 size = textureSize(image, 0);
     float page = floor(uv.x);
     int layer = clamp(int(page), 0, size.z - 1);
-    return sample_bilinear(lightmap, layer, size.xy, vec2(uv.x - page, uv.y), WRAP_CLAMP).rgb;
+    return sample_bilinear(image, layer, size.xy, vec2(uv.x - page, uv.y), WRAP_CLAMP).rgb;
 }
 
 void main() {
@@ -80,18 +84,31 @@ void main() {
     }
     vec3 result = front ? m.emission.rgb : vec3(0.0);
     vec3 unshadowed = vec3(0.0);    // sum_j E_j, for I'_S
+    vec3 direct = vec3(0.0);        // E_direct, for LPM_TIMES_OBSCURANCE_WITH_DIRECT
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec3 to_light;
         vec3 irradiance = incident_light(lights[i], world_position, to_light);
         unshadowed += irradiance;
         float cos_theta = dot(n, to_light);
         if (cos_theta <= 0.0) continue;
-        result += albedo / PI * irradiance * cos_theta
-                  * visibility(lights[i], world_position);
+        float v = visibility(lights[i], world_position, pc.shadows, pc.min_variance,
+                             pc.bleeding_reduction);
+        result += albedo / PI * irradiance * cos_theta * v;
+        direct += irradiance * cos_theta * v;
     }
     if (pc.ambient_beta != vec4(0.0)) {
         vec3 ambient = pc.ambient_beta.rgb + pc.ambient_beta.w * unshadowed;   // I_A + I'_S
-        result += albedo / PI * ambient * obscurance(uv1);
+        result += albedo / PI * ambient * atlas_sample(lightmap, uv1);
+    }
+    if (pc.lpm_mode != LPM_NONE) {
+        vec3 large_scale = atlas_sample(indirect, uv1);   // I
+        vec3 lpm = large_scale;
+        if (pc.lpm_mode == LPM_TIMES_OBSCURANCE) {
+            lpm = atlas_sample(lightmap, uv1) * large_scale;
+        } else if (pc.lpm_mode == LPM_TIMES_OBSCURANCE_WITH_DIRECT) {
+            lpm = atlas_sample(lightmap, uv1) * (large_scale + direct);
+        }
+        result += albedo / PI * lpm;
     }
     radiance = vec4(result, 1.0);
 }

@@ -8,6 +8,7 @@ layout(push_constant) uniform ForwardPush {
     float min_variance;
     float bleeding_reduction;
     uint material;           // of the current draw: one draw per mesh
+    uint lpm_mode;           // LPM_* of forward.frag: how the light path maps' I is added
     // Offset 112 (vec4 alignment). rgb: I_A, the ambient irradiance (lux), of 001 eq. (5);
     // w: beta of eq. (7). Both 0: the obscurance term is skipped (direct light only).
     vec4 ambient_beta;

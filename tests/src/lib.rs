@@ -1,5 +1,6 @@
 //! Shared helpers of relume's cross-crate tests: shipped scenes, a validated headless Vulkan
-//! render, the reference's direct layer at pixel centres, and failure images.
+//! render, the reference's direct layer at pixel centres, failure images, and synthetic light
+//! path maps (`synthetic_lpm`).
 
 use relume_bake::bvh::SceneBvh;
 use relume_bake::gltf_load;
@@ -10,6 +11,8 @@ use relume_bake::scene::Scene;
 use relume_renderer::vk::{Context, ContextOptions};
 use relume_renderer::{RenderSettings, Renderer};
 use std::path::PathBuf;
+
+pub mod synthetic_lpm;
 
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -1,12 +1,13 @@
 //! The frame loop allocates nothing: a counting allocator watches the thread that renders
-//! while frames are rendered, lights are moved, the ambient term changes and timings are
-//! read, with and without a lightmap. (Its own test binary,
-//! so no other test shares the allocator.)
+//! while frames are rendered, lights are moved, the ambient term (and the composition of the
+//! light path maps) changes and timings are read, without a lightmap, with one, and with
+//! light path maps. (Its own test binary, so no other test shares the allocator.)
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::scene::Scene;
-use relume_renderer::{LightmapData, RenderSettings, Renderer};
+use relume_renderer::{Composition, LightmapData, RenderSettings, Renderer};
+use relume_tests::synthetic_lpm::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -45,15 +46,23 @@ fn allocations() -> usize {
 /// Heap allocations made by 10 frames that move the first light (and, with `ambient`,
 /// change the ambient term) every frame, after one warm-up frame.
 fn frame_allocations(renderer: &mut Renderer, scene: &Scene, ambient: bool) -> usize {
+    frame_allocations_with(renderer, scene, |renderer, frame| {
+        if ambient {
+            renderer.set_ambient(Vec3::splat(0.1 * frame as f32), 0.05 * frame as f32).expect("valid ambient");
+        }
+    })
+}
+
+/// Heap allocations made by 10 frames that move the first light and call `change` (with the
+/// frame number) every frame, after one warm-up frame.
+fn frame_allocations_with(renderer: &mut Renderer, scene: &Scene, change: impl Fn(&mut Renderer, usize)) -> usize {
     renderer.render().expect("warm-up frame");
     let mut lights = scene.lights.clone();
     let before = allocations();
     for frame in 0..10 {
         lights[0].position += Vec3::new(0.001 * frame as f32, 0.0, 0.0);
         renderer.set_lights(&lights).expect("same kinds");
-        if ambient {
-            renderer.set_ambient(Vec3::splat(0.1 * frame as f32), 0.05 * frame as f32).expect("valid ambient");
-        }
+        change(renderer, frame);
         let timings = renderer.render().expect("frame");
         assert!(timings.passes_ms.is_none_or(|p| p.iter().all(|ms| ms.is_finite())));
     }
@@ -90,6 +99,25 @@ fn frames_with_a_lightmap_and_changing_ambient_allocate_nothing() {
     let log = ctx.message_log();
     let mut renderer = Renderer::with_lightmap(&ctx, &scene, &settings(), Some(&lightmap)).expect("renderer");
     let during = frame_allocations(&mut renderer, &scene, true);
+    drop(renderer);
+    drop(ctx);
+    assert_no_validation_messages(&log.lock().unwrap());
+    assert_eq!(during, 0, "10 frames made {during} heap allocations");
+}
+
+#[test]
+fn frames_with_light_path_maps_allocate_nothing() {
+    let (atlas, scene) = atlas_scene(&load_scene("cornell"), 16.0);
+    let texels = constant_obscurance(&atlas, Vec3::new(0.7, 0.6, 0.5));
+    let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
+    let transfer = synthetic_transfer(&atlas, vec![0, 20, 40, 64], 2, 1);
+    let ctx = validated_context();
+    let log = ctx.message_log();
+    let mut renderer = Renderer::with_transfer(&ctx, &scene, &settings(), &lightmap, &transfer).expect("renderer");
+    let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
+        renderer.set_composition(Composition::ALL[frame % 3]);
+        renderer.set_ambient(Vec3::splat(0.1 * frame as f32), 0.0).expect("valid ambient");
+    });
     drop(renderer);
     drop(ctx);
     assert_no_validation_messages(&log.lock().unwrap());

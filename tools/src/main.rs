@@ -248,6 +248,7 @@ fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,
+        composition: Default::default(),
         shadow_map_size: gpu.shadow_map_size,
         blur_radius: gpu.blur_radius,
         min_variance: gpu.min_variance,

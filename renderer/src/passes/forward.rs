@@ -3,11 +3,15 @@
 //! from every punctual light with glTF falloff and visibility from the variance shadow maps
 //! (Chebyshev bound, 000 §3.4), plus the ambient term (I_A + beta * every light's unshadowed,
 //! cosine-free irradiance) times the obscurance W, filtered by hand from the lightmap through
-//! uv1. With I_A = beta = 0 the ambient term is skipped and the lightmap is not read.
+//! uv1. With I_A = beta = 0 the ambient term is skipped and the lightmap is not read. With
+//! light path maps, their indirect irradiance I (read through uv1 like W) is added as
+//! `lpm_mode` says (frame.rs's `Composition`; 0 adds nothing and reads nothing).
 //!
 //! Reads: the scene's vertex, index, light, shadow-layer and material buffers, `moments`, the
-//! base-colour texture array and the lightmap (sampled in the fragment shader). Writes:
-//! `radiance` (linear radiance, RGBA32F, alpha 1) and `depth`, both cleared first.
+//! base-colour texture array, the lightmap and the indirect image (sampled in the fragment
+//! shader). Writes: `radiance` (linear radiance, RGBA32F, alpha 1) and `depth`, both cleared
+//! first. Cost: one draw per mesh; per fragment one shadow-map fetch per light facing it, and
+//! 4 texel fetches for W and 4 for I where they are read.
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
@@ -29,7 +33,10 @@ pub struct ForwardParams {
     pub bleeding_reduction: f32,
     /// The material of the current draw (set per draw by the pass).
     pub material: u32,
-    pub _pad: [u32; 3],
+    /// How the light path maps' indirect irradiance is added (forward.frag's LPM_*): 0 none
+    /// (the renderer has none), else `Composition::shader_mode`.
+    pub lpm_mode: u32,
+    pub _pad: [u32; 2],
     /// rgb: I_A, the ambient irradiance (lux); w: beta (001 eq. (5), (7)).
     pub ambient_beta: Vec4,
 }
@@ -46,8 +53,9 @@ pub struct ForwardPass<'a> {
 }
 
 impl<'a> ForwardPass<'a> {
-    /// `lightmap`: the RGBA32F 2D-array image of a [`crate::lightmap::GpuLightmap`].
-    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image, lightmap: &Image) -> VkResult<ForwardPass<'a>> {
+    /// `lightmap`: the RGBA32F 2D-array image of a [`crate::lightmap::GpuLightmap`];
+    /// `indirect`: the light path maps' indirect image, or a stand-in of that format.
+    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image, lightmap: &Image, indirect: &Image) -> VkResult<ForwardPass<'a>> {
         let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         // Textures and the lightmap are filtered by hand in the shader (texelFetch, with their
         // own wrap modes); the sampler only binds them.
@@ -62,6 +70,7 @@ impl<'a> ForwardPass<'a> {
                 Binding::StorageBuffer(scene.materials.raw),
                 Binding::SampledImage { view: scene.textures.view, sampler: texture_sampler.raw },
                 Binding::SampledImage { view: lightmap.view, sampler: texture_sampler.raw },
+                Binding::SampledImage { view: indirect.view, sampler: texture_sampler.raw },
             ],
         )?;
         let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
@@ -79,7 +88,7 @@ impl<'a> ForwardPass<'a> {
         Ok(ForwardPass { pipeline, descriptors, _shadow_sampler: shadow_sampler, _texture_sampler: texture_sampler })
     }
 
-    /// Reads: `sampled` = (`moments`, `lightmap`: the images given to `new`) and the textures
+    /// Reads: `sampled` = (`moments`, `lightmap`, `indirect`: the images given to `new`) and the textures
     /// (sampled), scene buffers. Writes: `targets` = (`radiance`, `depth`). One draw per mesh,
     /// so the material (and its texture) is uniform across each draw.
     pub(crate) fn record(
@@ -87,14 +96,15 @@ impl<'a> ForwardPass<'a> {
         rec: &CommandRecorder,
         tracker: &mut Tracker,
         scene: &GpuScene,
-        sampled: (&Image, &Image),
+        sampled: (&Image, &Image, &Image),
         targets: (&Image, &Image),
         params: &ForwardParams,
     ) {
-        let (moments, lightmap) = sampled;
+        let (moments, lightmap, indirect) = sampled;
         let (radiance, depth) = targets;
         tracker.use_image(rec, moments, Access::FragmentSampled);
         tracker.use_image(rec, lightmap, Access::FragmentSampled);
+        tracker.use_image(rec, indirect, Access::FragmentSampled);
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);

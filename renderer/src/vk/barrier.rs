@@ -1,8 +1,8 @@
-//! The one place barriers come from. Passes declare how they are about to use each image
-//! (`Access`); the tracker knows how each image was last used and records the barrier
-//! between the two, or none for a read after a read in the same layout.
+//! The one place barriers come from. Passes declare how they are about to use each image or
+//! buffer (`Access`); the tracker knows how each was last used and records the barrier
+//! between the two, or none for a read after a read (in the same layout, for images).
 
-use super::{CommandRecorder, Image};
+use super::{Buffer, CommandRecorder, Image};
 use ash::vk;
 use std::collections::HashMap;
 
@@ -14,6 +14,8 @@ pub enum Access {
     ColorAttachmentWrite,
     DepthAttachmentWrite,
     FragmentSampled,
+    /// Sampled (texture reads) by a compute shader.
+    ComputeSampled,
     ComputeStorageRead,
     ComputeStorageWrite,
     /// Read and written by one dispatch (or by a shader that could write it, which is how
@@ -37,6 +39,7 @@ impl Access {
                 L::DEPTH_ATTACHMENT_OPTIMAL,
             ),
             Access::FragmentSampled => (S::FRAGMENT_SHADER, A::SHADER_SAMPLED_READ, L::SHADER_READ_ONLY_OPTIMAL),
+            Access::ComputeSampled => (S::COMPUTE_SHADER, A::SHADER_SAMPLED_READ, L::SHADER_READ_ONLY_OPTIMAL),
             Access::ComputeStorageRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
             Access::ComputeStorageWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
             Access::ComputeStorageReadWrite => {
@@ -57,12 +60,25 @@ impl Access {
                 | Access::TransferDestination
         )
     }
+
+    /// Whether a buffer can be used this way (attachments and sampling are for images only).
+    fn is_buffer_access(self) -> bool {
+        matches!(
+            self,
+            Access::ComputeStorageRead
+                | Access::ComputeStorageWrite
+                | Access::ComputeStorageReadWrite
+                | Access::TransferSource
+                | Access::TransferDestination
+        )
+    }
 }
 
-/// The last known use of every image a frame touches.
+/// The last known use of every image and buffer a frame touches.
 #[derive(Default)]
 pub struct Tracker {
     last: HashMap<vk::Image, Access>,
+    last_buffers: HashMap<vk::Buffer, Access>,
 }
 
 impl Tracker {
@@ -76,6 +92,39 @@ impl Tracker {
     /// here keeps its contents instead of transitioning from UNDEFINED.
     pub fn assume(&mut self, image: &Image, access: Access) {
         self.set(image, access);
+    }
+
+    /// How `buffer` was last used (Undefined: not yet, as far as this tracker knows).
+    pub fn buffer_state(&self, buffer: &Buffer) -> Access {
+        self.last_buffers.get(&buffer.raw).copied().unwrap_or(Access::Undefined)
+    }
+
+    /// Records the barrier that makes `buffer` ready for `next` (a storage or transfer use):
+    /// after a write, and before a write that follows a read (write-after-read, also across
+    /// frames recorded with the same tracker); none between two reads of the same kind, nor
+    /// for a first use.
+    pub fn use_buffer(&mut self, rec: &CommandRecorder, buffer: &Buffer, next: Access) {
+        debug_assert!(next.is_buffer_access(), "{next:?} is not a way to use a buffer");
+        let previous = match self.last_buffers.get_mut(&buffer.raw) {
+            Some(last) => std::mem::replace(last, next),
+            None => {
+                self.last_buffers.insert(buffer.raw, next);
+                Access::Undefined
+            }
+        };
+        if previous == Access::Undefined || (previous == next && !next.writes()) {
+            return;
+        }
+        let (src_stage, src_access, _) = previous.stage_access_layout();
+        let (dst_stage, dst_access, _) = next.stage_access_layout();
+        let barrier = vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(src_stage)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst_stage)
+            .dst_access_mask(dst_access)
+            .buffer(buffer.raw)
+            .size(vk::WHOLE_SIZE);
+        rec.buffer_barrier(barrier);
     }
 
     /// Records the barrier that makes `image` ready for `next`.

@@ -235,6 +235,12 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
     }
 
+    pub fn buffer_barrier(&self, barrier: vk::BufferMemoryBarrier2) {
+        let barriers = [barrier];
+        // SAFETY: recording state; the barrier names a live buffer.
+        unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&barriers)) };
+    }
+
     pub fn bind_compute(&self, pipeline: vk::Pipeline, layout: vk::PipelineLayout, set: vk::DescriptorSet) {
         self.bind(vk::PipelineBindPoint::COMPUTE, pipeline, layout, set);
     }
@@ -324,6 +330,13 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
     }
 
+    /// Copies `size` bytes of `source` from `source_offset` to the start of `destination`.
+    pub fn copy_buffer(&self, source: vk::Buffer, source_offset: u64, destination: vk::Buffer, size: u64) {
+        let region = vk::BufferCopy { src_offset: source_offset, dst_offset: 0, size };
+        // SAFETY: recording state; both ranges lie in their buffers (the callers' check).
+        unsafe { self.device.cmd_copy_buffer(self.cmd, source, destination, &[region]) };
+    }
+
     /// Fills the top-left `extent` of one layer of an image (in TRANSFER_DST_OPTIMAL) from
     /// tightly packed buffer data starting at `offset` bytes.
     pub fn copy_buffer_to_image_layer(&self, buffer: vk::Buffer, offset: u64, image: &super::Image, layer: u32, extent: vk::Extent2D) {
@@ -339,9 +352,12 @@ impl<'a> CommandRecorder<'a> {
 
     /// Writes `data` into a device-local buffer inside the command stream (vkCmdUpdateBuffer:
     /// at most 65536 bytes, a multiple of 4), between two barriers: earlier shader reads of the
-    /// buffer finish first, and the vertex and fragment stages that follow see the new data.
+    /// buffer finish first, and the vertex, fragment and compute stages that follow see the
+    /// new data.
     pub fn update_buffer(&self, buffer: vk::Buffer, data: &[u8]) {
-        let shader_stages = vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let shader_stages = vk::PipelineStageFlags2::VERTEX_SHADER
+            | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            | vk::PipelineStageFlags2::COMPUTE_SHADER;
         let barrier = |src_stage, src_access, dst_stage, dst_access| {
             vk::BufferMemoryBarrier2::default()
                 .src_stage_mask(src_stage)

@@ -14,6 +14,8 @@ pub struct DeviceInfo {
     pub timestamp_period_ns: Option<f64>,
     /// Whether RG32F shadow moments can be filtered bilinearly.
     pub linear_moments: bool,
+    /// The most bytes one storage-buffer binding may span (maxStorageBufferRange).
+    pub max_storage_buffer_range: u64,
 }
 
 pub(super) struct DeviceParts {
@@ -153,5 +155,6 @@ fn describe(
         linear_moments: format
             .optimal_tiling_features
             .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR),
+        max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
     }
 }

@@ -10,7 +10,7 @@ pub struct TimestampQueries<'a> {
 }
 
 impl<'a> TimestampQueries<'a> {
-    pub const CAPACITY: usize = 8;
+    pub const CAPACITY: usize = 16;
 
     /// None when the device cannot write timestamps (the frame then reports no pass times).
     pub fn new(ctx: &'a Context) -> VkResult<Option<Self>> {

@@ -1,0 +1,61 @@
+#version 450
+// Step 2 of 000 §3.4: the irradiance I_e at every entry point from every light, with the
+// entry point's visibility from the variance shadow maps. One invocation per entry point:
+//
+//   I_e = sum_j E_j(e) * |l_j - e|^2 / (|l_j - e|^2 + delta-l / pi) * max(0, cos theta_e) * V_j(e)
+//
+// E_j(e) the light's irradiance on a surface facing it (lights.glsl's incident_light: glTF
+// falloff, range window, spot cone), the squared distance widened by the light area delta-l
+// (directional lights ignore it), V_j the same Chebyshev visibility the forward pass uses.
+// relume_bake::clustered_transfer::entry_irradiance_unshadowed is this without V_j.
+#extension GL_GOOGLE_include_directive : require
+#include "lights.glsl"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+struct EntryPoint {
+    vec4 position;   // xyz, w unused
+    vec4 normal;     // xyz unit, on the side the light arrives from
+};
+
+layout(std430, set = 0, binding = 0) readonly buffer Lights { Light lights[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Layers { ShadowLayer layers[]; };
+layout(set = 0, binding = 2) uniform sampler2DArray shadow_moments;
+layout(std430, set = 0, binding = 3) readonly buffer Entries { EntryPoint entries[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer Irradiance { vec4 irradiance[]; };   // rgb I_e
+
+layout(push_constant) uniform EntryIrradiancePush {
+    uint light_count;
+    uint shadows;            // 0: every light fully visible
+    float min_variance;
+    float bleeding_reduction;
+    uint entry_count;
+    float light_area;        // delta-l, square metres
+} pc;
+
+#include "vsm_visibility.glsl"
+
+const float PI = 3.14159265358979;
+
+void main() {
+    uint e = gl_GlobalInvocationID.x;
+    if (e >= pc.entry_count) return;
+    vec3 p = entries[e].position.xyz;
+    vec3 n = entries[e].normal.xyz;
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < pc.light_count; ++i) {
+        vec3 to_light;
+        vec3 incident = incident_light(lights[i], p, to_light);
+        float cos_e = max(dot(n, to_light), 0.0);
+        if (cos_e <= 0.0) continue;
+        float widening = 1.0;
+        if (uint(lights[i].position_kind.w) != LIGHT_DIRECTIONAL) {
+            float distance = length(lights[i].position_kind.xyz - p);
+            float d2 = distance * distance;
+            widening = d2 / (d2 + pc.light_area / PI);
+        }
+        sum += incident * widening * cos_e
+               * visibility(lights[i], p, pc.shadows, pc.min_variance, pc.bleeding_reduction);
+    }
+    irradiance[e] = vec4(sum, 0.0);
+}
