@@ -12,6 +12,7 @@
 //! always have the same integer part.
 
 pub use crate::artifact::{AtlasMesh, Texel, EMPTY};
+use crate::settings::first_failed_check;
 use crate::scene::{Mesh, Scene};
 use glam::{UVec2, Vec2, Vec3};
 use std::collections::HashMap;
@@ -44,10 +45,7 @@ impl AtlasSettings {
             ((16..=16384).contains(&self.max_size), "atlas maximum size must be 16..=16384 texels"),
             (self.discontinuity_angle > 0.0 && self.discontinuity_angle < std::f32::consts::FRAC_PI_2, "discontinuity angle must be in (0, 90) degrees"),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, message)) => Err(message.to_string()),
-            None => Ok(()),
-        }
+        first_failed_check(&checks)
     }
 }
 

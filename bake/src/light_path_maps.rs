@@ -9,6 +9,7 @@
 //! density d(e), so that sum_e I_e T_e[t] estimates the indirect irradiance at t
 //! (`clustered_transfer` holds the formula the renderer evaluates).
 
+use crate::settings::first_failed_check;
 use crate::artifact::Texel;
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
@@ -57,10 +58,7 @@ impl LightPathMapSettings {
             ((1..=1024).contains(&self.max_depth), "the walk depth must be 1..=1024"),
             (self.threads != Some(0), "threads must be at least 1"),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, message)) => Err(message.to_string()),
-            None => Ok(()),
-        }
+        first_failed_check(&checks)
     }
 }
 

@@ -9,6 +9,7 @@
 //! ray's estimate is rho(L) itself (the 1/pi and the cosine cancel the density).
 //! The lightmap holds the front side: a two-sided surface shows the same value on its back.
 
+use crate::settings::first_failed_check;
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
@@ -66,10 +67,7 @@ impl ObscuranceSettings {
             ((1..=1 << 20).contains(&self.rays_per_texel), "rays per texel must be 1..=1048576"),
             (self.threads != Some(0), "threads must be at least 1"),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, message)) => Err(message.to_string()),
-            None => Ok(()),
-        }
+        first_failed_check(&checks)
     }
 
     /// 001 eq. (2) cut at L_max (eq. 8), or the step of ambient occlusion.

@@ -103,9 +103,7 @@ impl LightingSettings {
             (self.l_max.is_finite() && self.l_max > 0.0, "obscurance l_max must be finite and > 0 (metres)"),
             (self.light_area.is_finite() && self.light_area >= 0.0, "light_path_maps.light_area must be finite and >= 0 (square metres)"),
         ];
-        if let Some((_, message)) = checks.iter().find(|(ok, _)| !ok) {
-            return Err(message.to_string());
-        }
+        first_failed_check(&checks)?;
         self.light_region.as_ref().map_or(Ok(()), LightRegion::validate)
     }
 
@@ -170,6 +168,14 @@ fn read_light_path_maps(block: &Map<String, Value>, s: &mut LightingSettings) ->
         });
     }
     Ok(())
+}
+
+/// The message of the first check that fails, or Ok: every `validate` of relume's settings.
+pub fn first_failed_check(checks: &[(bool, &str)]) -> Result<(), String> {
+    match checks.iter().find(|(ok, _)| !ok) {
+        Some((_, message)) => Err(message.to_string()),
+        None => Ok(()),
+    }
 }
 
 fn as_object<'v>(value: &'v Value, key: &str) -> Result<&'v Map<String, Value>, String> {

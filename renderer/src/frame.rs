@@ -12,6 +12,7 @@
 //! lights. `Renderer::record` writes a frame into any command buffer (the caller's, for
 //! integrators); `Renderer::render` is the headless driver relume's own tools use.
 
+use relume_bake::settings::first_failed_check;
 use crate::gpu_scene::GpuScene;
 use crate::light_path_maps::GpuLightPathMaps;
 use crate::lightmap::{check_uv1, GpuLightmap, LightmapData};
@@ -126,10 +127,7 @@ impl RenderSettings {
             (self.ambient.is_finite() && self.ambient.min_element() >= 0.0, "ambient must be three finite values >= 0 (lux)"),
             (self.beta.is_finite() && (0.0..1.0).contains(&self.beta), "beta must be in [0, 1)"),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, message)) => Err(message.to_string()),
-            None => Ok(()),
-        }
+        first_failed_check(&checks)
     }
 }
 
