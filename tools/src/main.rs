@@ -14,7 +14,8 @@ use relume_renderer::LightmapData;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use relume_renderer::vk::{Context, ContextOptions};
-use relume_renderer::{FrameTimings, RenderSettings, Renderer, PASS_NAMES};
+use relume_bake::clustered_transfer::ClusteredTransfer;
+use relume_renderer::{Composition, FrameTimings, RenderSettings, Renderer, PASS_NAMES};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -97,6 +98,11 @@ struct GpuArgs {
     /// Direct light only: no ambient term (ambient and beta 0).
     #[arg(long, conflicts_with_all = ["ambient", "beta"])]
     direct_only: bool,
+    /// How a light-path-maps bake's indirect irradiance I is added (000 §3.4): "plain"
+    /// (albedo/pi I), "times-obscurance" (albedo/pi W I) or "times-obscurance-with-direct"
+    /// (albedo/pi W (I + E_direct)). Only with a bake that has a transfer.
+    #[arg(long, value_parser = parse_composition)]
+    composition: Option<Composition>,
 }
 
 #[derive(Args)]
@@ -111,8 +117,9 @@ struct RenderArgs {
     /// Render this many frames and report the median GPU time of every pass.
     #[arg(long, default_value_t = 1)]
     frames: u32,
-    /// A bake artifact folder (`relume bake --out`): W from its lightmap. Without one,
-    /// W = 1 (constant ambient).
+    /// A bake artifact folder (`relume bake --out`): W from its lightmap and, from a
+    /// light-path-maps bake, the indirect irradiance of its transfer (then the ambient term
+    /// is off unless --ambient or --beta asks for it). Without one, W = 1 (constant ambient).
     #[arg(long)]
     bake: Option<PathBuf>,
 }
@@ -240,15 +247,37 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
     }
 }
 
-fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings) -> Result<RenderSettings> {
+/// `--composition`: the kebab-case name of a [`Composition`].
+fn parse_composition(text: &str) -> Result<Composition> {
+    Composition::ALL
+        .into_iter()
+        .find(|c| composition_name(*c) == text)
+        .ok_or_else(|| anyhow::anyhow!("--composition {text}: give one of {}", Composition::ALL.map(composition_name).join(", ")))
+}
+
+pub(crate) fn composition_name(composition: Composition) -> &'static str {
+    match composition {
+        Composition::Plain => "plain",
+        Composition::TimesObscurance => "times-obscurance",
+        Composition::TimesObscuranceWithDirect => "times-obscurance-with-direct",
+    }
+}
+
+/// The frame's settings from the flags. `lighting` gives the ambient term's defaults: the
+/// scene's, or none when light path maps supply the indirect light (`lpm`).
+fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings, lpm: bool) -> Result<RenderSettings> {
+    let (default_ambient, default_beta) = if lpm { (Vec3::ZERO, 0.0) } else { (lighting.ambient, lighting.beta) };
     let (ambient, beta) = match gpu.direct_only {
         true => (Vec3::ZERO, 0.0),
-        false => (gpu.ambient.as_deref().map(parse_ambient).transpose()?.unwrap_or(lighting.ambient), gpu.beta.unwrap_or(lighting.beta)),
+        false => (gpu.ambient.as_deref().map(parse_ambient).transpose()?.unwrap_or(default_ambient), gpu.beta.unwrap_or(default_beta)),
     };
+    if gpu.composition.is_some() && !lpm {
+        bail!("--composition: only a bake with light path maps (`relume bake --method light-path-maps`) has indirect light to compose");
+    }
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,
-        composition: Default::default(),
+        composition: gpu.composition.unwrap_or_default(),
         shadow_map_size: gpu.shadow_map_size,
         blur_radius: gpu.blur_radius,
         min_variance: gpu.min_variance,
@@ -268,6 +297,7 @@ struct GpuJob<'s> {
     scene: &'s Scene,
     settings: RenderSettings,
     lightmap: Option<LightmapData<'s>>,
+    transfer: Option<&'s ClusteredTransfer>,
     frames: u32,
 }
 
@@ -298,7 +328,11 @@ fn render_on_gpu(jobs: &[GpuJob], gpu: &GpuArgs) -> Result<(Vec<GpuRender>, Stri
 }
 
 fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
-    let mut renderer = Renderer::with_lightmap(ctx, job.scene, &job.settings, job.lightmap.as_ref()).context("Vulkan renderer")?;
+    let mut renderer = match (&job.lightmap, job.transfer) {
+        (Some(lightmap), Some(transfer)) => Renderer::with_transfer(ctx, job.scene, &job.settings, lightmap, transfer),
+        _ => Renderer::with_lightmap(ctx, job.scene, &job.settings, job.lightmap.as_ref()),
+    }
+    .context("Vulkan renderer")?;
     // The first frames warm caches and pipelines; the rest are timed.
     for _ in 0..job.frames.min(3) {
         renderer.render()?;
@@ -308,11 +342,13 @@ fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
     Ok(GpuRender { radiance, display_rgba, frames, padding_ms: renderer.padding_ms() })
 }
 
-/// The scene re-indexed by a bake artifact, and the artifact's lightmap as the renderer takes it.
+/// The scene re-indexed by a bake artifact, the artifact's lightmap as the renderer takes
+/// it, and its light path maps' transfer if it has one.
 struct Lit {
     scene: Scene,
     layout: PageLayout,
     texels: Vec<Vec4>,
+    transfer: Option<ClusteredTransfer>,
 }
 
 impl Lit {
@@ -320,7 +356,12 @@ impl Lit {
         let baked = Baked::read(dir, scene)?;
         let mut lit = scene.clone();
         baked.apply_to(&mut lit);
-        Ok(Lit { scene: lit, layout: baked.layout, texels: baked.lightmap_rgba() })
+        let texels = baked.lightmap_rgba();
+        Ok(Lit { scene: lit, layout: baked.layout, texels, transfer: baked.transfer })
+    }
+
+    fn job(&self, settings: RenderSettings, frames: u32) -> GpuJob<'_> {
+        GpuJob { scene: &self.scene, settings, lightmap: self.lightmap(), transfer: self.transfer.as_ref(), frames }
     }
 
     fn lightmap(&self) -> Option<LightmapData<'_>> {
@@ -342,12 +383,13 @@ fn frame_count(frames: u32) -> Result<u32> {
 
 fn render_command(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
-    let settings = render_settings(&args.scene, &args.gpu, &scene.settings)?;
     let frames = frame_count(args.frames)?;
     let lit = args.bake.as_deref().map(|dir| Lit::read(dir, &scene)).transpose()?;
+    let lpm = lit.as_ref().is_some_and(|lit| lit.transfer.is_some());
+    let settings = render_settings(&args.scene, &args.gpu, &scene.settings, lpm)?;
     let job = match &lit {
-        Some(lit) => GpuJob { scene: &lit.scene, settings, lightmap: lit.lightmap(), frames },
-        None => GpuJob { scene: &scene, settings, lightmap: None, frames },
+        Some(lit) => lit.job(settings, frames),
+        None => GpuJob { scene: &scene, settings, lightmap: None, transfer: None, frames },
     };
     let (renders, device) = render_on_gpu(&[job], &args.gpu)?;
     write_render_outputs(&args.out, &renders[0])?;

@@ -11,7 +11,7 @@ const MODELS: [&str; 3] = ["direct", "constant", "obscurance"];
 
 pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
-    let settings = render_settings(&args.scene, &args.gpu, &scene.settings)?;
+    let settings = render_settings(&args.scene, &args.gpu, &scene.settings, false)?;
     let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
     let frames = frame_count(args.frames)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
@@ -25,9 +25,9 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     println!("rendering with Vulkan: {} ({} timed frames each)", MODELS.join(", "), frames);
     let direct_only = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
     let jobs = [
-        GpuJob { scene: &scene, settings: direct_only, lightmap: None, frames },
-        GpuJob { scene: &scene, settings: settings.clone(), lightmap: None, frames },
-        GpuJob { scene: &lit.scene, settings: settings.clone(), lightmap: lit.lightmap(), frames },
+        GpuJob { scene: &scene, settings: direct_only, lightmap: None, transfer: None, frames },
+        GpuJob { scene: &scene, settings: settings.clone(), lightmap: None, transfer: None, frames },
+        lit.job(settings.clone(), frames),
     ];
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
     for (model, render) in MODELS.iter().zip(&renders) {
