@@ -136,6 +136,12 @@ impl BakeArgs {
             out: None,
         }
     }
+
+    /// `relume bake SCENE --method light-path-maps --clusters 32 --basis 2` (the sizes of 000 §3.2.3),
+    /// every other flag at its default.
+    pub(crate) fn light_path_maps(scene: &Path, rays: u32) -> BakeArgs {
+        BakeArgs { method: "light-path-maps".into(), clusters: Some(32), basis: Some(2), ..BakeArgs::obscurance(scene, rays) }
+    }
 }
 
 pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {

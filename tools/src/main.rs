@@ -199,12 +199,23 @@ struct RunArgs {
 }
 
 fn main() -> ExitCode {
+    end_quietly_when_stdout_closes();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {error:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Rust ignores SIGPIPE, so `relume compare a b | head -1` would panic in `println!` once
+/// `head` exits; restoring the default action ends the program quietly, as Unix tools do.
+fn end_quietly_when_stdout_closes() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

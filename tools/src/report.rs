@@ -1,13 +1,22 @@
-//! `relume run`, the main job: bake the scene's obscurances, render it with the Vulkan
-//! renderer three ways (direct light only, constant ambient, obscurance ambient: Iones et al.
-//! 2003, eq. 5-7) and with the reference path tracer, compare each against the reference,
-//! and write the images and `report.md` into one folder.
+//! `relume run`, the main job: bake the scene's obscurances (and its light path maps when it
+//! declares a light region), render it with the Vulkan renderer (direct light only, constant
+//! ambient, obscurance ambient: Iones et al. 2003, eq. 5-7; light path maps: Umenhoffer et
+//! al. 2008) and with the reference path tracer, compare each against the reference, and
+//! write the images and `report.md` into one folder.
 
 use super::*;
 use std::fmt::Write as _;
 
-/// The three ambient models the main job compares, in the order of the report.
-const MODELS: [&str; 3] = ["direct", "constant", "obscurance"];
+/// The models the main job compares, in the order of the report; the last only on a scene
+/// with a light region.
+const MODELS: [&str; 4] = ["direct", "constant", "obscurance", "light_path_maps"];
+
+/// Bakes `args` into `dir` and reads it back; returns the bake's summary too.
+fn bake_and_read(scene: &Scene, args: &bake::BakeArgs, dir: &Path) -> Result<(Lit, String)> {
+    let summary = bake::bake_scene(scene, args, dir)?;
+    print!("{summary}");
+    Ok((Lit::read(dir, scene)?, summary))
+}
 
 pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
@@ -17,20 +26,28 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
     println!("baking obscurances of {} ({} rays per texel)", args.scene.scene.display(), args.rays);
-    let bake_dir = args.out.join("bake");
-    let bake_summary = bake::bake_scene(&scene, &bake::BakeArgs::obscurance(&args.scene.scene, args.rays), &bake_dir)?;
-    print!("{bake_summary}");
-    let lit = Lit::read(&bake_dir, &scene)?;
+    let (lit, mut bake_summary) = bake_and_read(&scene, &bake::BakeArgs::obscurance(&args.scene.scene, args.rays), &args.out.join("bake"))?;
+    let lpm = match scene.settings.light_region {
+        Some(_) => {
+            println!("baking light path maps of {}", args.scene.scene.display());
+            let (lpm, summary) = bake_and_read(&scene, &bake::BakeArgs::light_path_maps(&args.scene.scene, args.rays), &args.out.join("bake_light_path_maps"))?;
+            bake_summary.push_str(&summary);
+            Some(lpm)
+        }
+        None => None,
+    };
+    let models = &MODELS[..3 + lpm.is_some() as usize];
 
-    println!("rendering with Vulkan: {} ({} timed frames each)", MODELS.join(", "), frames);
+    println!("rendering with Vulkan: {} ({} timed frames each)", models.join(", "), frames);
     let direct_only = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
-    let jobs = [
-        GpuJob { scene: &scene, settings: direct_only, lightmap: None, transfer: None, frames },
+    let mut jobs = vec![
+        GpuJob { scene: &scene, settings: direct_only.clone(), lightmap: None, transfer: None, frames },
         GpuJob { scene: &scene, settings: settings.clone(), lightmap: None, transfer: None, frames },
         lit.job(settings.clone(), frames),
     ];
+    jobs.extend(lpm.as_ref().map(|lpm| lpm.job(direct_only, frames)));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
-    for (model, render) in MODELS.iter().zip(&renders) {
+    for (model, render) in models.iter().zip(&renders) {
         write_render_outputs(&args.out.join(format!("{model}.exr")), render)?;
     }
 
@@ -38,8 +55,8 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let reference = trace_reference(&scene, &reference_settings);
     write_reference(&args.out.join("reference.exr"), &reference, settings.exposure)?;
 
-    let rows = MODELS.iter().zip(&renders).map(|(model, render)| score(model, render, &renders[0], &reference)).collect::<Result<Vec<_>>>()?;
-    for (model, render) in MODELS.iter().zip(&renders).skip(1) {
+    let rows = models.iter().zip(&renders).map(|(model, render)| score(model, render, &renders[0], &reference)).collect::<Result<Vec<_>>>()?;
+    for (model, render) in models.iter().zip(&renders).skip(1) {
         let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
         image::write_png_rgb8(&args.out.join(format!("error_{model}.png")), settings.width, settings.height, &rgb)?;
     }
@@ -109,11 +126,16 @@ fn report_text(
         settings.ambient.to_array(),
         settings.beta
     );
-    let _ = writeln!(r, "| direct only | constant ambient (W = 1) | obscurance ambient | reference |\n|---|---|---|---|");
-    let _ = writeln!(r, "| ![](direct.png) | ![](constant.png) | ![](obscurance.png) | ![](reference.png) |");
-    let _ = writeln!(r, "|  | ![](error_constant.png) | ![](error_obscurance.png) | false-colour error against the reference |\n");
+    if rows.iter().any(|row| row.model == "light_path_maps") {
+        let _ = writeln!(r, "Light path maps (Umenhoffer et al. 2008): direct light plus their indirect irradiance composed as `{}`, no ambient term.\n", composition_name(settings.composition));
+    }
+    let models: Vec<&str> = rows.iter().map(|row| row.model).collect();
+    let _ = writeln!(r, "| {} | reference |\n|{}---|", models.join(" | "), "---|".repeat(models.len()));
+    let _ = writeln!(r, "| {} ![](reference.png) |", models.iter().map(|m| format!("![]({m}.png) |")).collect::<String>());
+    let errors: String = models.iter().map(|m| if *m == "direct" { " |".to_string() } else { format!(" ![](error_{m}.png) |") }).collect();
+    let _ = writeln!(r, "|{errors} false-colour error against the reference |\n");
     let _ = writeln!(r, "## Error against the reference (NRMSE = RMSE / RMS of the reference, all channels)\n");
-    let _ = writeln!(r, "The indirect part of a model is its image minus the direct-only image. The best factor scales the ambient term (I_A and beta together) to fit the reference's indirect layer in the least-squares sense.\n");
+    let _ = writeln!(r, "The indirect part of a model is its image minus the direct-only image. The best factor scales that part (for the ambient models: I_A and beta together) to fit the reference's indirect layer in the least-squares sense.\n");
     let _ = writeln!(r, "| model | image vs combined | indirect part vs reference indirect | best factor | indirect at best factor | image at best factor |");
     let _ = writeln!(r, "|---|---|---|---|---|---|");
     for row in rows {
@@ -124,14 +146,15 @@ fn report_text(
         );
     }
     let _ = writeln!(r, "\n## Bake\n\n```\n{}```", bake_summary);
-    let obscurance = &renders[2];
-    let _ = writeln!(r, "\n## Vulkan GPU time, obscurance model, median of {} frames\n", obscurance.frames.len());
-    let _ = writeln!(r, "| pass | ms |\n|---|---|");
-    for (name, ms) in median_timings(&obscurance.frames) {
-        let _ = writeln!(r, "| {name} | {ms:.3} |");
-    }
-    if let Some(ms) = obscurance.padding_ms {
-        let _ = writeln!(r, "| lightmap padding (once, at upload) | {ms:.3} |");
+    for (model, render) in models.iter().zip(renders).skip(2) {
+        let _ = writeln!(r, "\n## Vulkan GPU time, {model}, median of {} frames\n", render.frames.len());
+        let _ = writeln!(r, "| pass | ms |\n|---|---|");
+        for (name, ms) in median_timings(&render.frames) {
+            let _ = writeln!(r, "| {name} | {ms:.3} |");
+        }
+        if let Some(ms) = render.padding_ms {
+            let _ = writeln!(r, "| lightmap padding (once, at upload) | {ms:.3} |");
+        }
     }
     let i = &reference.images;
     let _ = writeln!(

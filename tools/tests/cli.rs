@@ -172,3 +172,39 @@ fn comparing_images_of_different_sizes_is_refused() {
     assert_eq!(result.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&result.stderr).contains("8x8"));
 }
+
+fn relume(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_relume")).args(args).current_dir(dir).output().expect("run relume")
+}
+
+/// `render --bake` with a light-path-maps bake runs the run-time passes (validation on) and
+/// takes `--composition`; a composition without such a bake, or an unknown one, is refused.
+#[test]
+fn render_takes_a_light_path_maps_bake_and_its_composition() {
+    let dir = temp_dir("lpm");
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
+    let cornell = cornell.to_str().unwrap();
+    let bake = relume(&["bake", cornell, "--method", "light-path-maps", "--entry-points", "256", "--clusters", "4", "--basis", "1", "--patches", "500", "--rays", "16", "--out", "lpm"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let small = ["--width", "32", "--height", "32", "--shadow-map-size", "64"];
+    let render = relume(&[&["render", cornell, "--bake", "lpm", "--validation", "--composition", "plain", "--out", "lpm.exr"][..], &small].concat(), &dir);
+    let stdout = String::from_utf8_lossy(&render.stdout);
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    assert!(dir.join("lpm.exr").exists() && dir.join("lpm.png").exists());
+    if stdout.contains("GPU time") {
+        for pass in ["entry_irradiance", "cluster_sums", "lpm_reconstruct"] {
+            assert!(stdout.contains(pass), "no {pass} timing in:\n{stdout}");
+        }
+    }
+    // A value the flag's parser refuses is a usage error (exit code 2, clap's); the rest are 1.
+    for (args, expected, code) in [
+        (vec!["render", cornell, "--composition", "plain", "--out", "none.exr"], "light path maps", 1),
+        (vec!["render", cornell, "--bake", "lpm", "--composition", "sideways", "--out", "none.exr"], "times-obscurance", 2),
+    ] {
+        let result = relume(&[&args[..], &small].concat(), &dir);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(code), "{args:?}: {stderr}");
+        assert!(stderr.contains("--composition") && stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!dir.join("none.exr").exists(), "{args:?} left an output");
+    }
+}
