@@ -50,6 +50,12 @@ pub struct LightPathMapSettings {
 }
 
 impl LightPathMapSettings {
+    /// E entry points and a short-connection threshold, the rest at the command line's
+    /// defaults: one walk, 64 virtual lights at most, seed 0, every core, no time limit, quiet.
+    pub fn new(entry_points: u32, threshold: f32) -> Self {
+        LightPathMapSettings { entry_points, walks: 1, threshold, max_depth: 64, seed: 0, threads: None, time_limit: None, progress: false }
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
             ((1..=1 << 20).contains(&self.entry_points), "entry points must be 1..=1048576"),

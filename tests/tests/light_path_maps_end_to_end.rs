@@ -60,16 +60,7 @@ fn bake(scene: &Scene) -> Bake {
     let bvh = SceneBvh::new(scene);
     let tests = test_points(scene, scene.settings.light_region.as_ref(), 0).unwrap();
     let entries = entry_points(scene, &bvh, tests, 4096, 0).unwrap();
-    let settings = LightPathMapSettings {
-        entry_points: 4096,
-        walks: 1,
-        threshold: scene.settings.l_max,
-        max_depth: 64,
-        seed: 0,
-        threads: None,
-        time_limit: None,
-        progress: false,
-    };
+    let settings = LightPathMapSettings::new(4096, scene.settings.l_max);
     let transfers = bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings).unwrap();
     let compressed = compress(&transfers, &entries.entries, atlas.texels.len(), scene.settings.light_area, Compression::Fixed { clusters: 32, basis: 2 }).unwrap();
     println!(

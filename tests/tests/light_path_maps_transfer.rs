@@ -30,16 +30,7 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
     };
     let tests = test_points(scene, Some(&region), 0).unwrap();
     let entries = entry_points(scene, &bvh, tests, entries_wanted, 0).unwrap();
-    let settings = LightPathMapSettings {
-        entry_points: entries_wanted,
-        walks,
-        threshold: 0.0,
-        max_depth: 64,
-        seed: 0,
-        threads: None,
-        time_limit: None,
-        progress: false,
-    };
+    let settings = LightPathMapSettings { walks, ..LightPathMapSettings::new(entries_wanted, 0.0) };
     let transfers = bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings).unwrap();
     println!(
         "{} entry points, {} texels, {} virtual lights, {} connections in {:.1} s",
