@@ -119,7 +119,7 @@ impl ClusterTree {
 /// k-means makes the clustering for C + 1 a refinement of the one for C, so the PCA error can
 /// only fall as C grows, and one tree serves every C. Panics on no points.
 pub fn divisive_clusters(features: &[f32], feature_dims: usize, clusters: usize) -> ClusterTree {
-    assert!(feature_dims > 0 && !features.is_empty() && features.len() % feature_dims == 0, "no points");
+    assert!(feature_dims > 0 && !features.is_empty() && features.len().is_multiple_of(feature_dims), "no points");
     let points = Rows { values: features, cols: feature_dims };
     let count = features.len() / feature_dims;
     let mut members = vec![(0..count as u32).collect::<Vec<_>>()];
@@ -359,7 +359,7 @@ fn validate(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cl
     if data.is_empty() || cols == 0 {
         return Err("no data: at least one row of at least one value is needed".into());
     }
-    if data.len() % cols != 0 {
+    if !data.len().is_multiple_of(cols) {
         return Err(format!("data holds {} values, not whole rows of {cols}", data.len()));
     }
     let rows = data.len() / cols;
