@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Installs what relume needs from Debian when it is missing: Mesa's lavapipe (software
 # Vulkan), the Vulkan loader and validation layers, and shaderc with the glslang and
-# SPIRV-Tools static libraries it links against (and g++ for libstdc++, which they need).
+# SPIRV-Tools static libraries it links against (and g++ for libstdc++, which they need), and
+# the DejaVu font the bench's charts set their text in.
 # Safe to run again: it installs nothing
 # that is already there.
 set -euo pipefail
 
 packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers g++
-          libshaderc-dev glslang-dev spirv-tools)
+          libshaderc-dev glslang-dev spirv-tools fonts-dejavu-core)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

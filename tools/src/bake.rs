@@ -77,7 +77,7 @@ pub(crate) struct BakeArgs {
     seed: u64,
     /// Worker threads (default: all cores).
     #[arg(long)]
-    threads: Option<usize>,
+    pub(crate) threads: Option<usize>,
     /// Stop tracing after this many seconds, at a whole pass of 32 rays per texel.
     #[arg(long)]
     time_limit: Option<f64>,
@@ -135,6 +135,21 @@ impl BakeArgs {
             time_limit: None,
             out: None,
         }
+    }
+
+    /// `relume bake SCENE --method METHOD FLAGS..`, parsed as the command line would be.
+    pub(crate) fn from_flags(scene: &Path, method: &str, flags: &[String]) -> Result<BakeArgs> {
+        #[derive(clap::Parser)]
+        struct Bake {
+            #[command(flatten)]
+            args: BakeArgs,
+        }
+        let argv = ["bake".to_string(), scene.display().to_string(), "--method".into(), method.into()].into_iter().chain(flags.iter().cloned());
+        let bake = <Bake as clap::Parser>::try_parse_from(argv).map_err(|e| {
+            let text = e.render().to_string();
+            anyhow::anyhow!("bake flags {}: {}", flags.join(" "), text.lines().next().unwrap_or("").trim_start_matches("error: "))
+        })?;
+        Ok(bake.args)
     }
 
     /// `relume bake SCENE --method light-path-maps --clusters 32 --basis 2` (the sizes of 000 §3.2.3),

@@ -21,6 +21,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 mod bake;
+mod bench;
 mod report;
 
 #[derive(Parser)]
@@ -42,6 +43,9 @@ enum Command {
     Compare(CompareArgs),
     /// The main job: render a scene with Vulkan and the reference, compare, write images and a report.
     Run(RunArgs),
+    /// Run a sweep (scenes x methods x parameters x lights, from a TOML file): costs and
+    /// errors of every point, CSV/JSON, charts with the Pareto front, report.md.
+    Bench(bench::BenchArgs),
     /// Regenerate the shipped scenes (scenes/*.gltf) from their generator.
     Scenes {
         #[arg(long, default_value = "scenes")]
@@ -226,6 +230,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Reference(args) => reference_command(&args),
         Command::Compare(args) => compare_command(&args),
         Command::Run(args) => report::run_main_job(&args),
+        Command::Bench(args) => bench::bench_command(&args),
         Command::Scenes { out } => {
             for path in relume_tools::scenegen::write_all(&out)? {
                 println!("wrote {}", path.display());
@@ -259,7 +264,7 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
 }
 
 /// `--composition`: the kebab-case name of a [`Composition`].
-fn parse_composition(text: &str) -> Result<Composition> {
+pub(crate) fn parse_composition(text: &str) -> Result<Composition> {
     Composition::ALL
         .into_iter()
         .find(|c| composition_name(*c) == text)

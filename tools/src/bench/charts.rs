@@ -1,0 +1,105 @@
+//! The bench's charts, each written as SVG and PNG from one drawing: points (or lines) per
+//! method configuration, and optionally the Pareto front as a staircase.
+
+use anyhow::{bail, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use relume_bake::image::{write_atomically, write_png_rgb8};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Where Debian's fonts-dejavu-core puts the font the charts' text is set in.
+const FONT_FILE: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+const FONT: &str = "sans-serif";
+const SIZE: (u32, u32) = (900, 560);
+
+pub(crate) struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+pub(crate) struct Chart<'a> {
+    pub title: String,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub series: Vec<Series>,
+    /// Join each series' points with a line (a path along the light configurations).
+    pub lines: bool,
+    /// The Pareto front's points, by rising x.
+    pub front: Vec<(f64, f64)>,
+}
+
+/// Reads the font once; plotters keeps it for the life of the process.
+fn register_font() -> Result<()> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    let result = REGISTERED.get_or_init(|| {
+        let bytes = std::fs::read(FONT_FILE).map_err(|e| format!("{FONT_FILE}: cannot read the charts' font ({e}); install Debian's fonts-dejavu-core (tools/setup.sh does)"))?;
+        plotters::style::register_font(FONT, FontStyle::Normal, Box::leak(bytes.into_boxed_slice())).map_err(|_| format!("{FONT_FILE}: not a usable TrueType font"))
+    });
+    result.clone().map_err(anyhow::Error::msg)
+}
+
+/// Writes `stem`.svg and `stem`.png.
+pub(crate) fn write(stem: &Path, chart: &Chart) -> Result<()> {
+    register_font()?;
+    let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), chart)?;
+    let svg_path = stem.with_extension("svg");
+    write_atomically(&svg_path, |tmp| std::fs::write(tmp, &svg).map_err(|e| e.to_string()))?;
+    let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), chart)?;
+    write_png_rgb8(&stem.with_extension("png"), SIZE.0, SIZE.1, &rgb)?;
+    Ok(())
+}
+
+/// The axis range of `values` with a margin, never empty.
+fn range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if !lo.is_finite() {
+        return 0.0..1.0;
+    }
+    let margin = ((hi - lo) * 0.08).max(hi.abs().max(1e-6) * 0.05);
+    // Costs and errors are >= 0: their axes start at 0, so that ratios read true.
+    let start = if lo >= 0.0 { 0.0 } else { lo - margin };
+    start..hi + margin
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let fail = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("drawing the chart \"{}\": {e}", chart.title);
+    if chart.series.iter().all(|s| s.points.is_empty()) {
+        bail!("chart \"{}\": no points to draw", chart.title);
+    }
+    root.fill(&WHITE).map_err(fail)?;
+    let all = || chart.series.iter().flat_map(|s| s.points.iter().copied());
+    let mut plot = ChartBuilder::on(&root)
+        .caption(&chart.title, (FONT, 22))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(range(all().map(|p| p.0)), range(all().map(|p| p.1)))
+        .map_err(fail)?;
+    plot.configure_mesh().x_desc(chart.x_label).y_desc(chart.y_label).label_style((FONT, 14)).draw().map_err(fail)?;
+    for (i, series) in chart.series.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        if chart.lines {
+            plot.draw_series(LineSeries::new(series.points.iter().copied(), colour.stroke_width(2))).map_err(fail)?;
+        }
+        plot.draw_series(series.points.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+            .map_err(fail)?
+            .label(&series.label)
+            .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+    }
+    if chart.front.len() > 1 {
+        let staircase: Vec<(f64, f64)> = chart.front.windows(2).flat_map(|w| [w[0], (w[1].0, w[0].1)]).chain(chart.front.last().copied()).collect();
+        plot.draw_series(LineSeries::new(staircase, BLACK.stroke_width(2)))
+            .map_err(fail)?
+            .label("Pareto front")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+    }
+    plot.configure_series_labels().label_font((FONT, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::LowerLeft).draw().map_err(fail)?;
+    root.present().map_err(fail)?;
+    Ok(())
+}

@@ -1,0 +1,411 @@
+//! `relume bench`: runs a sweep (scenes x methods x parameter sets x light configurations,
+//! from a TOML file: docs/BENCH.md) and records, for every point, what the bake cost, what a
+//! frame costs on the GPU, and how far the image is from the reference path tracer; then
+//! writes results.csv, results.json, the charts and report.md into one folder.
+
+mod charts;
+mod methods;
+mod pareto;
+mod perceptual;
+mod reference_cache;
+mod report;
+mod results;
+mod sweep;
+
+use crate::{load_scene, median_timings, Lit, SceneArgs};
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use glam::Vec3;
+use methods::{Method, RenderParams};
+use reference_cache::{Reference, ReferenceCache};
+use relume_bake::bvh::SceneBvh;
+use relume_bake::image::{self, Image};
+use relume_bake::metrics;
+use relume_bake::reference::ReferenceSettings;
+use relume_bake::scene::{Light, Scene};
+use relume_renderer::vk::{Context, ContextOptions};
+use relume_renderer::{RenderSettings, Renderer};
+use results::{Accuracy, BakeCost, FrameCost, Row};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use sweep::{Sweep, SweepScene};
+
+#[derive(Args)]
+pub(crate) struct BenchArgs {
+    /// The sweep file (TOML; docs/BENCH.md).
+    #[arg(default_value = "tools/sweeps/default.toml")]
+    sweep: PathBuf,
+    /// Report folder: results.csv, results.json, charts, images, report.md.
+    #[arg(long, short, default_value = "out/bench")]
+    out: PathBuf,
+    /// Reference images are cached here, by a hash of scene, camera, lights, samples and version.
+    #[arg(long, default_value = "out/reference-cache")]
+    cache: PathBuf,
+    /// Pick, per scene and method, the cheapest parameter set whose mean NRMSE over the light
+    /// configurations is within this; written to recommended.toml and the report.
+    #[arg(long)]
+    budget: Option<f64>,
+    /// Start no new method configuration after this many seconds (the report says which were skipped).
+    #[arg(long)]
+    time_limit: Option<f64>,
+    /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe).
+    #[arg(long)]
+    device: Option<String>,
+    /// Turn on the Vulkan validation layers; any message fails the bench.
+    #[arg(long)]
+    validation: bool,
+    /// Worker threads of the reference path tracer and the bakes (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// One method with one parameter set, as the sweep gives it.
+pub(crate) struct Config {
+    method: &'static dyn Method,
+    table: toml::Table,
+    label: String,
+    render: RenderParams,
+    bake_flags: Vec<String>,
+}
+
+/// What a sweep run leaves for the outputs.
+pub(crate) struct Outcome {
+    sweep: Sweep,
+    device: String,
+    rows: Vec<Row>,
+    skipped: Vec<String>,
+    references_traced: usize,
+    references_found: usize,
+    seconds: f64,
+}
+
+pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
+    if let Some(budget) = args.budget.filter(|b| !(b.is_finite() && *b > 0.0)) {
+        bail!("--budget {budget}: give an NRMSE above 0");
+    }
+    if let Some(limit) = args.time_limit.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        bail!("--time-limit {limit}: give a positive number of seconds");
+    }
+    let sweep = Sweep::read(&args.sweep)?;
+    let configs = configs(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
+    std::fs::create_dir_all(args.out.join("images")).with_context(|| format!("{}: cannot create the report folder", args.out.display()))?;
+    let outcome = run_sweep(sweep, &configs, args)?;
+    let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();
+    report::write_all(&args.out, &outcome, args.budget)?;
+    println!(
+        "{} points in {:.1} s; references: {} traced, {} from the cache; wrote {}",
+        outcome.rows.len(),
+        outcome.seconds,
+        outcome.references_traced,
+        outcome.references_found,
+        args.out.join("report.md").display()
+    );
+    if let Some(row) = failed.first() {
+        bail!("{} point(s) failed, first: {} {} [{}] light {}: {}", failed.len(), row.scene, row.method, row.params, row.light, row.status);
+    }
+    Ok(())
+}
+
+/// Every method configuration of the sweep, checked before any work starts: the method
+/// exists and its bake takes the flags.
+fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
+    let mut configs = Vec::new();
+    for entry in &sweep.methods {
+        let method = methods::find(&entry.method)?;
+        let tables = if entry.params.is_empty() { vec![toml::Table::new()] } else { entry.params.clone() };
+        for table in tables {
+            let label = methods::label(&table);
+            let (render, bake_flags) = methods::split_params(method, &table).with_context(|| format!("method {} [{label}]", method.name()))?;
+            if let Some(bake) = method.bake_method() {
+                crate::bake::BakeArgs::from_flags(Path::new("scene.gltf"), bake, &bake_flags).with_context(|| format!("method {} [{label}]", method.name()))?;
+            }
+            configs.push(Config { method, table, label, render, bake_flags });
+        }
+    }
+    Ok(configs)
+}
+
+fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outcome> {
+    let start = Instant::now();
+    let ctx = Context::headless(&ContextOptions { validation: args.validation, device: args.device.clone() }).context("Vulkan")?;
+    let log = ctx.message_log();
+    let device = format!("{} ({})", ctx.info.name, ctx.info.driver);
+    let mut cache = ReferenceCache::new(&args.cache)?;
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    for entry in &sweep.scenes {
+        let mut bench = SceneBench::new(&sweep, entry, &ctx, &mut cache, args)?;
+        for config in configs {
+            if args.time_limit.is_some_and(|limit| start.elapsed().as_secs_f64() > limit) {
+                skipped.push(format!("{} {} [{}]", bench.name, config.method.name(), config.label));
+                continue;
+            }
+            rows.extend(bench.run(config, &device)?);
+        }
+    }
+    drop(ctx);
+    let messages = log.lock().map(|m| m.clone()).unwrap_or_default();
+    if !messages.is_empty() {
+        bail!("{} Vulkan validation message(s), first: {}", messages.len(), messages[0]);
+    }
+    for row in &mut rows {
+        row.device = device.clone();
+    }
+    results::mark_front(&mut rows);
+    let (references_traced, references_found) = (cache.traced, cache.found);
+    Ok(Outcome { sweep, device, rows, skipped, references_traced, references_found, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// One scene of the sweep: its light configurations, their references and direct-only frames.
+struct SceneBench<'s> {
+    sweep: &'s Sweep,
+    entry: &'s SweepScene,
+    ctx: &'s Context,
+    out: &'s Path,
+    threads: Option<usize>,
+    name: String,
+    scene: Scene,
+    lights: Vec<Vec<Light>>,
+    /// The moved light's position per configuration (None: the scene's lights).
+    positions: Vec<Option<Vec3>>,
+    references: Vec<Reference>,
+    direct: Vec<Image>,
+}
+
+impl<'s> SceneBench<'s> {
+    fn new(sweep: &'s Sweep, entry: &'s SweepScene, ctx: &'s Context, cache: &mut ReferenceCache, args: &'s BenchArgs) -> Result<SceneBench<'s>> {
+        let scene_args = SceneArgs { scene: entry.path.clone(), camera: entry.camera.clone(), width: sweep.width, height: sweep.height };
+        let scene = load_scene(&scene_args)?;
+        let name = entry.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        let (lights, positions) = light_configurations(&scene, entry)?;
+        let bvh = SceneBvh::new(&scene);
+        let settings = ReferenceSettings {
+            samples_per_pixel: sweep.reference_spp,
+            width: sweep.width,
+            height: sweep.height,
+            pixel_centres: true,
+            threads: args.threads,
+            progress: true,
+            ..ReferenceSettings::default()
+        };
+        let mut references = Vec::new();
+        for (k, config) in lights.iter().enumerate() {
+            println!("{name}: reference {}/{} ({} spp)", k + 1, lights.len(), sweep.reference_spp);
+            let moved = Scene { lights: config.clone(), ..scene.clone() };
+            let reference = cache.get(&moved, &bvh, &settings)?;
+            let exposure = perceptual::exposure_for(&reference.combined);
+            image::write_png_tonemapped(&args.out.join("images").join(format!("{name}_light{k}_reference.png")), &reference.combined, exposure)?;
+            references.push(reference);
+        }
+        let base = RenderSettings { width: sweep.width, height: sweep.height, ambient: Vec3::ZERO, beta: 0.0, ..RenderSettings::default() };
+        let mut renderer = Renderer::new(ctx, &scene, &base).context("Vulkan renderer")?;
+        let direct = lights.iter().map(|l| frame_image(&mut renderer, l)).collect::<Result<Vec<_>>>()?;
+        drop(renderer);
+        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, lights, positions, references, direct })
+    }
+
+    /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
+    fn run(&mut self, config: &Config, device: &str) -> Result<Vec<Row>> {
+        let method = config.method;
+        println!("{}: {} [{}]", self.name, method.name(), config.label);
+        let id = format!("{}_{}_{}", self.name, method.name(), sanitize(&config.label));
+        let (bake, lit) = match method.bake_method() {
+            Some(bake_method) => {
+                let dir = self.out.join("bakes").join(&id);
+                let mut bake_args = crate::bake::BakeArgs::from_flags(&self.entry.path, bake_method, &config.bake_flags)?;
+                bake_args.threads = self.threads;
+                crate::bake::bake_scene(&self.scene, &bake_args, &dir)?;
+                (BakeCost::read(&dir)?, Some(Lit::read(&dir, &self.scene)?))
+            }
+            None => (BakeCost::default(), None),
+        };
+        let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ambient: self.scene.settings.ambient, beta: self.scene.settings.beta, ..RenderSettings::default() };
+        let settings = method.settings(&base, &config.render);
+        settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
+        let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings)?;
+        let mut rows: Vec<Row> = Vec::new();
+        let mut previous: Option<Image> = None;
+        for k in 0..self.lights.len() {
+            renderer.set_lights(&self.lights[k])?;
+            let frames = time_frames(&mut renderer, self.sweep.frames)?;
+            let image = frame_image(&mut renderer, &self.lights[k])?;
+            let point_id = format!("{id}_light{k}");
+            let accuracy = self.score(k, &image, &point_id)?;
+            let flicker = match (&previous, &accuracy) {
+                (Some(before), Some(_)) => Some(flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined)),
+                _ => None,
+            };
+            rows.push(Row {
+                scene: self.name.clone(),
+                light: k,
+                light_position: self.positions[k].map(|p| p.to_array()),
+                method: method.name().to_string(),
+                params: config.label.clone(),
+                params_table: config.table.clone(),
+                status: match &accuracy {
+                    Some(_) => "ok".into(),
+                    None => format!("failed: {} NaN or infinite pixel(s)", count_non_finite(&image)),
+                },
+                bake: bake.clone(),
+                frame: frames,
+                accuracy,
+                flicker,
+                non_finite_pixels: count_non_finite(&image),
+                on_front: false,
+                device: device.to_string(),
+                image_id: point_id,
+            });
+            previous = Some(image);
+        }
+        Ok(rows)
+    }
+
+    /// Writes the point's pictures (image, false-colour error) and scores it.
+    fn score(&self, k: usize, image: &Image, point_id: &str) -> Result<Option<Accuracy>> {
+        let reference = &self.references[k];
+        let exposure = perceptual::exposure_for(&reference.combined);
+        let images = self.out.join("images");
+        image::write_png_tonemapped(&images.join(format!("{point_id}.png")), image, exposure)?;
+        let rgb = metrics::false_colour(image, &reference.combined, 0.5)?;
+        image::write_png_rgb8(&images.join(format!("{point_id}_error.png")), image.width, image.height, &rgb)?;
+        accuracy(image, reference, &self.direct[k])
+    }
+}
+
+/// The errors of a method's image against the reference, over the whole image and over its
+/// indirect part (the image minus the direct-only frame `direct`); None when the image holds
+/// a NaN or an infinity: the point fails, and nothing is averaged over it.
+fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Option<Accuracy>> {
+    if count_non_finite(image) > 0 {
+        return Ok(None);
+    }
+    let exposure = perceptual::exposure_for(&reference.combined);
+    let combined = metrics::compare(image, &reference.combined)?;
+    let indirect_part = subtract(image, direct);
+    let indirect = metrics::compare(&indirect_part, &reference.indirect)?;
+    Ok(Some(Accuracy {
+        rmse: combined.rmse,
+        nrmse: combined.nrmse,
+        flip: perceptual::mean_flip(image, &reference.combined, exposure),
+        indirect_rmse: indirect.rmse,
+        indirect_nrmse: indirect.nrmse,
+        indirect_flip: perceptual::mean_flip(&indirect_part, &reference.indirect, exposure),
+    }))
+}
+
+/// The scene's lights as they are, or one light moved along the sweep's path.
+fn light_configurations(scene: &Scene, entry: &SweepScene) -> Result<(Vec<Vec<Light>>, Vec<Option<Vec3>>)> {
+    let Some(path) = &entry.light_path else {
+        return Ok((vec![scene.lights.clone()], vec![None]));
+    };
+    if path.light >= scene.lights.len() {
+        bail!("{}: light_path.light {}: the scene has {} light(s)", entry.path.display(), path.light, scene.lights.len());
+    }
+    let positions = path.positions();
+    let lights = positions
+        .iter()
+        .map(|&p| {
+            let mut lights = scene.lights.clone();
+            lights[path.light].position = p;
+            lights
+        })
+        .collect();
+    Ok((lights, positions.into_iter().map(Some).collect()))
+}
+
+fn frame_image(renderer: &mut Renderer, lights: &[Light]) -> Result<Image> {
+    renderer.set_lights(lights)?;
+    Ok(renderer.render_and_read()?.0)
+}
+
+/// Three warm-up frames, then `frames` timed ones: GPU time per pass from timestamps and the
+/// CPU's wall time of each `render` call (record, submit, wait for its fence).
+fn time_frames(renderer: &mut Renderer, frames: u32) -> Result<FrameCost> {
+    for _ in 0..3 {
+        renderer.render()?;
+    }
+    let mut timings = Vec::new();
+    let mut cpu_ms = Vec::new();
+    for _ in 0..frames {
+        let start = Instant::now();
+        timings.push(renderer.render()?);
+        cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    let totals: Vec<f64> = timings.iter().filter_map(|t| t.passes_ms.map(|p| p.iter().sum())).collect();
+    Ok(FrameCost {
+        passes_ms: median_timings(&timings).into_iter().filter(|(name, _)| name != "frame").collect(),
+        gpu_ms: results::percentile(&totals, 0.5),
+        gpu_p10_ms: results::percentile(&totals, 0.1),
+        gpu_p90_ms: results::percentile(&totals, 0.9),
+        cpu_ms: results::percentile(&cpu_ms, 0.5),
+    })
+}
+
+fn subtract(a: &Image, b: &Image) -> Image {
+    Image { width: a.width, height: a.height, pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect() }
+}
+
+fn count_non_finite(image: &Image) -> usize {
+    image.pixels.iter().filter(|p| !p.is_finite()).count()
+}
+
+/// Side of the pixel blocks flicker averages over: popping is spatially coherent, the
+/// reference's Monte Carlo noise is not, and averaging 4 x 4 blocks cuts the noise 4 times.
+const FLICKER_BLOCK: u32 = 4;
+
+/// Popping (docs/BENCH.md): the part of the method's frame-to-frame change that the
+/// reference does not have, averaged over blocks of pixels, RMS over blocks and channels,
+/// relative to the RMS of the reference's blocks.
+fn flicker(before: &Image, after: &Image, reference_before: &Image, reference_after: &Image) -> f64 {
+    let change = |i: usize| (after.pixels[i] - before.pixels[i]) - (reference_after.pixels[i] - reference_before.pixels[i]);
+    let (changes, reference) = (block_means(after.width, after.height, change), block_means(after.width, after.height, |i| reference_after.pixels[i]));
+    let squares = |blocks: &[Vec3]| blocks.iter().map(|b| b.length_squared() as f64).sum::<f64>();
+    let reference = squares(&reference);
+    if reference > 0.0 {
+        (squares(&changes) / reference).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The mean of `value(pixel index)` over each FLICKER_BLOCK square (partial at the edges).
+fn block_means(width: u32, height: u32, value: impl Fn(usize) -> Vec3) -> Vec<Vec3> {
+    let mut blocks = Vec::new();
+    for by in (0..height).step_by(FLICKER_BLOCK as usize) {
+        for bx in (0..width).step_by(FLICKER_BLOCK as usize) {
+            let pixels: Vec<usize> = (by..(by + FLICKER_BLOCK).min(height)).flat_map(|y| (bx..(bx + FLICKER_BLOCK).min(width)).map(move |x| (y * width + x) as usize)).collect();
+            blocks.push(pixels.iter().map(|&i| value(i)).sum::<Vec3>() / pixels.len() as f32);
+        }
+    }
+    blocks
+}
+
+/// A label as part of a file name: letters, digits, '-', '.', the rest '_'.
+fn sanitize(label: &str) -> String {
+    label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flicker_counts_only_change_the_reference_lacks() {
+        let image = |v: f32| Image { width: 2, height: 1, pixels: vec![Vec3::splat(v); 2] };
+        assert_eq!(flicker(&image(1.0), &image(2.0), &image(1.0), &image(2.0)), 0.0);
+        let popped = flicker(&image(1.0), &image(3.0), &image(1.0), &image(2.0));
+        assert!((popped - 0.5).abs() < 1e-9, "{popped}");
+    }
+
+    #[test]
+    fn a_nan_pixel_fails_the_point_and_is_counted() {
+        let grey = Image { width: 4, height: 4, pixels: vec![Vec3::splat(0.5); 16] };
+        let reference = Reference { indirect: grey.clone(), combined: grey.clone() };
+        assert!(accuracy(&grey, &reference, &Image::new(4, 4)).unwrap().is_some());
+        let mut image = grey.clone();
+        image.pixels[5] = Vec3::new(f32::NAN, 0.0, 0.0);
+        image.pixels[6] = Vec3::splat(f32::INFINITY);
+        assert_eq!(count_non_finite(&image), 2);
+        assert!(accuracy(&image, &reference, &Image::new(4, 4)).unwrap().is_none(), "a NaN image must not be scored");
+    }
+}

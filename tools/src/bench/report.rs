@@ -1,0 +1,286 @@
+//! The bench's outputs: results.csv, results.json, the charts, recommended.toml (with
+//! `--budget`) and report.md, all in the report folder.
+
+use super::charts::{self, Chart, Series};
+use super::results::{self, percentile, Row};
+use super::{pareto, Outcome};
+use anyhow::Result;
+use relume_bake::image::write_atomically;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One method configuration on one scene, over its light configurations.
+struct Summary<'r> {
+    rows: Vec<&'r Row>,
+    mean_nrmse: f64,
+    mean_flip: f64,
+    mean_indirect_nrmse: f64,
+    max_flicker: Option<f64>,
+    gpu_ms: f64,
+    cpu_ms: f64,
+    failed: usize,
+}
+
+impl Summary<'_> {
+    fn first(&self) -> &Row {
+        self.rows[0]
+    }
+    fn artifact_mib(&self) -> f64 {
+        self.first().bake.artifact_bytes as f64 / (1 << 20) as f64
+    }
+    /// Usable in charts and budgets: every light configuration scored.
+    fn ok(&self) -> bool {
+        self.failed == 0
+    }
+}
+
+fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
+    let mut keys: Vec<(&str, &str, &str)> = Vec::new();
+    for r in rows {
+        if !keys.contains(&(&r.scene, &r.method, &r.params)) {
+            keys.push((&r.scene, &r.method, &r.params));
+        }
+    }
+    keys.into_iter()
+        .map(|key| {
+            let rows: Vec<&Row> = rows.iter().filter(|r| (r.scene.as_str(), r.method.as_str(), r.params.as_str()) == key).collect();
+            let scored: Vec<_> = rows.iter().filter_map(|r| r.accuracy).collect();
+            let mean = |f: &dyn Fn(&results::Accuracy) -> f64| if scored.is_empty() { f64::NAN } else { scored.iter().map(f).sum::<f64>() / scored.len() as f64 };
+            let flickers: Vec<f64> = rows.iter().filter_map(|r| r.flicker).collect();
+            Summary {
+                mean_nrmse: mean(&|a| a.nrmse),
+                mean_flip: mean(&|a| a.flip),
+                mean_indirect_nrmse: mean(&|a| a.indirect_nrmse),
+                max_flicker: flickers.iter().copied().reduce(f64::max),
+                gpu_ms: percentile(&rows.iter().map(|r| r.frame.gpu_ms).collect::<Vec<_>>(), 0.5),
+                cpu_ms: percentile(&rows.iter().map(|r| r.frame.cpu_ms).collect::<Vec<_>>(), 0.5),
+                failed: rows.len() - scored.len(),
+                rows,
+            }
+        })
+        .collect()
+}
+
+pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> Result<()> {
+    let save = |name: &str, text: &str| write_atomically(&out.join(name), |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()));
+    save("results.csv", &results::csv(&outcome.rows))?;
+    let json = serde_json::json!({
+        "sweep": outcome.sweep.name,
+        "device": outcome.device,
+        "relume_version": env!("CARGO_PKG_VERSION"),
+        "seconds": outcome.seconds,
+        "references": { "traced": outcome.references_traced, "from_cache": outcome.references_found },
+        "skipped": outcome.skipped,
+        "rows": outcome.rows,
+    });
+    save("results.json", &serde_json::to_string_pretty(&json)?)?;
+    let summaries = summaries(&outcome.rows);
+    let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
+    scenes.dedup();
+    let mut charts_md = String::new();
+    for scene in &scenes {
+        let of_scene: Vec<&Summary> = summaries.iter().filter(|s| s.first().scene == *scene && s.ok()).collect();
+        for (stem, md) in write_scene_charts(out, scene, &of_scene)? {
+            let _ = writeln!(charts_md, "![{md}]({stem}.png) ([SVG]({stem}.svg))\n");
+        }
+    }
+    let recommendations = budget.map(|b| recommend(&summaries, b));
+    if let Some(recommendations) = &recommendations {
+        save("recommended.toml", &recommended_toml(recommendations))?;
+    }
+    save("report.md", &report_text(outcome, &summaries, &charts_md, recommendations.as_deref(), budget))?;
+    Ok(())
+}
+
+/// One chart's points per method: (x, mean NRMSE) of each of its configurations.
+fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>, Vec<(f64, f64)>) {
+    let mut series: Vec<Series> = Vec::new();
+    for s in of_scene {
+        let point = (x(s), s.mean_nrmse);
+        match series.iter_mut().find(|series| series.label == s.first().method) {
+            Some(series) => series.points.push(point),
+            None => series.push(Series { label: s.first().method.clone(), points: vec![point] }),
+        }
+    }
+    let points: Vec<(f64, f64)> = of_scene.iter().map(|s| (x(s), s.mean_nrmse)).collect();
+    let front = pareto::front_in_cost_order(&points).into_iter().map(|i| points[i]).collect();
+    (series, front)
+}
+
+/// The scene's charts; returns (file stem, caption) of each.
+fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<Vec<(String, String)>> {
+    if of_scene.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut written = Vec::new();
+    let costs: [(&str, &str, &dyn Fn(&Summary) -> f64); 3] = [
+        ("frame_time", "GPU frame time, ms (median)", &|s| s.gpu_ms),
+        ("bake_time", "bake time, s", &|s| s.first().bake.seconds),
+        ("memory", "bake artifact, MiB", &|s| s.artifact_mib()),
+    ];
+    for (name, x_label, x) in costs {
+        let (series, front) = by_method(of_scene, x);
+        let stem = format!("{scene}_error_vs_{name}");
+        let title = format!("{scene}: error against {}", x_label.split(',').next().unwrap_or(name));
+        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label, y_label: "NRMSE vs reference (mean over lights)", series, lines: false, front })?;
+        written.push((stem, title));
+    }
+    if of_scene[0].rows.len() > 1 {
+        let series = of_scene
+            .iter()
+            .map(|s| Series {
+                label: format!("{} [{}]", s.first().method, s.first().params),
+                points: s.rows.iter().filter_map(|r| r.accuracy.map(|a| (r.light as f64, a.nrmse))).collect(),
+            })
+            .collect();
+        let stem = format!("{scene}_error_along_path");
+        let title = format!("{scene}: error along the light path");
+        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label: "light configuration", y_label: "NRMSE vs reference", series, lines: true, front: Vec::new() })?;
+        written.push((stem, title));
+    }
+    Ok(written)
+}
+
+/// The `--budget` choice for one scene and method.
+pub(crate) struct Recommendation {
+    scene: String,
+    method: String,
+    /// (params label, params table, mean NRMSE, artifact MiB, GPU ms) in cost order.
+    ladder: Vec<(String, toml::Table, f64, f64, f64)>,
+    chosen: Option<usize>,
+}
+
+/// Per scene and method: the configurations by cost (artifact size, then GPU frame time),
+/// and the first whose mean NRMSE is within the budget.
+fn recommend(summaries: &[Summary], budget: f64) -> Vec<Recommendation> {
+    let mut recommendations: Vec<Recommendation> = Vec::new();
+    for s in summaries.iter().filter(|s| s.ok()) {
+        let row = s.first();
+        let step = (row.params.clone(), row.params_table.clone(), s.mean_nrmse, s.artifact_mib(), s.gpu_ms);
+        match recommendations.iter_mut().find(|r| r.scene == row.scene && r.method == row.method) {
+            Some(r) => r.ladder.push(step),
+            None => recommendations.push(Recommendation { scene: row.scene.clone(), method: row.method.clone(), ladder: vec![step], chosen: None }),
+        }
+    }
+    for r in &mut recommendations {
+        r.ladder.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.4.total_cmp(&b.4)));
+        r.chosen = r.ladder.iter().position(|step| step.2 <= budget);
+    }
+    recommendations
+}
+
+fn recommended_toml(recommendations: &[Recommendation]) -> String {
+    let mut root = toml::Table::new();
+    for r in recommendations {
+        let Some(chosen) = r.chosen else { continue };
+        let (_, table, nrmse, mib, ms) = &r.ladder[chosen];
+        let scene = root.entry(r.scene.clone()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let mut entry = toml::Table::new();
+        entry.insert("params".into(), toml::Value::Table(table.clone()));
+        entry.insert("mean_nrmse".into(), toml::Value::Float(*nrmse));
+        entry.insert("artifact_mib".into(), toml::Value::Float(*mib));
+        entry.insert("gpu_frame_ms".into(), toml::Value::Float(*ms));
+        if let toml::Value::Table(scene) = scene {
+            scene.insert(r.method.clone(), toml::Value::Table(entry));
+        }
+    }
+    format!("# relume bench --budget: per scene and method, the cheapest parameter set within the budget.\n{}", toml::to_string(&root).unwrap_or_default())
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| text.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|s| s.trim().to_string()))
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} core(s)")
+}
+
+fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recommendations: Option<&[Recommendation]>, budget: Option<f64>) -> String {
+    let sweep = &outcome.sweep;
+    let mut r = String::new();
+    let _ = writeln!(r, "# relume bench: {}\n", sweep.name);
+    let _ = writeln!(r, "Device: {}. Machine: {}. relume {}.", outcome.device, machine(), env!("CARGO_PKG_VERSION"));
+    let _ = writeln!(
+        r,
+        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point after 3 warm-up frames; {:.1} s in all.\n",
+        sweep.width, sweep.height, sweep.reference_spp, outcome.references_traced, outcome.references_found, sweep.frames, outcome.seconds
+    );
+    if !outcome.skipped.is_empty() {
+        let _ = writeln!(r, "**Skipped by --time-limit:** {}.\n", outcome.skipped.join("; "));
+    }
+    let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();
+    if !failed.is_empty() {
+        let _ = writeln!(r, "## Failed points\n");
+        for row in failed {
+            let _ = writeln!(r, "- {} {} [{}] light {}: {}", row.scene, row.method, row.params, row.light, row.status);
+        }
+        let _ = writeln!(r);
+    }
+    let _ = writeln!(r, "## Summary per method configuration\n");
+    let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect`; flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene.\n");
+    let _ = writeln!(r, "| scene | method | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
+    let _ = writeln!(r, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for scene_summaries in summaries.chunk_by(|a, b| a.first().scene == b.first().scene) {
+        let points: Vec<(f64, f64)> = scene_summaries.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect();
+        for (s, on) in scene_summaries.iter().zip(pareto::front(&points)) {
+            let row = s.first();
+            let _ = writeln!(
+                r,
+                "| {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
+                row.scene,
+                row.method,
+                row.params,
+                s.mean_nrmse,
+                s.mean_flip,
+                s.mean_indirect_nrmse,
+                s.max_flicker.map_or("-".into(), |f| format!("{f:.4}")),
+                s.gpu_ms,
+                s.cpu_ms,
+                row.bake.seconds,
+                row.bake.peak_memory_bytes as f64 / (1 << 20) as f64,
+                s.artifact_mib(),
+                if on { "yes" } else { "" }
+            );
+        }
+    }
+    let _ = writeln!(r, "\n## Charts\n\n{charts_md}");
+    if let (Some(recommendations), Some(budget)) = (recommendations, budget) {
+        let _ = writeln!(r, "## Within the budget: NRMSE <= {budget}\n");
+        let _ = writeln!(r, "Per scene and method, the configurations in order of cost (artifact size, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
+        for rec in recommendations {
+            let describe = |i: usize| {
+                let (label, _, nrmse, mib, ms) = &rec.ladder[i];
+                format!("[{label}] NRMSE {nrmse:.4}, {mib:.2} MiB, {ms:.2} ms")
+            };
+            match rec.chosen {
+                Some(i) => {
+                    let smaller = if i > 0 { describe(i - 1) } else { "none".into() };
+                    let larger = if i + 1 < rec.ladder.len() { describe(i + 1) } else { "none".into() };
+                    let _ = writeln!(r, "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}", rec.scene, rec.method, describe(i));
+                }
+                None => {
+                    let best = (0..rec.ladder.len()).min_by(|&a, &b| rec.ladder[a].2.total_cmp(&rec.ladder[b].2)).map(describe).unwrap_or_default();
+                    let _ = writeln!(r, "- {} {}: no configuration within the budget (the best: {best})", rec.scene, rec.method);
+                }
+            }
+        }
+        let _ = writeln!(r);
+    }
+    let _ = writeln!(r, "## Every point: method image, reference, false-colour error\n");
+    let _ = writeln!(r, "| point | method | reference | error | NRMSE |\n|---|---|---|---|---|");
+    for row in &outcome.rows {
+        let reference = format!("images/{}_light{}_reference.png", row.scene, row.light);
+        let _ = writeln!(
+            r,
+            "| {} {} [{}] light {} | ![](images/{id}.png) | ![]({reference}) | ![](images/{id}_error.png) | {} |",
+            row.scene,
+            row.method,
+            row.params,
+            row.light,
+            row.accuracy.map_or(row.status.clone(), |a| format!("{:.4}", a.nrmse)),
+            id = row.image_id
+        );
+    }
+    r
+}

@@ -1,0 +1,163 @@
+//! A sweep file (TOML, documented in docs/BENCH.md): scenes, each with the light
+//! configurations to measure (the scene's own lights, or one light moved along a path of K
+//! frames), times methods, each with its parameter sets.
+
+use anyhow::{bail, Context as _, Result};
+use glam::Vec3;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct Sweep {
+    pub name: String,
+    #[serde(default = "default_size")]
+    pub width: u32,
+    #[serde(default = "default_size")]
+    pub height: u32,
+    /// Samples per pixel of the reference path tracer.
+    #[serde(default = "default_spp")]
+    pub reference_spp: u32,
+    /// Timed frames per point, after three warm-up frames.
+    #[serde(default = "default_frames")]
+    pub frames: u32,
+    pub scenes: Vec<SweepScene>,
+    pub methods: Vec<SweepMethod>,
+}
+
+fn default_size() -> u32 {
+    128
+}
+
+fn default_spp() -> u32 {
+    256
+}
+
+fn default_frames() -> u32 {
+    20
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SweepScene {
+    /// glTF file, relative to the sweep file's folder.
+    pub path: PathBuf,
+    /// `--camera` syntax; default the scene's camera.
+    pub camera: Option<String>,
+    /// Move one light along a path; without it the scene's lights as they are.
+    pub light_path: Option<LightPath>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightPath {
+    /// Index of the scene's light that moves (default 0).
+    #[serde(default)]
+    pub light: usize,
+    /// The path's corners in metres; the light visits `frames` positions spread evenly by
+    /// length along it, both ends included.
+    pub points: Vec<[f32; 3]>,
+    pub frames: u32,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SweepMethod {
+    pub method: String,
+    /// One table per parameter set (an empty list means one set of defaults).
+    #[serde(default)]
+    pub params: Vec<toml::Table>,
+}
+
+impl Sweep {
+    /// Reads and checks `path`; scene paths become relative to the current folder.
+    pub fn read(path: &Path) -> Result<Sweep> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read the sweep file", path.display()))?;
+        let mut sweep: Sweep = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim()))?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        for scene in &mut sweep.scenes {
+            scene.path = folder.join(&scene.path);
+        }
+        sweep.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        Ok(sweep)
+    }
+
+    fn validate(&self) -> Result<()> {
+        if !(1..=4096).contains(&self.width) || !(1..=4096).contains(&self.height) {
+            bail!("width {} height {}: use 1..=4096 pixels per side", self.width, self.height);
+        }
+        if !(1..=65536).contains(&self.reference_spp) {
+            bail!("reference_spp {}: use 1..=65536 samples per pixel", self.reference_spp);
+        }
+        if !(1..=10_000).contains(&self.frames) {
+            bail!("frames {}: time 1..=10000 frames per point", self.frames);
+        }
+        if self.scenes.is_empty() || self.methods.is_empty() {
+            bail!("a sweep needs at least one [[scenes]] and one [[methods]] entry");
+        }
+        for (i, scene) in self.scenes.iter().enumerate() {
+            if let Some(path) = &scene.light_path {
+                if path.points.is_empty() || !(1..=1000).contains(&path.frames) {
+                    bail!("scenes[{i}].light_path: give at least one point and 1..=1000 frames");
+                }
+                if path.points.iter().flatten().any(|v| !v.is_finite()) {
+                    bail!("scenes[{i}].light_path.points: every coordinate must be a finite number (metres)");
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl LightPath {
+    /// The light's positions, `frames` of them evenly spread by length along the polyline.
+    pub fn positions(&self) -> Vec<Vec3> {
+        let corners: Vec<Vec3> = self.points.iter().map(|p| Vec3::from_array(*p)).collect();
+        let lengths: Vec<f32> = corners.windows(2).map(|w| w[0].distance(w[1])).collect();
+        let total: f32 = lengths.iter().sum();
+        (0..self.frames)
+            .map(|k| {
+                let mut along = if self.frames > 1 { total * k as f32 / (self.frames - 1) as f32 } else { 0.0 };
+                for (i, &length) in lengths.iter().enumerate() {
+                    if along <= length && length > 0.0 {
+                        return corners[i].lerp(corners[i + 1], along / length);
+                    }
+                    along -= length;
+                }
+                *corners.last().unwrap()
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_path_is_spread_evenly_by_length_with_both_ends() {
+        let path = LightPath { light: 0, points: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 3.0, 0.0]], frames: 5 };
+        let p = path.positions();
+        assert_eq!(p.len(), 5);
+        for (got, want) in p.iter().zip([Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(1.0, 3.0, 0.0)]) {
+            assert!(got.distance(want) < 1e-5, "{got} != {want}");
+        }
+    }
+
+    #[test]
+    fn bad_sweeps_are_refused_by_key() {
+        let dir = std::env::temp_dir().join(format!("relume-sweep-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (text, expected) in [
+            ("name = 'x'\nscenes = []\nmethods = []", "at least one"),
+            ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
+            ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
+        ] {
+            let path = dir.join("sweep.toml");
+            std::fs::write(&path, text).unwrap();
+            let error = Sweep::read(&path).unwrap_err().to_string();
+            assert!(error.contains("sweep.toml") && error.contains(expected), "{expected}: {error}");
+        }
+    }
+}

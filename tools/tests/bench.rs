@@ -1,0 +1,125 @@
+//! `relume bench` end to end on lavapipe (validation on): the tiny sweep (2 methods x 2
+//! parameter sets x 3 light positions, 32 x 32) writes a row per point with every number
+//! finite, valid SVG and PNG charts and a correct Pareto front; run again on the same
+//! reference cache it traces no reference.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("relume-bench-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn bench(out: &Path, cache: &Path, extra: &[&str]) -> String {
+    let sweep = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/tiny.toml");
+    let result = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .arg("bench")
+        .arg(&sweep)
+        .arg("--out")
+        .arg(out)
+        .arg("--cache")
+        .arg(cache)
+        .arg("--validation")
+        .args(extra)
+        .output()
+        .expect("run relume bench");
+    let stdout = String::from_utf8_lossy(&result.stdout).into_owned();
+    assert!(result.status.success(), "relume bench failed:\n{stdout}\n{}", String::from_utf8_lossy(&result.stderr));
+    stdout
+}
+
+/// results.csv as one map of column to cell per row (no cell of the tiny sweep is quoted
+/// except the device's name).
+fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).expect("results.csv");
+    let split = |line: &str| -> Vec<String> {
+        let mut cells = vec![String::new()];
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => cells.push(String::new()),
+                c => cells.last_mut().unwrap().push(c),
+            }
+        }
+        cells
+    };
+    let mut lines = text.lines();
+    let header = split(lines.next().expect("header"));
+    lines
+        .map(|line| {
+            let cells = split(line);
+            assert_eq!(cells.len(), header.len(), "row with {} cells, header {}: {line}", cells.len(), header.len());
+            header.iter().cloned().zip(cells).collect()
+        })
+        .collect()
+}
+
+const TEXT_COLUMNS: [&str; 7] = ["scene", "method", "params", "status", "bake_stages", "on_front", "device"];
+
+#[test]
+fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
+    let (out, cache) = (temp_dir("out"), temp_dir("cache"));
+    let stdout = bench(&out, &cache, &[]);
+    assert!(stdout.contains("references: 3 traced, 0 from the cache"), "{stdout}");
+
+    let rows = read_csv(&out.join("results.csv"));
+    assert_eq!(rows.len(), 2 * 2 * 3, "one row per point");
+    let mut points: Vec<(String, String, String)> = rows.iter().map(|r| (r["method"].clone(), r["params"].clone(), r["light"].clone())).collect();
+    points.sort();
+    points.dedup();
+    assert_eq!(points.len(), 12, "every method x parameter set x light once");
+    for row in &rows {
+        assert_eq!(row["status"], "ok");
+        for (column, cell) in row.iter().filter(|(c, _)| !TEXT_COLUMNS.contains(&c.as_str())) {
+            if cell.is_empty() {
+                let allowed = (column == "flicker" && row["light"] == "0") || (column.starts_with("gpu_") && column != "gpu_frame_ms");
+                assert!(allowed, "{column} is empty in {row:?}");
+                continue;
+            }
+            let value: f64 = cell.parse().unwrap_or_else(|_| panic!("{column} = {cell:?} is not a number"));
+            assert!(value.is_finite(), "{column} = {value} in {row:?}");
+        }
+    }
+
+    // The front within each light configuration, recomputed by brute force.
+    for row in &rows {
+        let point = |r: &HashMap<String, String>| (r["gpu_frame_ms"].parse::<f64>().unwrap(), r["nrmse"].parse::<f64>().unwrap());
+        let (cost, error) = point(row);
+        let beaten = rows.iter().filter(|r| r["light"] == row["light"]).any(|r| {
+            let (c, e) = point(r);
+            c <= cost && e <= error && (c < cost || e < error)
+        });
+        assert_eq!(row["on_front"] == "true", !beaten, "front wrong for {row:?}");
+    }
+
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["rows"].as_array().map(Vec::len), Some(12));
+    for chart in ["error_vs_frame_time", "error_vs_bake_time", "error_vs_memory", "error_along_path"] {
+        let svg = std::fs::read_to_string(out.join(format!("cornell_{chart}.svg"))).expect("svg chart");
+        let document = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{chart}.svg is not XML: {e}"));
+        assert_eq!(document.root_element().tag_name().name(), "svg");
+        let png = std::fs::File::open(out.join(format!("cornell_{chart}.png"))).expect("png chart");
+        let mut reader = png::Decoder::new(std::io::BufReader::new(png)).read_info().expect("a PNG");
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).expect("PNG pixels");
+        assert!(info.width > 100 && info.height > 100);
+        assert!(pixels.iter().any(|&p| p < 128), "{chart}.png is blank");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("cornell_error_vs_frame_time.png") && report.contains("_error.png"));
+
+    // The rerun, with a budget: every reference from the cache, and a recommendation that meets it.
+    let again = temp_dir("again");
+    let stdout = bench(&again, &cache, &["--budget", "0.45"]);
+    assert!(stdout.contains("references: 0 traced, 3 from the cache"), "{stdout}");
+    let recommended: toml::Table = toml::from_str(&std::fs::read_to_string(again.join("recommended.toml")).unwrap()).unwrap();
+    for (method, entry) in recommended["cornell"].as_table().expect("cornell's recommendations") {
+        let nrmse = entry["mean_nrmse"].as_float().unwrap();
+        assert!(nrmse <= 0.45, "{method}: recommended NRMSE {nrmse} above the budget");
+    }
+}
