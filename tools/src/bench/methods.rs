@@ -15,6 +15,24 @@ pub(crate) struct RenderParams {
     pub ambient: Option<Vec3>,
     pub beta: Option<f32>,
     pub composition: Option<Composition>,
+    /// The variance shadow maps' settings, for every method (render's flags of the same names).
+    pub shadow_map_size: Option<u32>,
+    pub blur_radius: Option<u32>,
+    pub min_variance: Option<f32>,
+    pub bleeding_reduction: Option<f32>,
+}
+
+impl RenderParams {
+    /// `settings` with the shadow-map keys this parameter set gives.
+    pub fn apply_shadows(&self, settings: RenderSettings) -> RenderSettings {
+        RenderSettings {
+            shadow_map_size: self.shadow_map_size.unwrap_or(settings.shadow_map_size),
+            blur_radius: self.blur_radius.unwrap_or(settings.blur_radius),
+            min_variance: self.min_variance.unwrap_or(settings.min_variance),
+            bleeding_reduction: self.bleeding_reduction.unwrap_or(settings.bleeding_reduction),
+            ..settings
+        }
+    }
 }
 
 pub(crate) trait Method: Sync {
@@ -122,18 +140,26 @@ pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
     })
 }
 
+/// The parameter keys every method takes at run time.
+pub(crate) const RENDER_KEYS: [&str; 7] = ["ambient", "beta", "composition", "shadow_map_size", "blur_radius", "min_variance", "bleeding_reduction"];
+
 /// Splits a sweep's parameter table into the run-time keys and the bake's flags
 /// (`key = value` becomes `--key value`, `key = true` becomes `--key`).
 pub(crate) fn split_params(method: &dyn Method, table: &toml::Table) -> Result<(RenderParams, Vec<String>)> {
     let mut render = RenderParams::default();
     let mut flags = Vec::new();
     for (key, value) in table {
-        let number = || value.as_float().or_else(|| value.as_integer().map(|i| i as f64)).map(|v| v as f32);
+        let number = || value.as_float().or_else(|| value.as_integer().map(|i| i as f64)).map(|v| v as f32).with_context(|| format!("{key}: give a number"));
+        let count = || value.as_integer().and_then(|i| u32::try_from(i).ok()).with_context(|| format!("{key}: give a whole number >= 0"));
         match key.as_str() {
-            "ambient" => render.ambient = Some(Vec3::splat(number().with_context(|| format!("{key}: give a number (lux)"))?)),
-            "beta" => render.beta = Some(number().with_context(|| format!("{key}: give a number in [0, 1)"))?),
+            "ambient" => render.ambient = Some(Vec3::splat(number()?)),
+            "beta" => render.beta = Some(number()?),
             "composition" => render.composition = Some(crate::parse_composition(value.as_str().unwrap_or_default())?),
-            _ if method.bake_method().is_none() => bail!("{key}: method {} has no bake, so it takes only ambient, beta or composition", method.name()),
+            "shadow_map_size" => render.shadow_map_size = Some(count()?),
+            "blur_radius" => render.blur_radius = Some(count()?),
+            "min_variance" => render.min_variance = Some(number()?),
+            "bleeding_reduction" => render.bleeding_reduction = Some(number()?),
+            _ if method.bake_method().is_none() => bail!("{key}: method {} has no bake; its keys are {}", method.name(), RENDER_KEYS.join(", ")),
             _ => match value {
                 toml::Value::Boolean(true) => flags.push(format!("--{key}")),
                 toml::Value::Boolean(false) => {}

@@ -169,7 +169,9 @@ struct SceneBench<'s> {
     /// The moved light's position per configuration (None: the scene's lights).
     positions: Vec<Option<Vec3>>,
     references: Vec<Reference>,
-    direct: Vec<Image>,
+    /// Bakes made so far, by method and flags: configurations that differ only at run time
+    /// (composition, shadow maps) share one.
+    bakes: Vec<(String, PathBuf, BakeCost)>,
 }
 
 impl<'s> SceneBench<'s> {
@@ -197,11 +199,7 @@ impl<'s> SceneBench<'s> {
             image::write_png_tonemapped(&args.out.join("images").join(format!("{name}_light{k}_reference.png")), &reference.combined, exposure)?;
             references.push(reference);
         }
-        let base = RenderSettings { width: sweep.width, height: sweep.height, ambient: Vec3::ZERO, beta: 0.0, ..RenderSettings::default() };
-        let mut renderer = Renderer::new(ctx, &scene, &base).context("Vulkan renderer")?;
-        let direct = lights.iter().map(|l| frame_image(&mut renderer, l)).collect::<Result<Vec<_>>>()?;
-        drop(renderer);
-        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, lights, positions, references, direct })
+        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, lights, positions, references, bakes: Vec::new() })
     }
 
     /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
@@ -211,26 +209,26 @@ impl<'s> SceneBench<'s> {
         let id = format!("{}_{}_{}", self.name, method.name(), sanitize(&config.label));
         let (bake, lit) = match method.bake_method() {
             Some(bake_method) => {
-                let dir = self.out.join("bakes").join(&id);
-                let mut bake_args = crate::bake::BakeArgs::from_flags(&self.entry.path, bake_method, &config.bake_flags)?;
-                bake_args.threads = self.threads;
-                crate::bake::bake_scene(&self.scene, &bake_args, &dir)?;
-                (BakeCost::read(&dir)?, Some(Lit::read(&dir, &self.scene)?))
+                let dir = self.bake(bake_method, &config.bake_flags, &id)?;
+                (self.bakes.iter().find(|b| b.1 == dir).map(|b| b.2.clone()).unwrap_or_default(), Some(Lit::read(&dir, &self.scene)?))
             }
             None => (BakeCost::default(), None),
         };
         let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ambient: self.scene.settings.ambient, beta: self.scene.settings.beta, ..RenderSettings::default() };
-        let settings = method.settings(&base, &config.render);
+        let settings = config.render.apply_shadows(method.settings(&base, &config.render));
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
         let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings)?;
+        // Direct light alone with the same shadow maps: what the indirect part is measured against.
+        let mut direct_renderer = Renderer::new(self.ctx, &self.scene, &RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() }).context("Vulkan renderer")?;
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for k in 0..self.lights.len() {
             renderer.set_lights(&self.lights[k])?;
             let frames = time_frames(&mut renderer, self.sweep.frames)?;
             let image = frame_image(&mut renderer, &self.lights[k])?;
+            let direct = frame_image(&mut direct_renderer, &self.lights[k])?;
             let point_id = format!("{id}_light{k}");
-            let accuracy = self.score(k, &image, &point_id)?;
+            let accuracy = self.score(k, &image, &direct, &point_id)?;
             let flicker = match (&previous, &accuracy) {
                 (Some(before), Some(_)) => Some(flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined)),
                 _ => None,
@@ -260,15 +258,30 @@ impl<'s> SceneBench<'s> {
         Ok(rows)
     }
 
+    /// The folder of the bake `relume bake --method bake_method flags` of this scene: made
+    /// now into bakes/`id`, or the one made earlier in this run with the same method and flags.
+    fn bake(&mut self, bake_method: &str, flags: &[String], id: &str) -> Result<PathBuf> {
+        let key = format!("{bake_method} {}", flags.join(" "));
+        if let Some((_, dir, _)) = self.bakes.iter().find(|b| b.0 == key) {
+            return Ok(dir.clone());
+        }
+        let dir = self.out.join("bakes").join(id);
+        let mut bake_args = crate::bake::BakeArgs::from_flags(&self.entry.path, bake_method, flags)?;
+        bake_args.threads = self.threads;
+        crate::bake::bake_scene(&self.scene, &bake_args, &dir)?;
+        self.bakes.push((key, dir.clone(), BakeCost::read(&dir)?));
+        Ok(dir)
+    }
+
     /// Writes the point's pictures (image, false-colour error) and scores it.
-    fn score(&self, k: usize, image: &Image, point_id: &str) -> Result<Option<Accuracy>> {
+    fn score(&self, k: usize, image: &Image, direct: &Image, point_id: &str) -> Result<Option<Accuracy>> {
         let reference = &self.references[k];
         let exposure = perceptual::exposure_for(&reference.combined);
         let images = self.out.join("images");
         image::write_png_tonemapped(&images.join(format!("{point_id}.png")), image, exposure)?;
         let rgb = metrics::false_colour(image, &reference.combined, 0.5)?;
         image::write_png_rgb8(&images.join(format!("{point_id}_error.png")), image.width, image.height, &rgb)?;
-        accuracy(image, reference, &self.direct[k])
+        accuracy(image, reference, direct)
     }
 }
 
