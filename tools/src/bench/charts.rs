@@ -74,12 +74,19 @@ where
     }
     root.fill(&WHITE).map_err(fail)?;
     let all = || chart.series.iter().flat_map(|s| s.points.iter().copied());
+    // Line charts keep their legend at the top, above room made for it; scatter charts put it
+    // in the lower left, which a cost-error chart starting at 0 leaves empty.
+    let legend_at = if chart.lines { SeriesLabelPosition::UpperLeft } else { SeriesLabelPosition::LowerLeft };
+    let mut y_range = range(all().map(|p| p.1));
+    if chart.lines {
+        y_range.end += (y_range.end - y_range.start) * 0.075 * chart.series.len() as f64;
+    }
     let mut plot = ChartBuilder::on(&root)
         .caption(&chart.title, (FONT, 22))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d(range(all().map(|p| p.0)), range(all().map(|p| p.1)))
+        .build_cartesian_2d(range(all().map(|p| p.0)), y_range)
         .map_err(fail)?;
     plot.configure_mesh().x_desc(chart.x_label).y_desc(chart.y_label).label_style((FONT, 14)).draw().map_err(fail)?;
     for (i, series) in chart.series.iter().enumerate() {
@@ -99,7 +106,7 @@ where
             .label("Pareto front")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.stroke_width(2)));
     }
-    plot.configure_series_labels().label_font((FONT, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::LowerLeft).draw().map_err(fail)?;
+    plot.configure_series_labels().label_font((FONT, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(legend_at).draw().map_err(fail)?;
     root.present().map_err(fail)?;
     Ok(())
 }

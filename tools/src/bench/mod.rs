@@ -228,7 +228,8 @@ impl<'s> SceneBench<'s> {
             let image = frame_image(&mut renderer, &self.lights[k])?;
             let direct = frame_image(&mut direct_renderer, &self.lights[k])?;
             let point_id = format!("{id}_light{k}");
-            let accuracy = self.score(k, &image, &direct, &point_id)?;
+            let scored = self.score(k, &image, &direct, &point_id)?;
+            let accuracy = scored.as_ref().ok().copied();
             let flicker = match (&previous, &accuracy) {
                 (Some(before), Some(_)) => Some(flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined)),
                 _ => None,
@@ -240,9 +241,9 @@ impl<'s> SceneBench<'s> {
                 method: method.name().to_string(),
                 params: config.label.clone(),
                 params_table: config.table.clone(),
-                status: match &accuracy {
-                    Some(_) => "ok".into(),
-                    None => format!("failed: {} NaN or infinite pixel(s)", count_non_finite(&image)),
+                status: match scored {
+                    Ok(_) => "ok".into(),
+                    Err(why) => format!("failed: {why}"),
                 },
                 bake: bake.clone(),
                 frame: frames,
@@ -274,7 +275,7 @@ impl<'s> SceneBench<'s> {
     }
 
     /// Writes the point's pictures (image, false-colour error) and scores it.
-    fn score(&self, k: usize, image: &Image, direct: &Image, point_id: &str) -> Result<Option<Accuracy>> {
+    fn score(&self, k: usize, image: &Image, direct: &Image, point_id: &str) -> Result<Result<Accuracy, String>> {
         let reference = &self.references[k];
         let exposure = perceptual::exposure_for(&reference.combined);
         let images = self.out.join("images");
@@ -286,17 +287,22 @@ impl<'s> SceneBench<'s> {
 }
 
 /// The errors of a method's image against the reference, over the whole image and over its
-/// indirect part (the image minus the direct-only frame `direct`); None when the image holds
-/// a NaN or an infinity: the point fails, and nothing is averaged over it.
-fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Option<Accuracy>> {
-    if count_non_finite(image) > 0 {
-        return Ok(None);
+/// indirect part (the image minus the direct-only frame `direct`). The point fails (inner
+/// Err, saying why; nothing is averaged over it) when the image holds a NaN or an infinity,
+/// or when the reference is black, where NRMSE has no meaning.
+fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Result<Accuracy, String>> {
+    let non_finite = count_non_finite(image);
+    if non_finite > 0 {
+        return Ok(Err(format!("{non_finite} NaN or infinite pixel(s)")));
     }
     let exposure = perceptual::exposure_for(&reference.combined);
     let combined = metrics::compare(image, &reference.combined)?;
+    if !combined.nrmse.is_finite() {
+        return Ok(Err("the reference is black (the camera sees nothing the lights reach): NRMSE has no meaning".into()));
+    }
     let indirect_part = subtract(image, direct);
     let indirect = metrics::compare(&indirect_part, &reference.indirect)?;
-    Ok(Some(Accuracy {
+    Ok(Ok(Accuracy {
         rmse: combined.rmse,
         nrmse: combined.nrmse,
         flip: perceptual::mean_flip(image, &reference.combined, exposure),
@@ -414,11 +420,14 @@ mod tests {
     fn a_nan_pixel_fails_the_point_and_is_counted() {
         let grey = Image { width: 4, height: 4, pixels: vec![Vec3::splat(0.5); 16] };
         let reference = Reference { indirect: grey.clone(), combined: grey.clone() };
-        assert!(accuracy(&grey, &reference, &Image::new(4, 4)).unwrap().is_some());
+        assert!(accuracy(&grey, &reference, &Image::new(4, 4)).unwrap().is_ok());
         let mut image = grey.clone();
         image.pixels[5] = Vec3::new(f32::NAN, 0.0, 0.0);
         image.pixels[6] = Vec3::splat(f32::INFINITY);
         assert_eq!(count_non_finite(&image), 2);
-        assert!(accuracy(&image, &reference, &Image::new(4, 4)).unwrap().is_none(), "a NaN image must not be scored");
+        let failure = accuracy(&image, &reference, &Image::new(4, 4)).unwrap().unwrap_err();
+        assert!(failure.contains("2 NaN"), "a NaN image must not be scored: {failure}");
+        let black = Reference { indirect: Image::new(4, 4), combined: Image::new(4, 4) };
+        assert!(accuracy(&grey, &black, &Image::new(4, 4)).unwrap().unwrap_err().contains("black"));
     }
 }
