@@ -344,6 +344,16 @@ impl<'a> Renderer<'a> {
         self.scene.set_lights(lights)
     }
 
+    /// Moves mesh `mesh` (an index into the scene's meshes) by `translation` from where the
+    /// scene had it, for the frames recorded from now on, without allocating; the shadow
+    /// maps refit to the moved scene at the next [`Renderer::set_lights`]. Baked data (the
+    /// lightmap, light path maps) stays as baked: that is what a moving-occluder sweep
+    /// measures. The vertex buffer is written at once, so no frame this renderer recorded
+    /// may be in flight ([`Renderer::render`] waits for its own).
+    pub fn set_mesh_translation(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
+        self.scene.translate_mesh(mesh, translation)
+    }
+
     pub fn set_camera(&mut self, camera: Camera) {
         self.camera = camera;
     }

@@ -94,6 +94,12 @@ pub(crate) struct GpuScene<'a> {
     light_data: Vec<GpuLight>,
     layer_data: Vec<Mat4>,
     bounds: (Vec3, Vec3),
+    /// The vertices as uploaded, each mesh's range of them, and room for one moved mesh:
+    /// what `translate_mesh` rewrites without allocating.
+    uploaded: Vec<GpuVertex>,
+    mesh_ranges: Vec<std::ops::Range<usize>>,
+    moved: Vec<GpuVertex>,
+    translations: Vec<Vec3>,
 }
 
 impl<'a> GpuScene<'a> {
@@ -108,6 +114,12 @@ impl<'a> GpuScene<'a> {
             )));
         }
         let (vertices, indices, draws) = flatten_meshes(scene);
+        let mut mesh_ranges = Vec::with_capacity(scene.meshes.len());
+        for mesh in &scene.meshes {
+            let start = mesh_ranges.last().map_or(0, |r: &std::ops::Range<usize>| r.end);
+            mesh_ranges.push(start..start + mesh.positions.len());
+        }
+        let largest_mesh = mesh_ranges.iter().map(|r| r.len()).max().unwrap_or(0);
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
@@ -137,6 +149,10 @@ impl<'a> GpuScene<'a> {
             light_data: vec![GpuLight::default(); scene.lights.len()],
             layer_data: vec![Mat4::ZERO; layer_count as usize],
             bounds: scene.bounds(),
+            translations: vec![Vec3::ZERO; mesh_ranges.len()],
+            mesh_ranges,
+            moved: Vec::with_capacity(largest_mesh),
+            uploaded: vertices,
         };
         gpu.set_lights(&scene.lights)?;
         Ok(gpu)
@@ -165,6 +181,27 @@ impl<'a> GpuScene<'a> {
             );
             first_layer += count;
         }
+        Ok(())
+    }
+
+    /// Moves mesh `mesh` by `translation` from where it was uploaded: rewrites its vertices
+    /// in the (host-visible) vertex buffer now, without allocating, and widens the bounds the
+    /// shadow layers are fitted to, which takes effect at the next `set_lights`. No frame
+    /// that reads the vertices may be in flight.
+    pub fn translate_mesh(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
+        let Some(range) = self.mesh_ranges.get(mesh).cloned() else {
+            return Err(VkError::Invalid(format!("mesh {mesh}: the scene has {} meshes", self.mesh_ranges.len())));
+        };
+        if !translation.is_finite() {
+            return Err(VkError::Invalid(format!("mesh {mesh}: translation {translation} is not finite")));
+        }
+        self.moved.clear();
+        self.moved.extend(self.uploaded[range.clone()].iter().map(|v| GpuVertex { position: (Vec3::from_array(v.position) + translation).to_array(), ..*v }));
+        self.vertices.write_at(range.start * std::mem::size_of::<GpuVertex>(), &self.moved)?;
+        self.translations[mesh] = translation;
+        self.bounds = self.mesh_ranges.iter().zip(&self.translations).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (r, t)| {
+            self.uploaded[r.clone()].iter().fold((lo, hi), |(lo, hi), v| (lo.min(Vec3::from_array(v.position) + *t), hi.max(Vec3::from_array(v.position) + *t)))
+        });
         Ok(())
     }
 

@@ -87,6 +87,22 @@ fn frames_allocate_nothing() {
 }
 
 #[test]
+fn frames_with_a_moving_occluder_allocate_nothing() {
+    let scene = load_scene("occluder-stacked");
+    let ctx = validated_context();
+    let log = ctx.message_log();
+    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let last = scene.meshes.len() - 1;
+    let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
+        renderer.set_mesh_translation(last, Vec3::new(0.01 * frame as f32, 0.0, 0.0)).expect("a mesh of the scene");
+    });
+    drop(renderer);
+    drop(ctx);
+    assert_no_validation_messages(&log.lock().unwrap());
+    assert_eq!(during, 0, "10 frames with a moving occluder made {during} heap allocations");
+}
+
+#[test]
 fn frames_with_a_lightmap_and_changing_ambient_allocate_nothing() {
     let mut scene = load_scene("cornell");
     let atlas = Atlas::build(&scene, &AtlasSettings { texel_density: 8.0, ..AtlasSettings::default() }).expect("atlas");

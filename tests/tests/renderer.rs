@@ -1,5 +1,5 @@
 //! The renderer as a library: every light kind's shadows against the reference, the
-//! caller-owned command buffer contract, moving lights, refusal of bad settings, and proof
+//! caller-owned command buffer contract, moving lights and occluders, refusal of bad settings, and proof
 //! that a validation message is caught.
 
 use glam::Vec3;
@@ -105,6 +105,32 @@ fn moving_a_light_needs_no_new_renderer() {
     assert_no_validation_messages(&log.lock().unwrap());
     assert_ne!(before, after, "the light moved");
     assert_eq!(after, expected, "a moved light renders as a fresh renderer does");
+}
+
+#[test]
+fn moving_an_occluder_needs_no_new_renderer() {
+    let scene = load_scene("occluder-plane");
+    let (cube, shift) = (scene.meshes.len() - 1, Vec3::new(0.3, 0.1, -0.2));
+    let mut moved = scene.clone();
+    for p in &mut moved.meshes[cube].positions {
+        *p += shift;
+    }
+    let ctx = validated_context();
+    let log = ctx.message_log();
+    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let (before, _) = renderer.render_and_read().expect("frame");
+    renderer.set_mesh_translation(cube, shift).expect("a mesh of the scene");
+    renderer.set_lights(&scene.lights).expect("same lights: refits the shadow maps to the moved scene");
+    let (after, _) = renderer.render_and_read().expect("frame");
+    let mut fresh = Renderer::new(&ctx, &moved, &settings()).expect("renderer");
+    let (expected, _) = fresh.render_and_read().expect("frame");
+    assert!(renderer.set_mesh_translation(scene.meshes.len(), shift).is_err(), "a mesh the scene lacks is refused");
+    assert!(renderer.set_mesh_translation(cube, Vec3::NAN).is_err(), "a NaN translation is refused");
+    drop((renderer, fresh));
+    drop(ctx);
+    assert_no_validation_messages(&log.lock().unwrap());
+    assert_ne!(before, after, "the occluder moved");
+    assert_eq!(after, expected, "a moved occluder renders as a fresh renderer of the moved scene does");
 }
 
 #[test]

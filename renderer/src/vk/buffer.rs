@@ -63,13 +63,18 @@ impl<'a> Buffer<'a> {
     /// Copies `data` to the start of a host-visible buffer. The caller makes sure no GPU
     /// work that reads the buffer is pending.
     pub fn write<T: NoUninit>(&self, data: &[T]) -> VkResult<()> {
+        self.write_at(0, data)
+    }
+
+    /// Copies `data` into a host-visible buffer from byte `offset` on; as [`Buffer::write`].
+    pub fn write_at<T: NoUninit>(&self, offset: usize, data: &[T]) -> VkResult<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let (ptr, len) = self.mapping()?;
-        if bytes.len() > len {
-            return Err(VkError::Invalid(format!("{} bytes do not fit a {len}-byte buffer", bytes.len())));
+        if offset.checked_add(bytes.len()).is_none_or(|end| end > len) {
+            return Err(VkError::Invalid(format!("{} bytes at {offset} do not fit a {len}-byte buffer", bytes.len())));
         }
-        // SAFETY: the mapping holds `len` >= bytes.len() bytes and does not overlap `data`.
-        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
+        // SAFETY: the mapping holds `len` >= offset + bytes.len() bytes and does not overlap `data`.
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr.add(offset), bytes.len()) };
         Ok(())
     }
 
