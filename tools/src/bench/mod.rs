@@ -165,9 +165,7 @@ struct SceneBench<'s> {
     threads: Option<usize>,
     name: String,
     scene: Scene,
-    lights: Vec<Vec<Light>>,
-    /// The moved light's position per configuration (None: the scene's lights).
-    positions: Vec<Option<Vec3>>,
+    configurations: Vec<Configuration>,
     references: Vec<Reference>,
     /// Bakes made so far, by method and flags: configurations that differ only at run time
     /// (composition, shadow maps) share one.
@@ -179,7 +177,7 @@ impl<'s> SceneBench<'s> {
         let scene_args = SceneArgs { scene: entry.path.clone(), camera: entry.camera.clone(), width: sweep.width, height: sweep.height };
         let scene = load_scene(&scene_args)?;
         let name = entry.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-        let (lights, positions) = light_configurations(&scene, entry)?;
+        let configurations = configurations(&scene, entry)?;
         let bvh = SceneBvh::new(&scene);
         let settings = ReferenceSettings {
             samples_per_pixel: sweep.reference_spp,
@@ -191,15 +189,18 @@ impl<'s> SceneBench<'s> {
             ..ReferenceSettings::default()
         };
         let mut references = Vec::new();
-        for (k, config) in lights.iter().enumerate() {
-            println!("{name}: reference {}/{} ({} spp)", k + 1, lights.len(), sweep.reference_spp);
-            let moved = Scene { lights: config.clone(), ..scene.clone() };
-            let reference = cache.get(&moved, &bvh, &settings)?;
+        for (k, config) in configurations.iter().enumerate() {
+            println!("{name}: reference {}/{} ({} spp)", k + 1, configurations.len(), sweep.reference_spp);
+            let moved = config.apply_to(&scene);
+            let reference = match config.occluder {
+                Some(_) => cache.get(&moved, &SceneBvh::new(&moved), &settings)?,
+                None => cache.get(&moved, &bvh, &settings)?,
+            };
             let exposure = perceptual::exposure_for(&reference.combined);
             image::write_png_tonemapped(&args.out.join("images").join(format!("{name}_light{k}_reference.png")), &reference.combined, exposure)?;
             references.push(reference);
         }
-        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, lights, positions, references, bakes: Vec::new() })
+        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, configurations, references, bakes: Vec::new() })
     }
 
     /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
@@ -222,11 +223,12 @@ impl<'s> SceneBench<'s> {
         let mut direct_renderer = Renderer::new(self.ctx, &self.scene, &RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() }).context("Vulkan renderer")?;
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
-        for k in 0..self.lights.len() {
-            renderer.set_lights(&self.lights[k])?;
+        for (k, configuration) in self.configurations.iter().enumerate() {
+            configuration.apply(&mut renderer)?;
             let frames = time_frames(&mut renderer, self.sweep.frames)?;
-            let image = frame_image(&mut renderer, &self.lights[k])?;
-            let direct = frame_image(&mut direct_renderer, &self.lights[k])?;
+            let image = frame_image(&mut renderer)?;
+            configuration.apply(&mut direct_renderer)?;
+            let direct = frame_image(&mut direct_renderer)?;
             let point_id = format!("{id}_light{k}");
             let scored = self.score(k, &image, &direct, &point_id)?;
             let accuracy = scored.as_ref().ok().copied();
@@ -237,7 +239,8 @@ impl<'s> SceneBench<'s> {
             rows.push(Row {
                 scene: self.name.clone(),
                 light: k,
-                light_position: self.positions[k].map(|p| p.to_array()),
+                light_position: configuration.light_position.map(|p| p.to_array()),
+                occluder_translation: configuration.occluder.map(|(_, t)| t.to_array()),
                 method: method.name().to_string(),
                 params: config.label.clone(),
                 params_table: config.table.clone(),
@@ -312,28 +315,65 @@ fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Resu
     }))
 }
 
-/// The scene's lights as they are, or one light moved along the sweep's path.
-fn light_configurations(scene: &Scene, entry: &SweepScene) -> Result<(Vec<Vec<Light>>, Vec<Option<Vec3>>)> {
-    let Some(path) = &entry.light_path else {
-        return Ok((vec![scene.lights.clone()], vec![None]));
-    };
-    if path.light >= scene.lights.len() {
-        bail!("{}: light_path.light {}: the scene has {} light(s)", entry.path.display(), path.light, scene.lights.len());
-    }
-    let positions = path.positions();
-    let lights = positions
-        .iter()
-        .map(|&p| {
-            let mut lights = scene.lights.clone();
-            lights[path.light].position = p;
-            lights
-        })
-        .collect();
-    Ok((lights, positions.into_iter().map(Some).collect()))
+/// One configuration of a scene: its lights, and where the moving light or occluder is.
+struct Configuration {
+    lights: Vec<Light>,
+    light_position: Option<Vec3>,
+    /// (mesh index, translation from where the scene has it).
+    occluder: Option<(usize, Vec3)>,
 }
 
-fn frame_image(renderer: &mut Renderer, lights: &[Light]) -> Result<Image> {
-    renderer.set_lights(lights)?;
+impl Configuration {
+    /// The scene as this configuration has it, for the reference.
+    fn apply_to(&self, scene: &Scene) -> Scene {
+        let mut moved = Scene { lights: self.lights.clone(), ..scene.clone() };
+        if let Some((mesh, translation)) = self.occluder {
+            for p in &mut moved.meshes[mesh].positions {
+                *p += translation;
+            }
+        }
+        moved
+    }
+
+    /// The renderer set to this configuration (the occluder first: set_lights refits the
+    /// shadow maps to it).
+    fn apply(&self, renderer: &mut Renderer) -> Result<()> {
+        if let Some((mesh, translation)) = self.occluder {
+            renderer.set_mesh_translation(mesh, translation)?;
+        }
+        renderer.set_lights(&self.lights)?;
+        Ok(())
+    }
+}
+
+/// The scene as it is, or one light or one mesh moved along the sweep's path.
+fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration>> {
+    let at_rest = || Configuration { lights: scene.lights.clone(), light_position: None, occluder: None };
+    if let Some(path) = &entry.light_path {
+        if path.light >= scene.lights.len() {
+            bail!("{}: light_path.light {}: the scene has {} light(s)", entry.path.display(), path.light, scene.lights.len());
+        }
+        return Ok(sweep::spread(&path.points, path.frames)
+            .into_iter()
+            .map(|p| {
+                let mut configuration = at_rest();
+                configuration.lights[path.light].position = p;
+                configuration.light_position = Some(p);
+                configuration
+            })
+            .collect());
+    }
+    if let Some(path) = &entry.occluder_path {
+        let Some(mesh) = scene.meshes.iter().position(|m| m.name == path.mesh) else {
+            let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+            bail!("{}: occluder_path.mesh \"{}\": no such mesh; the scene has {}", entry.path.display(), path.mesh, names.join(", "));
+        };
+        return Ok(sweep::spread(&path.points, path.frames).into_iter().map(|t| Configuration { occluder: Some((mesh, t)), ..at_rest() }).collect());
+    }
+    Ok(vec![at_rest()])
+}
+
+fn frame_image(renderer: &mut Renderer) -> Result<Image> {
     Ok(renderer.render_and_read()?.0)
 }
 

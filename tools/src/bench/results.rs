@@ -76,6 +76,8 @@ pub(crate) struct Row {
     /// The light configuration's index (0 when the scene's lights are used as they are).
     pub light: usize,
     pub light_position: Option<[f32; 3]>,
+    /// The moving occluder's translation (None without an occluder path).
+    pub occluder_translation: Option<[f32; 3]>,
     pub method: String,
     pub params: String,
     #[serde(skip)]
@@ -122,7 +124,7 @@ pub(crate) fn mark_front(rows: &mut [Row]) {
 /// The CSV's columns, in order (docs/BENCH.md describes each).
 pub(crate) fn csv_header() -> Vec<String> {
     let mut columns: Vec<String> = [
-        "scene", "light", "light_x", "light_y", "light_z", "method", "params", "status", "bake_seconds", "bake_stages", "bake_peak_memory_bytes", "artifact_bytes",
+        "scene", "light", "light_x", "light_y", "light_z", "occluder_dx", "occluder_dy", "occluder_dz", "method", "params", "status", "bake_seconds", "bake_stages", "bake_peak_memory_bytes", "artifact_bytes",
         "gpu_frame_ms", "gpu_frame_p10_ms", "gpu_frame_p90_ms", "cpu_frame_ms",
     ]
     .map(String::from)
@@ -136,6 +138,7 @@ fn csv_cells(row: &Row) -> Vec<String> {
     let number = |v: f64| format!("{v:.6}");
     let optional = |v: Option<f64>| v.map(number).unwrap_or_default();
     let position = |i: usize| row.light_position.map(|p| p[i].to_string()).unwrap_or_default();
+    let translation = |i: usize| row.occluder_translation.map(|t| t[i].to_string()).unwrap_or_default();
     let stages: Vec<String> = row.bake.stages.iter().map(|(name, s)| format!("{name}={s:.4}")).collect();
     let mut cells = vec![
         row.scene.clone(),
@@ -143,6 +146,9 @@ fn csv_cells(row: &Row) -> Vec<String> {
         position(0),
         position(1),
         position(2),
+        translation(0),
+        translation(1),
+        translation(2),
         row.method.clone(),
         row.params.clone(),
         row.status.clone(),

@@ -46,6 +46,8 @@ pub(crate) struct SweepScene {
     pub camera: Option<String>,
     /// Move one light along a path; without it the scene's lights as they are.
     pub light_path: Option<LightPath>,
+    /// Or move one mesh (an occluder) along a path of translations; the bakes stay as made.
+    pub occluder_path: Option<OccluderPath>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -56,6 +58,17 @@ pub(crate) struct LightPath {
     pub light: usize,
     /// The path's corners in metres; the light visits `frames` positions spread evenly by
     /// length along it, both ends included.
+    pub points: Vec<[f32; 3]>,
+    pub frames: u32,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct OccluderPath {
+    /// The mesh's name, as the scene names it.
+    pub mesh: String,
+    /// Translations from where the scene has the mesh, metres; `frames` of them are spread
+    /// evenly by length along the polyline, both ends included.
     pub points: Vec<[f32; 3]>,
     pub frames: u32,
 }
@@ -96,12 +109,17 @@ impl Sweep {
             bail!("a sweep needs at least one [[scenes]] and one [[methods]] entry");
         }
         for (i, scene) in self.scenes.iter().enumerate() {
-            if let Some(path) = &scene.light_path {
-                if path.points.is_empty() || !(1..=1000).contains(&path.frames) {
-                    bail!("scenes[{i}].light_path: give at least one point and 1..=1000 frames");
+            let paths = [("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))), ("occluder_path", scene.occluder_path.as_ref().map(|p| (&p.points, p.frames)))];
+            if paths.iter().all(|(_, p)| p.is_some()) {
+                bail!("scenes[{i}]: give a light_path or an occluder_path, not both");
+            }
+            for (key, path) in paths {
+                let Some((points, frames)) = path else { continue };
+                if points.is_empty() || !(1..=1000).contains(&frames) {
+                    bail!("scenes[{i}].{key}: give at least one point and 1..=1000 frames");
                 }
-                if path.points.iter().flatten().any(|v| !v.is_finite()) {
-                    bail!("scenes[{i}].light_path.points: every coordinate must be a finite number (metres)");
+                if points.iter().flatten().any(|v| !v.is_finite()) {
+                    bail!("scenes[{i}].{key}.points: every coordinate must be a finite number (metres)");
                 }
             }
         }
@@ -109,25 +127,24 @@ impl Sweep {
     }
 }
 
-impl LightPath {
-    /// The light's positions, `frames` of them evenly spread by length along the polyline.
-    pub fn positions(&self) -> Vec<Vec3> {
-        let corners: Vec<Vec3> = self.points.iter().map(|p| Vec3::from_array(*p)).collect();
-        let lengths: Vec<f32> = corners.windows(2).map(|w| w[0].distance(w[1])).collect();
-        let total: f32 = lengths.iter().sum();
-        (0..self.frames)
-            .map(|k| {
-                let mut along = if self.frames > 1 { total * k as f32 / (self.frames - 1) as f32 } else { 0.0 };
-                for (i, &length) in lengths.iter().enumerate() {
-                    if along <= length && length > 0.0 {
-                        return corners[i].lerp(corners[i + 1], along / length);
-                    }
-                    along -= length;
+/// `frames` points evenly spread by length along the polyline through `points`, both ends
+/// included.
+pub(crate) fn spread(points: &[[f32; 3]], frames: u32) -> Vec<Vec3> {
+    let corners: Vec<Vec3> = points.iter().map(|p| Vec3::from_array(*p)).collect();
+    let lengths: Vec<f32> = corners.windows(2).map(|w| w[0].distance(w[1])).collect();
+    let total: f32 = lengths.iter().sum();
+    (0..frames)
+        .map(|k| {
+            let mut along = if frames > 1 { total * k as f32 / (frames - 1) as f32 } else { 0.0 };
+            for (i, &length) in lengths.iter().enumerate() {
+                if along <= length && length > 0.0 {
+                    return corners[i].lerp(corners[i + 1], along / length);
                 }
-                *corners.last().unwrap()
-            })
-            .collect()
-    }
+                along -= length;
+            }
+            *corners.last().unwrap()
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -136,8 +153,7 @@ mod tests {
 
     #[test]
     fn a_path_is_spread_evenly_by_length_with_both_ends() {
-        let path = LightPath { light: 0, points: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 3.0, 0.0]], frames: 5 };
-        let p = path.positions();
+        let p = spread(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 3.0, 0.0]], 5);
         assert_eq!(p.len(), 5);
         for (got, want) in p.iter().zip([Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(1.0, 3.0, 0.0)]) {
             assert!(got.distance(want) < 1e-5, "{got} != {want}");
@@ -153,6 +169,7 @@ mod tests {
             ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
             ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
         ] {
             let path = dir.join("sweep.toml");
             std::fs::write(&path, text).unwrap();
