@@ -349,8 +349,9 @@ fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
         _ => Renderer::with_lightmap(ctx, job.scene, &job.settings, job.lightmap.as_ref()),
     }
     .context("Vulkan renderer")?;
-    // The first frames warm caches and pipelines; the rest are timed.
-    for _ in 0..job.frames.min(3) {
+    if job.frames > 1 {
+        warm_up(&mut renderer, WARM_UP_SECONDS)?;
+    } else {
         renderer.render()?;
     }
     let frames = (0..job.frames).map(|_| renderer.render()).collect::<Result<Vec<_>, _>>()?;
@@ -387,6 +388,22 @@ impl Lit {
 
 fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
     rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// How long frames run before any is timed, unless a sweep says otherwise: long enough for
+/// a real GPU's clocks to settle at the frame's load (docs/BENCHMARKS.md: on an H100 a point
+/// timed after 3 frames alone ran at clocks its predecessor left, up to 2.7 times slower).
+pub(crate) const WARM_UP_SECONDS: f64 = 0.5;
+
+/// Renders untimed frames, at least three (caches, pipelines) and for at least `seconds`.
+pub(crate) fn warm_up(renderer: &mut Renderer, seconds: f64) -> Result<()> {
+    let start = std::time::Instant::now();
+    let mut frames = 0;
+    while frames < 3 || start.elapsed().as_secs_f64() < seconds {
+        renderer.render()?;
+        frames += 1;
+    }
+    Ok(())
 }
 
 /// Timed frames: at least one, at most a number that cannot exhaust memory.

@@ -58,9 +58,12 @@ fn range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     if !lo.is_finite() {
         return 0.0..1.0;
     }
-    let margin = ((hi - lo) * 0.08).max(hi.abs().max(1e-6) * 0.05);
-    // Costs and errors are >= 0: their axes start at 0, so that ratios read true.
-    let start = if lo >= 0.0 { 0.0 } else { lo - margin };
+    let span = hi - lo;
+    let margin = if span > hi.abs() * 1e-3 { span * 0.08 } else { hi.abs().max(1e-6) * 0.05 };
+    // Costs and errors are >= 0: their axes start at 0, so that ratios read true, unless every
+    // value lies in the upper half, where 0 would squeeze the points into a sliver (a real
+    // GPU's frame times differ by a few percent between methods).
+    let start = if lo >= 0.0 && lo < hi * 0.5 { 0.0 } else { lo - margin };
     start..hi + margin
 }
 
@@ -75,7 +78,7 @@ where
     root.fill(&WHITE).map_err(fail)?;
     let all = || chart.series.iter().flat_map(|s| s.points.iter().copied());
     // Line charts keep their legend at the top, above room made for it; scatter charts put it
-    // in the lower left, which a cost-error chart starting at 0 leaves empty.
+    // in the lower left, cheap and right, where a point would beat every other.
     let legend_at = if chart.lines { SeriesLabelPosition::UpperLeft } else { SeriesLabelPosition::LowerLeft };
     let mut y_range = range(all().map(|p| p.1));
     if chart.lines {
@@ -109,4 +112,21 @@ where
     plot.configure_series_labels().label_font((FONT, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(legend_at).draw().map_err(fail)?;
     root.present().map_err(fail)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_start_at_zero_unless_the_values_would_be_a_sliver() {
+        let spread = range([0.1, 0.4, 1.0].into_iter());
+        assert_eq!(spread.start, 0.0);
+        assert!(spread.end > 1.0 && spread.end < 1.1, "{spread:?}");
+        let close = range([1.80, 1.85, 1.91].into_iter());
+        assert!(close.start > 1.78 && close.start < 1.80 && close.end > 1.91 && close.end < 1.93, "{close:?}");
+        let same = range([2.0, 2.0].into_iter());
+        assert!(same.start < 2.0 && same.end > 2.0, "{same:?}");
+        assert_eq!(range([f64::NAN].into_iter()), 0.0..1.0);
+    }
 }

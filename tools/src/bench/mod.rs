@@ -225,7 +225,7 @@ impl<'s> SceneBench<'s> {
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
             configuration.apply(&mut renderer)?;
-            let frames = time_frames(&mut renderer, self.sweep.frames)?;
+            let frames = time_frames(&mut renderer, self.sweep.frames, self.sweep.warmup_seconds)?;
             let image = frame_image(&mut renderer)?;
             configuration.apply(&mut direct_renderer)?;
             let direct = frame_image(&mut direct_renderer)?;
@@ -377,12 +377,10 @@ fn frame_image(renderer: &mut Renderer) -> Result<Image> {
     Ok(renderer.render_and_read()?.0)
 }
 
-/// Three warm-up frames, then `frames` timed ones: GPU time per pass from timestamps and the
-/// CPU's wall time of each `render` call (record, submit, wait for its fence).
-fn time_frames(renderer: &mut Renderer, frames: u32) -> Result<FrameCost> {
-    for _ in 0..3 {
-        renderer.render()?;
-    }
+/// Warm-up frames (crate::warm_up), then `frames` timed ones: GPU time per pass from
+/// timestamps and the CPU's wall time of each `render` call (record, submit, wait for its fence).
+fn time_frames(renderer: &mut Renderer, frames: u32, warm_up_seconds: f64) -> Result<FrameCost> {
+    crate::warm_up(renderer, warm_up_seconds)?;
     let mut timings = Vec::new();
     let mut cpu_ms = Vec::new();
     for _ in 0..frames {

@@ -203,8 +203,8 @@ fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recomm
     let _ = writeln!(r, "Device: {}. Machine: {}. relume {}.", outcome.device, machine(), env!("CARGO_PKG_VERSION"));
     let _ = writeln!(
         r,
-        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point after 3 warm-up frames; {:.1} s in all.\n",
-        sweep.width, sweep.height, sweep.reference_spp, outcome.references_traced, outcome.references_found, sweep.frames, outcome.seconds
+        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point after {} s of warm-up frames (3 at least); {:.1} s in all.\n",
+        sweep.width, sweep.height, sweep.reference_spp, outcome.references_traced, outcome.references_found, sweep.frames, sweep.warmup_seconds, outcome.seconds
     );
     if !outcome.skipped.is_empty() {
         let _ = writeln!(r, "**Skipped by --time-limit:** {}.\n", outcome.skipped.join("; "));

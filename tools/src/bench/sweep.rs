@@ -18,9 +18,12 @@ pub(crate) struct Sweep {
     /// Samples per pixel of the reference path tracer.
     #[serde(default = "default_spp")]
     pub reference_spp: u32,
-    /// Timed frames per point, after three warm-up frames.
+    /// Timed frames per point.
     #[serde(default = "default_frames")]
     pub frames: u32,
+    /// Untimed frames run for at least this long before a point's timed ones (at least 3).
+    #[serde(default = "default_warmup")]
+    pub warmup_seconds: f64,
     pub scenes: Vec<SweepScene>,
     pub methods: Vec<SweepMethod>,
 }
@@ -35,6 +38,10 @@ fn default_spp() -> u32 {
 
 fn default_frames() -> u32 {
     20
+}
+
+fn default_warmup() -> f64 {
+    crate::WARM_UP_SECONDS
 }
 
 #[derive(Deserialize, Debug)]
@@ -105,6 +112,9 @@ impl Sweep {
         if !(1..=10_000).contains(&self.frames) {
             bail!("frames {}: time 1..=10000 frames per point", self.frames);
         }
+        if !(0.0..=600.0).contains(&self.warmup_seconds) {
+            bail!("warmup_seconds {}: warm up for 0 to 600 seconds", self.warmup_seconds);
+        }
         if self.scenes.is_empty() || self.methods.is_empty() {
             bail!("a sweep needs at least one [[scenes]] and one [[methods]] entry");
         }
@@ -167,6 +177,7 @@ mod tests {
         for (text, expected) in [
             ("name = 'x'\nscenes = []\nmethods = []", "at least one"),
             ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
+            ("name = 'x'\nwarmup_seconds = -1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "warmup_seconds"),
             ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
