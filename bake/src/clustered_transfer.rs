@@ -88,10 +88,10 @@ impl ClusteredTransfer {
         let d = self.basis_count as usize;
         let mut sums = vec![Vec3::ZERO; self.cluster_count() * (1 + d)];
         for (c, range) in self.cluster_starts.windows(2).enumerate() {
-            for e in range[0] as usize..range[1] as usize {
-                sums[c * (1 + d)] += irradiance[e];
+            for (e, &i_e) in irradiance.iter().enumerate().take(range[1] as usize).skip(range[0] as usize) {
+                sums[c * (1 + d)] += i_e;
                 for k in 0..d {
-                    sums[c * (1 + d) + 1 + k] += irradiance[e] * self.weights[e * d + k];
+                    sums[c * (1 + d) + 1 + k] += i_e * self.weights[e * d + k];
                 }
             }
         }

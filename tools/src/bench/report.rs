@@ -107,13 +107,16 @@ fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>
     (series, front)
 }
 
+/// A cost axis: (file-name part, axis label, the cost of a configuration).
+type ChartCost<'f> = (&'static str, &'static str, &'f dyn Fn(&Summary) -> f64);
+
 /// The scene's charts; returns (file stem, caption) of each.
 fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<Vec<(String, String)>> {
     if of_scene.is_empty() {
         return Ok(Vec::new());
     }
     let mut written = Vec::new();
-    let costs: [(&str, &str, &dyn Fn(&Summary) -> f64); 3] = [
+    let costs: [ChartCost; 3] = [
         ("frame_time", "GPU frame time, ms (median)", &|s| s.gpu_ms),
         ("bake_time", "bake time, s", &|s| s.first().bake.seconds),
         ("memory", "bake artifact, MiB", &|s| s.artifact_mib()),
