@@ -392,7 +392,7 @@ fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
 
 /// How long frames run before any is timed, unless a sweep says otherwise: long enough for
 /// a real GPU's clocks to settle at the frame's load (docs/BENCHMARKS.md: on an H100 a point
-/// timed after 3 frames alone ran at clocks its predecessor left, up to 2.7 times slower).
+/// timed after 3 frames alone ran at clocks its predecessor left, up to 4.1 times slower).
 pub(crate) const WARM_UP_SECONDS: f64 = 0.5;
 
 /// Renders untimed frames, at least three (caches, pipelines) and for at least `seconds`.

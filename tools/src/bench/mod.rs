@@ -77,6 +77,8 @@ pub(crate) struct Outcome {
     references_traced: usize,
     references_found: usize,
     seconds: f64,
+    /// Vulkan validation messages (with --validation): any fails the bench, after the outputs.
+    validation_messages: Vec<String>,
 }
 
 pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
@@ -88,12 +90,20 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
     }
     let sweep = Sweep::read(&args.sweep)?;
     let configs = configs(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
+    check_scenes(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
     std::fs::create_dir_all(args.out.join("images")).with_context(|| format!("{}: cannot create the report folder", args.out.display()))?;
     let outcome = run_sweep(sweep, &configs, args)?;
     let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();
     report::write_all(&args.out, &outcome, args.budget)?;
+    if let Some(first) = outcome.validation_messages.first() {
+        bail!("{} Vulkan validation message(s), first: {first}", outcome.validation_messages.len());
+    }
+    let skipped = match outcome.skipped.len() {
+        0 => String::new(),
+        n => format!("; {n} configuration(s) skipped by --time-limit"),
+    };
     println!(
-        "{} points in {:.1} s; references: {} traced, {} from the cache; wrote {}",
+        "{} points in {:.1} s; references: {} traced, {} from the cache{skipped}; wrote {}",
         outcome.rows.len(),
         outcome.seconds,
         outcome.references_traced,
@@ -125,6 +135,19 @@ fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
     Ok(configs)
 }
 
+/// Loads every scene of the sweep and lays out its light configurations, so that a bad scene
+/// or path is refused before any work starts.
+fn check_scenes(sweep: &Sweep) -> Result<()> {
+    for entry in &sweep.scenes {
+        configurations(&load_scene(&scene_args(sweep, entry))?, entry)?;
+    }
+    Ok(())
+}
+
+fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
+    SceneArgs { scene: entry.path.clone(), camera: entry.camera.clone(), width: sweep.width, height: sweep.height }
+}
+
 fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outcome> {
     let start = Instant::now();
     let ctx = Context::headless(&ContextOptions { validation: args.validation, device: args.device.clone() }).context("Vulkan")?;
@@ -133,27 +156,36 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
     let mut cache = ReferenceCache::new(&args.cache)?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
+    let out_of_time = || args.time_limit.is_some_and(|limit| start.elapsed().as_secs_f64() > limit);
     for entry in &sweep.scenes {
+        if out_of_time() {
+            skipped.extend(configs.iter().map(|config| format!("{} {} [{}]", entry.name(), config.method.name(), config.label)));
+            continue;
+        }
         let mut bench = SceneBench::new(&sweep, entry, &ctx, &mut cache, args)?;
         for config in configs {
-            if args.time_limit.is_some_and(|limit| start.elapsed().as_secs_f64() > limit) {
+            if out_of_time() {
                 skipped.push(format!("{} {} [{}]", bench.name, config.method.name(), config.label));
                 continue;
             }
-            rows.extend(bench.run(config, &device)?);
+            // A configuration that cannot be baked or rendered fails its points; the sweep goes on.
+            match bench.run(config, &device) {
+                Ok(scored) => rows.extend(scored),
+                Err(why) => {
+                    eprintln!("{}: {} [{}] failed: {why:#}", bench.name, config.method.name(), config.label);
+                    rows.extend(bench.failed(config, &format!("{why:#}")));
+                }
+            }
         }
     }
     drop(ctx);
-    let messages = log.lock().map(|m| m.clone()).unwrap_or_default();
-    if !messages.is_empty() {
-        bail!("{} Vulkan validation message(s), first: {}", messages.len(), messages[0]);
-    }
+    let validation_messages = log.lock().map(|m| m.clone()).unwrap_or_default();
     for row in &mut rows {
         row.device = device.clone();
     }
     results::mark_front(&mut rows);
     let (references_traced, references_found) = (cache.traced, cache.found);
-    Ok(Outcome { sweep, device, rows, skipped, references_traced, references_found, seconds: start.elapsed().as_secs_f64() })
+    Ok(Outcome { sweep, device, rows, skipped, references_traced, references_found, seconds: start.elapsed().as_secs_f64(), validation_messages })
 }
 
 /// One scene of the sweep: its light configurations, their references and direct-only frames.
@@ -174,9 +206,8 @@ struct SceneBench<'s> {
 
 impl<'s> SceneBench<'s> {
     fn new(sweep: &'s Sweep, entry: &'s SweepScene, ctx: &'s Context, cache: &mut ReferenceCache, args: &'s BenchArgs) -> Result<SceneBench<'s>> {
-        let scene_args = SceneArgs { scene: entry.path.clone(), camera: entry.camera.clone(), width: sweep.width, height: sweep.height };
-        let scene = load_scene(&scene_args)?;
-        let name = entry.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        let scene = load_scene(&scene_args(sweep, entry))?;
+        let name = entry.name();
         let configurations = configurations(&scene, entry)?;
         let bvh = SceneBvh::new(&scene);
         let settings = ReferenceSettings {
@@ -207,7 +238,7 @@ impl<'s> SceneBench<'s> {
     fn run(&mut self, config: &Config, device: &str) -> Result<Vec<Row>> {
         let method = config.method;
         println!("{}: {} [{}]", self.name, method.name(), config.label);
-        let id = format!("{}_{}_{}", self.name, method.name(), sanitize(&config.label));
+        let id = self.config_id(config);
         let (bake, lit) = match method.bake_method() {
             Some(bake_method) => {
                 let dir = self.bake(bake_method, &config.bake_flags, &id)?;
@@ -229,7 +260,7 @@ impl<'s> SceneBench<'s> {
             let image = frame_image(&mut renderer)?;
             configuration.apply(&mut direct_renderer)?;
             let direct = frame_image(&mut direct_renderer)?;
-            let point_id = format!("{id}_light{k}");
+            let point_id = self.row(config, k).image_id;
             let scored = self.score(k, &image, &direct, &point_id)?;
             let accuracy = scored.as_ref().ok().copied();
             let flicker = match (&previous, &accuracy) {
@@ -237,13 +268,6 @@ impl<'s> SceneBench<'s> {
                 _ => None,
             };
             rows.push(Row {
-                scene: self.name.clone(),
-                light: k,
-                light_position: configuration.light_position.map(|p| p.to_array()),
-                occluder_translation: configuration.occluder.map(|(_, t)| t.to_array()),
-                method: method.name().to_string(),
-                params: config.label.clone(),
-                params_table: config.table.clone(),
                 status: match scored {
                     Ok(_) => "ok".into(),
                     Err(why) => format!("failed: {why}"),
@@ -253,13 +277,46 @@ impl<'s> SceneBench<'s> {
                 accuracy,
                 flicker,
                 non_finite_pixels: count_non_finite(&image),
-                on_front: false,
                 device: device.to_string(),
-                image_id: point_id,
+                ..self.row(config, k)
             });
-            previous = Some(image);
+            // Flicker compares scored images only: after a failed point the next has none.
+            previous = accuracy.is_some().then_some(image);
         }
         Ok(rows)
+    }
+
+    /// The stem of the configuration's files: its bake folder, its points' pictures.
+    fn config_id(&self, config: &Config) -> String {
+        format!("{}_{}_{}", self.name, config.method.name(), sanitize(&config.label))
+    }
+
+    /// A row of `config` at light configuration `k` with nothing measured: failed, costs unknown.
+    fn row(&self, config: &Config, k: usize) -> Row {
+        let configuration = &self.configurations[k];
+        Row {
+            scene: self.name.clone(),
+            light: k,
+            light_position: configuration.light_position.map(|p| p.to_array()),
+            occluder_translation: configuration.occluder.map(|(_, t)| t.to_array()),
+            method: config.method.name().to_string(),
+            params: config.label.clone(),
+            params_table: config.table.clone(),
+            status: "failed".into(),
+            bake: BakeCost::default(),
+            frame: FrameCost::unknown(),
+            accuracy: None,
+            flicker: None,
+            non_finite_pixels: 0,
+            on_front: false,
+            device: String::new(),
+            image_id: format!("{}_light{k}", self.config_id(config)),
+        }
+    }
+
+    /// The rows of a configuration that could not be baked or rendered: every point failed, `why`.
+    fn failed(&self, config: &Config, why: &str) -> Vec<Row> {
+        (0..self.configurations.len()).map(|k| Row { status: format!("failed: {why}"), ..self.row(config, k) }).collect()
     }
 
     /// The folder of the bake `relume bake --method bake_method flags` of this scene: made

@@ -61,6 +61,43 @@ fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
         .collect()
 }
 
+/// Per summary: on the Pareto front of (GPU frame time, mean NRMSE) among its scene's
+/// configurations scored at every light configuration.
+fn fronts(summaries: &[Summary]) -> Vec<bool> {
+    summaries
+        .chunk_by(|a, b| a.first().scene == b.first().scene)
+        .flat_map(|of_scene| pareto::front(&of_scene.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect::<Vec<_>>()))
+        .collect()
+}
+
+/// summary.csv: the report's summary table, one row per method configuration (docs/BENCH.md).
+fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
+    let header = "scene,method,params,points,failed,mean_nrmse,mean_flip,mean_indirect_nrmse,max_flicker,gpu_frame_ms,cpu_frame_ms,bake_seconds,bake_peak_memory_bytes,artifact_bytes,on_front";
+    let number = |v: f64| if v.is_finite() { format!("{v:.6}") } else { String::new() };
+    let lines = summaries.iter().zip(fronts).map(|(s, on)| {
+        let row = s.first();
+        let cells = [
+            row.scene.clone(),
+            row.method.clone(),
+            row.params.clone(),
+            s.rows.len().to_string(),
+            s.failed.to_string(),
+            number(s.mean_nrmse),
+            number(s.mean_flip),
+            number(s.mean_indirect_nrmse),
+            s.max_flicker.map(number).unwrap_or_default(),
+            number(s.gpu_ms),
+            number(s.cpu_ms),
+            number(row.bake.seconds),
+            row.bake.peak_memory_bytes.to_string(),
+            row.bake.artifact_bytes.to_string(),
+            on.to_string(),
+        ];
+        cells.iter().map(|c| results::quote(c)).collect::<Vec<_>>().join(",")
+    });
+    std::iter::once(header.to_string()).chain(lines).map(|line| line + "\n").collect()
+}
+
 pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> Result<()> {
     let save = |name: &str, text: &str| write_atomically(&out.join(name), |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()));
     save("results.csv", &results::csv(&outcome.rows))?;
@@ -68,6 +105,8 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
         "sweep": outcome.sweep.name,
         "device": outcome.device,
         "relume_version": env!("CARGO_PKG_VERSION"),
+        "machine": machine(),
+        "warmup_seconds": outcome.sweep.warmup_seconds,
         "seconds": outcome.seconds,
         "references": { "traced": outcome.references_traced, "from_cache": outcome.references_found },
         "skipped": outcome.skipped,
@@ -75,6 +114,8 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     });
     save("results.json", &serde_json::to_string_pretty(&json)?)?;
     let summaries = summaries(&outcome.rows);
+    let fronts = fronts(&summaries);
+    save("summary.csv", &summary_csv(&summaries, &fronts))?;
     let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
     scenes.dedup();
     let mut charts_md = String::new();
@@ -88,7 +129,7 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     if let Some(recommendations) = &recommendations {
         save("recommended.toml", &recommended_toml(recommendations))?;
     }
-    save("report.md", &report_text(outcome, &summaries, &charts_md, recommendations.as_deref(), budget))?;
+    save("report.md", &report_text(outcome, &summaries, &fronts, &charts_md, recommendations.as_deref(), budget))?;
     Ok(())
 }
 
@@ -137,37 +178,43 @@ fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<
             })
             .collect();
         let stem = format!("{scene}_error_along_path");
-        let title = format!("{scene}: error along the light path");
-        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label: "light configuration", y_label: "NRMSE vs reference", series, lines: true, front: Vec::new() })?;
+        let title = format!("{scene}: error along the path");
+        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label: "position along the light or occluder path", y_label: "NRMSE vs reference", series, lines: true, front: Vec::new() })?;
         written.push((stem, title));
     }
     Ok(written)
 }
 
 /// The `--budget` choice for one scene and method.
-pub(crate) struct Recommendation {
-    scene: String,
-    method: String,
-    /// (params label, params table, mean NRMSE, artifact MiB, GPU ms) in cost order.
-    ladder: Vec<(String, toml::Table, f64, f64, f64)>,
+pub(crate) struct Recommendation<'s> {
+    scene: &'s str,
+    method: &'s str,
+    /// The method's configurations in cost order.
+    ladder: Vec<&'s Summary<'s>>,
     chosen: Option<usize>,
 }
 
-/// Per scene and method: the configurations by cost (artifact size, then GPU frame time),
-/// and the first whose mean NRMSE is within the budget.
-fn recommend(summaries: &[Summary], budget: f64) -> Vec<Recommendation> {
+/// The budget's cost order: artifact size (to 3 significant digits, so that bytes of
+/// compression noise do not rank configurations), then bake time, then GPU frame time.
+fn cost_order(a: &Summary, b: &Summary) -> std::cmp::Ordering {
+    let size = |s: &Summary| format!("{:.2e}", s.first().bake.artifact_bytes as f64).parse::<f64>().unwrap_or(f64::NAN);
+    size(a).total_cmp(&size(b)).then(a.first().bake.seconds.total_cmp(&b.first().bake.seconds)).then(a.gpu_ms.total_cmp(&b.gpu_ms))
+}
+
+/// Per scene and method: the configurations in cost order, and the first whose mean NRMSE is
+/// within the budget.
+fn recommend<'s>(summaries: &'s [Summary<'s>], budget: f64) -> Vec<Recommendation<'s>> {
     let mut recommendations: Vec<Recommendation> = Vec::new();
     for s in summaries.iter().filter(|s| s.ok()) {
         let row = s.first();
-        let step = (row.params.clone(), row.params_table.clone(), s.mean_nrmse, s.artifact_mib(), s.gpu_ms);
         match recommendations.iter_mut().find(|r| r.scene == row.scene && r.method == row.method) {
-            Some(r) => r.ladder.push(step),
-            None => recommendations.push(Recommendation { scene: row.scene.clone(), method: row.method.clone(), ladder: vec![step], chosen: None }),
+            Some(r) => r.ladder.push(s),
+            None => recommendations.push(Recommendation { scene: &row.scene, method: &row.method, ladder: vec![s], chosen: None }),
         }
     }
     for r in &mut recommendations {
-        r.ladder.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.4.total_cmp(&b.4)));
-        r.chosen = r.ladder.iter().position(|step| step.2 <= budget);
+        r.ladder.sort_by(|a, b| cost_order(a, b));
+        r.chosen = r.ladder.iter().position(|s| s.mean_nrmse <= budget);
     }
     recommendations
 }
@@ -176,15 +223,16 @@ fn recommended_toml(recommendations: &[Recommendation]) -> String {
     let mut root = toml::Table::new();
     for r in recommendations {
         let Some(chosen) = r.chosen else { continue };
-        let (_, table, nrmse, mib, ms) = &r.ladder[chosen];
-        let scene = root.entry(r.scene.clone()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let s = r.ladder[chosen];
+        let scene = root.entry(r.scene.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
         let mut entry = toml::Table::new();
-        entry.insert("params".into(), toml::Value::Table(table.clone()));
-        entry.insert("mean_nrmse".into(), toml::Value::Float(*nrmse));
-        entry.insert("artifact_mib".into(), toml::Value::Float(*mib));
-        entry.insert("gpu_frame_ms".into(), toml::Value::Float(*ms));
+        entry.insert("params".into(), toml::Value::Table(s.first().params_table.clone()));
+        entry.insert("mean_nrmse".into(), toml::Value::Float(s.mean_nrmse));
+        entry.insert("artifact_mib".into(), toml::Value::Float(s.artifact_mib()));
+        entry.insert("bake_seconds".into(), toml::Value::Float(s.first().bake.seconds));
+        entry.insert("gpu_frame_ms".into(), toml::Value::Float(s.gpu_ms));
         if let toml::Value::Table(scene) = scene {
-            scene.insert(r.method.clone(), toml::Value::Table(entry));
+            scene.insert(r.method.to_string(), toml::Value::Table(entry));
         }
     }
     format!("# relume bench --budget: per scene and method, the cheapest parameter set within the budget.\n{}", toml::to_string(&root).unwrap_or_default())
@@ -199,7 +247,7 @@ fn machine() -> String {
     format!("{cpu}, {cores} core(s)")
 }
 
-fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recommendations: Option<&[Recommendation]>, budget: Option<f64>) -> String {
+fn report_text(outcome: &Outcome, summaries: &[Summary], fronts: &[bool], charts_md: &str, recommendations: Option<&[Recommendation]>, budget: Option<f64>) -> String {
     let sweep = &outcome.sweep;
     let mut r = String::new();
     let _ = writeln!(r, "# relume bench: {}\n", sweep.name);
@@ -224,37 +272,36 @@ fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recomm
     let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect`; flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene.\n");
     let _ = writeln!(r, "| scene | method | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
     let _ = writeln!(r, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for scene_summaries in summaries.chunk_by(|a, b| a.first().scene == b.first().scene) {
-        let points: Vec<(f64, f64)> = scene_summaries.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect();
-        for (s, on) in scene_summaries.iter().zip(pareto::front(&points)) {
-            let row = s.first();
-            let _ = writeln!(
-                r,
-                "| {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
-                row.scene,
-                row.method,
-                row.params,
-                s.mean_nrmse,
-                s.mean_flip,
-                s.mean_indirect_nrmse,
-                s.max_flicker.map_or("-".into(), |f| format!("{f:.4}")),
-                s.gpu_ms,
-                s.cpu_ms,
-                row.bake.seconds,
-                row.bake.peak_memory_bytes as f64 / (1 << 20) as f64,
-                s.artifact_mib(),
-                if on { "yes" } else { "" }
-            );
-        }
+    for (s, &on) in summaries.iter().zip(fronts) {
+        let row = s.first();
+        // Means over the points that were scored: say so when some were not.
+        let failed = if s.failed > 0 { format!(" ({} of {} failed)", s.failed, s.rows.len()) } else { String::new() };
+        let _ = writeln!(
+            r,
+            "| {} | {} | {} | {:.4}{failed} | {:.4} | {:.4} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
+            row.scene,
+            row.method,
+            row.params,
+            s.mean_nrmse,
+            s.mean_flip,
+            s.mean_indirect_nrmse,
+            s.max_flicker.map_or("-".into(), |f| format!("{f:.4}")),
+            s.gpu_ms,
+            s.cpu_ms,
+            row.bake.seconds,
+            row.bake.peak_memory_bytes as f64 / (1 << 20) as f64,
+            s.artifact_mib(),
+            if on { "yes" } else { "" }
+        );
     }
     let _ = writeln!(r, "\n## Charts\n\n{charts_md}");
     if let (Some(recommendations), Some(budget)) = (recommendations, budget) {
         let _ = writeln!(r, "## Within the budget: NRMSE <= {budget}\n");
-        let _ = writeln!(r, "Per scene and method, the configurations in order of cost (artifact size, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
+        let _ = writeln!(r, "Per scene and method, the configurations in order of cost (artifact size to 3 digits, then bake time, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
         for rec in recommendations {
             let describe = |i: usize| {
-                let (label, _, nrmse, mib, ms) = &rec.ladder[i];
-                format!("[{label}] NRMSE {nrmse:.4}, {mib:.2} MiB, {ms:.2} ms")
+                let s = rec.ladder[i];
+                format!("[{}] NRMSE {:.4}, {:.2} MiB, bake {:.2} s, {:.2} ms", s.first().params, s.mean_nrmse, s.artifact_mib(), s.first().bake.seconds, s.gpu_ms)
             };
             match rec.chosen {
                 Some(i) => {
@@ -263,7 +310,7 @@ fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recomm
                     let _ = writeln!(r, "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}", rec.scene, rec.method, describe(i));
                 }
                 None => {
-                    let best = (0..rec.ladder.len()).min_by(|&a, &b| rec.ladder[a].2.total_cmp(&rec.ladder[b].2)).map(describe).unwrap_or_default();
+                    let best = (0..rec.ladder.len()).min_by(|&a, &b| rec.ladder[a].mean_nrmse.total_cmp(&rec.ladder[b].mean_nrmse)).map(describe).unwrap_or_default();
                     let _ = writeln!(r, "- {} {}: no configuration within the budget (the best: {best})", rec.scene, rec.method);
                 }
             }
@@ -286,4 +333,52 @@ fn report_text(outcome: &Outcome, summaries: &[Summary], charts_md: &str, recomm
         );
     }
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::results::{Accuracy, BakeCost, FrameCost};
+
+    /// A point of method "m" with parameter set `params` at light `light`; `nrmse` None: failed.
+    fn point(params: &str, light: usize, nrmse: Option<f64>) -> Row {
+        let accuracy = nrmse.map(|nrmse| Accuracy { rmse: nrmse, nrmse, flip: nrmse, indirect_rmse: nrmse, indirect_nrmse: nrmse, indirect_flip: nrmse });
+        Row {
+            scene: "s".into(),
+            light,
+            light_position: None,
+            occluder_translation: None,
+            method: "m".into(),
+            params: params.into(),
+            params_table: toml::Table::new(),
+            status: if nrmse.is_some() { "ok".into() } else { "failed: 3 NaN or infinite pixel(s)".into() },
+            bake: BakeCost::default(),
+            frame: FrameCost { gpu_ms: 1.0, gpu_p10_ms: 1.0, gpu_p90_ms: 1.0, cpu_ms: 1.0, passes_ms: Vec::new() },
+            accuracy,
+            flicker: None,
+            non_finite_pixels: if nrmse.is_some() { 0 } else { 3 },
+            on_front: false,
+            device: "d".into(),
+            image_id: format!("{params}{light}"),
+        }
+    }
+
+    #[test]
+    fn a_failed_point_is_reported_and_kept_out_of_fronts_and_budgets() {
+        // "a" is the better configuration where it was scored, but one of its points failed.
+        let rows = [point("a", 0, Some(0.1)), point("a", 1, None), point("b", 0, Some(0.3)), point("b", 1, Some(0.3))];
+        let summaries = summaries(&rows);
+        assert_eq!((summaries[0].failed, summaries[0].ok(), summaries[0].mean_nrmse), (1, false, 0.1));
+        assert_eq!(fronts(&summaries), [false, true]);
+        let recommendations = recommend(&summaries, 0.5);
+        assert_eq!(recommendations[0].ladder.len(), 1, "a configuration with a failed point is never recommended");
+        assert_eq!(recommendations[0].ladder[0].first().params, "b");
+
+        let csv = results::csv(&rows);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let failed: Vec<&str> = csv.lines().find(|l| l.contains("failed: 3 NaN")).expect("the failed point has its row").split(',').collect();
+        let cell = |name: &str| failed[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!((cell("nrmse"), cell("flip"), cell("non_finite_pixels")), ("", "", "3"), "error cells empty, the NaN count kept");
+        assert!(summary_csv(&summaries, &fronts(&summaries)).contains("\ns,m,a,2,1,0.100000,"));
+    }
 }

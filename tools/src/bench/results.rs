@@ -47,7 +47,7 @@ impl BakeCost {
 }
 
 /// What a frame cost over the timed frames.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub(crate) struct FrameCost {
     /// Median GPU time per pass (renderer::PASS_NAMES order); empty without timestamps.
     pub passes_ms: Vec<(String, f64)>,
@@ -57,6 +57,13 @@ pub(crate) struct FrameCost {
     pub gpu_p90_ms: f64,
     /// Median CPU wall time of one `render` call: record, submit, wait for the frame's fence.
     pub cpu_ms: f64,
+}
+
+impl FrameCost {
+    /// The cost of a configuration that never rendered: NaN (empty in the CSV, null in JSON).
+    pub fn unknown() -> FrameCost {
+        FrameCost { passes_ms: Vec::new(), gpu_ms: f64::NAN, gpu_p10_ms: f64::NAN, gpu_p90_ms: f64::NAN, cpu_ms: f64::NAN }
+    }
 }
 
 /// Errors against the reference path tracer (NRMSE as docs/METRICS.md defines it; FLIP mean).
@@ -135,7 +142,8 @@ pub(crate) fn csv_header() -> Vec<String> {
 }
 
 fn csv_cells(row: &Row) -> Vec<String> {
-    let number = |v: f64| format!("{v:.6}");
+    // Unknown figures (a failed configuration's costs) are empty cells, never "NaN".
+    let number = |v: f64| if v.is_finite() { format!("{v:.6}") } else { String::new() };
     let optional = |v: Option<f64>| v.map(number).unwrap_or_default();
     let position = |i: usize| row.light_position.map(|p| p[i].to_string()).unwrap_or_default();
     let translation = |i: usize| row.occluder_translation.map(|t| t[i].to_string()).unwrap_or_default();
@@ -169,7 +177,7 @@ fn csv_cells(row: &Row) -> Vec<String> {
 }
 
 /// A CSV field, quoted when it holds a comma, a quote or a line break.
-fn quote(cell: &str) -> String {
+pub(crate) fn quote(cell: &str) -> String {
     if cell.contains([',', '"', '\n']) {
         format!("\"{}\"", cell.replace('"', "\"\""))
     } else {

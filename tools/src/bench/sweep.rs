@@ -49,6 +49,8 @@ fn default_warmup() -> f64 {
 pub(crate) struct SweepScene {
     /// glTF file, relative to the sweep file's folder.
     pub path: PathBuf,
+    /// The scene's name in the outputs; default the file's stem. Each must be unique.
+    pub name: Option<String>,
     /// `--camera` syntax; default the scene's camera.
     pub camera: Option<String>,
     /// Move one light along a path; without it the scene's lights as they are.
@@ -89,6 +91,13 @@ pub(crate) struct SweepMethod {
     pub params: Vec<toml::Table>,
 }
 
+impl SweepScene {
+    /// The name rows, pictures and charts carry: `name`, else the file's stem.
+    pub fn name(&self) -> String {
+        self.name.clone().unwrap_or_else(|| self.path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()))
+    }
+}
+
 impl Sweep {
     /// Reads and checks `path`; scene paths become relative to the current folder.
     pub fn read(path: &Path) -> Result<Sweep> {
@@ -119,6 +128,13 @@ impl Sweep {
             bail!("a sweep needs at least one [[scenes]] and one [[methods]] entry");
         }
         for (i, scene) in self.scenes.iter().enumerate() {
+            let name = scene.name();
+            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
+                bail!("scenes[{i}].name \"{name}\": use letters, digits, '-', '_' and '.' (it names files)");
+            }
+            if let Some(j) = self.scenes[..i].iter().position(|other| other.name() == name) {
+                bail!("scenes[{j}] and scenes[{i}] are both named \"{name}\": give each its own `name`");
+            }
             let paths = [("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))), ("occluder_path", scene.occluder_path.as_ref().map(|p| (&p.points, p.frames)))];
             if paths.iter().all(|(_, p)| p.is_some()) {
                 bail!("scenes[{i}]: give a light_path or an occluder_path, not both");
@@ -178,6 +194,8 @@ mod tests {
             ("name = 'x'\nscenes = []\nmethods = []", "at least one"),
             ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
             ("name = 'x'\nwarmup_seconds = -1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "warmup_seconds"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\n[[scenes]]\npath = 'b/a.gltf'\ncamera = 'eye=0,1,2;target=0,0,0'\n[[methods]]\nmethod = 'direct'", "both named \"a\""),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nname = 'a b'\n[[methods]]\nmethod = 'direct'", "names files"),
             ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
