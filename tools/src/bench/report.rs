@@ -126,11 +126,20 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
         }
     }
     let recommendations = budget.map(|b| recommend(&summaries, b));
-    if let Some(recommendations) = &recommendations {
-        save("recommended.toml", &recommended_toml(recommendations))?;
+    match &recommendations {
+        Some(recommendations) => save("recommended.toml", &recommended_toml(recommendations))?,
+        // An earlier run's choices must not pass for this run's.
+        None => remove_stale(&out.join("recommended.toml"))?,
     }
     save("report.md", &report_text(outcome, &summaries, &fronts, &charts_md, recommendations.as_deref(), budget))?;
     Ok(())
+}
+
+fn remove_stale(path: &Path) -> Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(anyhow::anyhow!("{}: cannot remove the earlier run's file ({e})", path.display())),
+        _ => Ok(()),
+    }
 }
 
 /// One chart's points per method: (x, mean NRMSE) of each of its configurations.
