@@ -134,18 +134,27 @@ pub fn checksum(bytes: &[u8]) -> String {
     format!("fnv1a64:{hash:016x}")
 }
 
-/// A checksum of everything a bake depends on in the scene: geometry and materials.
+/// A checksum of everything a bake or the path tracer reads of the scene's surfaces: meshes
+/// (positions, normals, uv0, triangles, material), materials (base colour, its texture,
+/// emission) and textures. Lights and camera are not in it: a bake does not depend on them.
 pub fn scene_checksum(scene: &Scene) -> String {
+    fn floats<'a>(bytes: &mut Vec<u8>, values: impl IntoIterator<Item = &'a f32>) {
+        bytes.extend(values.into_iter().flat_map(|f| f.to_le_bytes()));
+    }
     let mut bytes = Vec::new();
     for mesh in &scene.meshes {
-        for v in mesh.positions.iter().chain(&mesh.normals) {
-            bytes.extend(v.to_array().iter().flat_map(|f| f.to_le_bytes()));
-        }
+        floats(&mut bytes, mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.as_ref()));
+        floats(&mut bytes, mesh.uv0.iter().flatten().flat_map(|v| v.as_ref()));
         bytes.extend(mesh.indices.iter().flat_map(|i| i.to_le_bytes()));
-        bytes.extend((mesh.material as u32).to_le_bytes());
+        bytes.extend((mesh.material as u64).to_le_bytes());
     }
     for material in &scene.materials {
-        bytes.extend(material.base_color.to_array().iter().flat_map(|f| f.to_le_bytes()));
+        floats(&mut bytes, material.base_color.as_ref().iter().chain(material.emission.as_ref()));
+        bytes.extend(material.base_color_texture.map_or(u64::MAX, |t| t as u64).to_le_bytes());
+    }
+    for texture in &scene.textures {
+        bytes.extend([texture.width, texture.height].iter().flat_map(|v| v.to_le_bytes()));
+        floats(&mut bytes, texture.texels.iter().flat_map(|t| t.as_ref()));
     }
     checksum(&bytes)
 }

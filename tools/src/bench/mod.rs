@@ -260,8 +260,7 @@ impl<'s> SceneBench<'s> {
             let image = frame_image(&mut renderer)?;
             configuration.apply(&mut direct_renderer)?;
             let direct = frame_image(&mut direct_renderer)?;
-            let point_id = self.row(config, k).image_id;
-            let scored = self.score(k, &image, &direct, &point_id)?;
+            let scored = self.score(k, &image, &direct, &self.point_id(config, k))?;
             let accuracy = scored.as_ref().ok().copied();
             let flicker = match (&previous, &accuracy) {
                 (Some(before), Some(_)) => Some(flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined)),
@@ -291,6 +290,11 @@ impl<'s> SceneBench<'s> {
         format!("{}_{}_{}", self.name, config.method.name(), sanitize(&config.label))
     }
 
+    /// The stem of a point's pictures.
+    fn point_id(&self, config: &Config, k: usize) -> String {
+        format!("{}_light{k}", self.config_id(config))
+    }
+
     /// A row of `config` at light configuration `k` with nothing measured: failed, costs unknown.
     fn row(&self, config: &Config, k: usize) -> Row {
         let configuration = &self.configurations[k];
@@ -310,7 +314,7 @@ impl<'s> SceneBench<'s> {
             non_finite_pixels: 0,
             on_front: false,
             device: String::new(),
-            image_id: format!("{}_light{k}", self.config_id(config)),
+            image_id: self.point_id(config, k),
         }
     }
 

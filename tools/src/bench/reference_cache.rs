@@ -54,7 +54,7 @@ impl ReferenceCache {
 fn key(scene: &Scene, settings: &ReferenceSettings) -> String {
     let described = format!(
         "{}|{:?}|{:?}|{} {} {} {} {} {} {}|{}",
-        relume_bake::artifact::checksum(&traced_bytes(scene)),
+        relume_bake::artifact::scene_checksum(scene),
         scene.lights,
         scene.camera,
         settings.samples_per_pixel,
@@ -67,28 +67,4 @@ fn key(scene: &Scene, settings: &ReferenceSettings) -> String {
         env!("CARGO_PKG_VERSION"),
     );
     relume_bake::artifact::checksum(described.as_bytes()).replace(':', "-")
-}
-
-/// The bytes of everything the path tracer reads of the scene's surfaces: meshes (positions,
-/// normals, uv0, triangles, material), materials and textures.
-fn traced_bytes(scene: &Scene) -> Vec<u8> {
-    fn floats<'a>(bytes: &mut Vec<u8>, values: impl IntoIterator<Item = &'a f32>) {
-        bytes.extend(values.into_iter().flat_map(|f| f.to_le_bytes()));
-    }
-    let mut bytes = Vec::new();
-    for mesh in &scene.meshes {
-        floats(&mut bytes, mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.as_ref()));
-        floats(&mut bytes, mesh.uv0.iter().flatten().flat_map(|v| v.as_ref()));
-        bytes.extend(mesh.indices.iter().flat_map(|i| i.to_le_bytes()));
-        bytes.extend((mesh.material as u64).to_le_bytes());
-    }
-    for material in &scene.materials {
-        floats(&mut bytes, material.base_color.as_ref().iter().chain(material.emission.as_ref()));
-        bytes.extend(material.base_color_texture.map_or(u64::MAX, |t| t as u64).to_le_bytes());
-    }
-    for texture in &scene.textures {
-        bytes.extend([texture.width, texture.height].iter().flat_map(|v| v.to_le_bytes()));
-        floats(&mut bytes, texture.texels.iter().flat_map(|t| t.as_ref()));
-    }
-    bytes
 }

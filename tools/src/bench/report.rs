@@ -72,8 +72,10 @@ fn fronts(summaries: &[Summary]) -> Vec<bool> {
 
 /// summary.csv: the report's summary table, one row per method configuration (docs/BENCH.md).
 fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
-    let header = "scene,method,params,points,failed,mean_nrmse,mean_flip,mean_indirect_nrmse,max_flicker,gpu_frame_ms,cpu_frame_ms,bake_seconds,bake_peak_memory_bytes,artifact_bytes,on_front";
-    let number = |v: f64| if v.is_finite() { format!("{v:.6}") } else { String::new() };
+    use results::number;
+    let header = [
+        "scene", "method", "params", "points", "failed", "mean_nrmse", "mean_flip", "mean_indirect_nrmse", "max_flicker", "gpu_frame_ms", "cpu_frame_ms", "bake_seconds", "bake_peak_memory_bytes", "artifact_bytes", "on_front",
+    ];
     let lines = summaries.iter().zip(fronts).map(|(s, on)| {
         let row = s.first();
         let cells = [
@@ -93,9 +95,9 @@ fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
             row.bake.artifact_bytes.to_string(),
             on.to_string(),
         ];
-        cells.iter().map(|c| results::quote(c)).collect::<Vec<_>>().join(",")
+        results::csv_line(&cells)
     });
-    std::iter::once(header.to_string()).chain(lines).map(|line| line + "\n").collect()
+    std::iter::once(results::csv_line(&header)).chain(lines).collect()
 }
 
 pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> Result<()> {

@@ -142,8 +142,6 @@ pub(crate) fn csv_header() -> Vec<String> {
 }
 
 fn csv_cells(row: &Row) -> Vec<String> {
-    // Unknown figures (a failed configuration's costs) are empty cells, never "NaN".
-    let number = |v: f64| if v.is_finite() { format!("{v:.6}") } else { String::new() };
     let optional = |v: Option<f64>| v.map(number).unwrap_or_default();
     let position = |i: usize| row.light_position.map(|p| p[i].to_string()).unwrap_or_default();
     let translation = |i: usize| row.occluder_translation.map(|t| t[i].to_string()).unwrap_or_default();
@@ -176,8 +174,22 @@ fn csv_cells(row: &Row) -> Vec<String> {
     cells
 }
 
+/// A CSV number cell; unknown figures (a failed configuration's costs) are empty, never "NaN".
+pub(crate) fn number(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        String::new()
+    }
+}
+
+/// One CSV line of `cells`, each quoted where it must be.
+pub(crate) fn csv_line<S: AsRef<str>>(cells: &[S]) -> String {
+    cells.iter().map(|c| quote(c.as_ref())).collect::<Vec<_>>().join(",") + "\n"
+}
+
 /// A CSV field, quoted when it holds a comma, a quote or a line break.
-pub(crate) fn quote(cell: &str) -> String {
+fn quote(cell: &str) -> String {
     if cell.contains([',', '"', '\n']) {
         format!("\"{}\"", cell.replace('"', "\"\""))
     } else {
@@ -186,8 +198,7 @@ pub(crate) fn quote(cell: &str) -> String {
 }
 
 pub(crate) fn csv(rows: &[Row]) -> String {
-    let line = |cells: Vec<String>| cells.iter().map(|c| quote(c)).collect::<Vec<_>>().join(",") + "\n";
-    std::iter::once(line(csv_header())).chain(rows.iter().map(|r| line(csv_cells(r)))).collect()
+    std::iter::once(csv_line(&csv_header())).chain(rows.iter().map(|r| csv_line(&csv_cells(r)))).collect()
 }
 
 #[cfg(test)]
