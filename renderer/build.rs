@@ -39,10 +39,7 @@ fn main() {
         let spv_path = out_dir.join(format!("{file_name}.spv"));
         std::fs::write(&spv_path, spirv.as_binary_u8()).expect("write SPIR-V");
         let const_name = file_name.replace('.', "_").to_uppercase();
-        module.push_str(&format!(
-            "pub const {const_name}: &[u8] = include_bytes!(\"{}\");\n",
-            spv_path.display()
-        ));
+        module.push_str(&format!("pub const {const_name}: &[u8] = include_bytes!(\"{}\");\n", spv_path.display()));
     }
     std::fs::write(out_dir.join("shaders.rs"), module).expect("write shaders.rs");
 }

@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# relume's test command: installs what is missing, then runs every test of the workspace.
-# GPU tests run on lavapipe (or a real GPU when there is one) with validation layers on.
+# relume's test command: installs what is missing, checks the formatting, builds the renderer
+# crate alone (so that a feature only the workspace turns on cannot hide a wrong dependency),
+# then runs every test of the workspace. GPU tests run on lavapipe (or a real GPU when there
+# is one) with validation layers on.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
+cargo fmt --all --check
+cargo build --locked -p relume-renderer
 cargo test --workspace --locked

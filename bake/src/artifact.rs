@@ -167,7 +167,8 @@ impl BakeOutput<'_> {
         refuse_foreign_folder(dir)?;
         let staging = staging_folder(dir);
         let _ = std::fs::remove_dir_all(&staging);
-        std::fs::create_dir_all(&staging).map_err(|e| fail(&staging, format!("cannot create the folder ({e})"), "check the path and permissions"))?;
+        std::fs::create_dir_all(&staging)
+            .map_err(|e| fail(&staging, format!("cannot create the folder ({e})"), "check the path and permissions"))?;
         let written = self.write_files(&staging).and_then(|()| replace_folder(&staging, dir));
         if written.is_err() {
             let _ = std::fs::remove_dir_all(&staging);
@@ -178,11 +179,13 @@ impl BakeOutput<'_> {
     fn write_files(&self, dir: &Path) -> Result<(), ArtifactError> {
         let atlas_bytes = encode_atlas(self.meshes, self.layout, self.texels);
         let atlas_path = dir.join("atlas.bin");
-        std::fs::write(&atlas_path, &atlas_bytes).map_err(|e| fail(&atlas_path, format!("cannot write ({e})"), "check free space and permissions"))?;
+        std::fs::write(&atlas_path, &atlas_bytes)
+            .map_err(|e| fail(&atlas_path, format!("cannot write ({e})"), "check free space and permissions"))?;
         let lightmap_name = format!("{}.exr", self.method);
         let lightmap_path = dir.join(&lightmap_name);
         let image = Image { width: self.layout.width, height: self.layout.height * self.layout.pages, pixels: self.lightmap.to_vec() };
-        write_exr_layers(&lightmap_path, &[("W", &image)]).map_err(|e| fail(&lightmap_path, e.to_string(), "check free space and permissions"))?;
+        write_exr_layers(&lightmap_path, &[("W", &image)])
+            .map_err(|e| fail(&lightmap_path, e.to_string(), "check free space and permissions"))?;
         let lightmap_bytes = std::fs::read(&lightmap_path).map_err(|e| fail(&lightmap_path, e.to_string(), "check permissions"))?;
         let file_entry = |bytes: &[u8]| json!({ "bytes": bytes.len(), "checksum": checksum(bytes) });
         let mut files = json!({ "atlas.bin": file_entry(&atlas_bytes), lightmap_name.clone(): file_entry(&lightmap_bytes) });
@@ -255,20 +258,40 @@ fn decode_transfer(dir: &Path, bin: &[u8], layout: PageLayout) -> Result<Cluster
     if version != VERSION {
         return Err(fail(&path, format!("transfer format version {version}; this relume reads version {VERSION}"), REBAKE));
     }
-    let [entries, clusters, basis_count, texel_count] = [r.u32("the entry-point count")?, r.u32("the cluster count")?, r.u32("D")?, r.u32("the texel count")?];
+    let [entries, clusters, basis_count, texel_count] =
+        [r.u32("the entry-point count")?, r.u32("the cluster count")?, r.u32("D")?, r.u32("the texel count")?];
     if texel_count as usize != layout.texel_count() || entries > 1 << 24 || clusters > entries || basis_count > 1024 {
-        return Err(fail(&path, format!("{entries} entry points, {clusters} clusters, D = {basis_count}, {texel_count} texels do not fit an atlas of {} texels", layout.texel_count()), REBAKE));
+        return Err(fail(
+            &path,
+            format!(
+                "{entries} entry points, {clusters} clusters, D = {basis_count}, {texel_count} texels do not fit an atlas of {} texels",
+                layout.texel_count()
+            ),
+            REBAKE,
+        ));
     }
     let light_area = r.f32s(1, "the light area")?[0];
     let cluster_starts = r.u32s(clusters + 1, "the cluster starts")?;
-    let entry_points = r.f32s(entries as usize * 6, "the entry points")?.chunks_exact(6).map(|f| EntryPoint { position: Vec3::new(f[0], f[1], f[2]), normal: Vec3::new(f[3], f[4], f[5]) }).collect();
+    let entry_points = r
+        .f32s(entries as usize * 6, "the entry points")?
+        .chunks_exact(6)
+        .map(|f| EntryPoint { position: Vec3::new(f[0], f[1], f[2]), normal: Vec3::new(f[3], f[4], f[5]) })
+        .collect();
     let weights = r.f32s(entries as usize * basis_count as usize, "the weights")?;
     if r.at != bin.len() {
         return Err(fail(&path, format!("{} bytes after the weights", bin.len() - r.at), REBAKE));
     }
     let exr_path = dir.join(TRANSFER_EXR);
     let image = read_exr_layer(&exr_path, Some("T")).map_err(|e| fail(&exr_path, e.to_string(), REBAKE))?;
-    let transfer = ClusteredTransfer { entry_points, cluster_starts, basis_count, weights, texel_count: texel_count as usize, textures: image.pixels, light_area };
+    let transfer = ClusteredTransfer {
+        entry_points,
+        cluster_starts,
+        basis_count,
+        weights,
+        texel_count: texel_count as usize,
+        textures: image.pixels,
+        light_area,
+    };
     transfer.validate().map_err(|e| fail(&path, e, REBAKE))?;
     Ok(transfer)
 }
@@ -276,7 +299,8 @@ fn decode_transfer(dir: &Path, bin: &[u8], layout: PageLayout) -> Result<Cluster
 fn write_json(path: &Path, value: &Value) -> Result<(), ArtifactError> {
     let mut text = serde_json::to_string_pretty(value).map_err(|e| fail(path, e.to_string(), "report this as a bug"))?;
     text.push('\n');
-    write_atomically(path, |tmp| std::fs::write(tmp, &text).map_err(|e| e.to_string())).map_err(|e| fail(path, e.to_string(), "check free space and permissions"))
+    write_atomically(path, |tmp| std::fs::write(tmp, &text).map_err(|e| e.to_string()))
+        .map_err(|e| fail(path, e.to_string(), "check free space and permissions"))
 }
 
 fn staging_folder(dir: &Path) -> PathBuf {
@@ -332,7 +356,11 @@ impl Reader<'_> {
     fn take(&mut self, n: usize, what: &str) -> Result<&[u8], ArtifactError> {
         let end = self.at.checked_add(n).filter(|&end| end <= self.bytes.len());
         let Some(end) = end else {
-            return Err(fail(self.path, format!("truncated: {what} needs {n} bytes at offset {} but the file has {}", self.at, self.bytes.len()), REBAKE));
+            return Err(fail(
+                self.path,
+                format!("truncated: {what} needs {n} bytes at offset {} but the file has {}", self.at, self.bytes.len()),
+                REBAKE,
+            ));
         };
         let slice = &self.bytes[self.at..end];
         self.at = end;
@@ -393,7 +421,11 @@ fn decode_mesh(r: &mut Reader, m: usize, mesh: &Mesh) -> Result<AtlasMesh, Artif
     let item = format!("mesh {m} (\"{}\")", mesh.name);
     let [vertices, index_count] = [r.u32(&format!("{item}'s vertex count"))?, r.u32(&format!("{item}'s index count"))?];
     if index_count as usize != mesh.indices.len() || vertices as usize > 3 * mesh.indices.len() {
-        return Err(fail(r.path, format!("{item}: {vertices} vertices and {index_count} indices, but the scene's mesh has {} indices", mesh.indices.len()), "bake this scene again"));
+        return Err(fail(
+            r.path,
+            format!("{item}: {vertices} vertices and {index_count} indices, but the scene's mesh has {} indices", mesh.indices.len()),
+            "bake this scene again",
+        ));
     }
     let source_vertex = r.u32s(vertices, &format!("{item}'s source vertices"))?;
     let uv1: Vec<Vec2> = r.f32s(2 * vertices as usize, &format!("{item}'s uv1"))?.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect();
@@ -414,7 +446,8 @@ impl Baked {
     /// artifact was applied to it).
     pub fn read(dir: &Path, scene: &Scene) -> Result<Baked, ArtifactError> {
         let manifest_path = dir.join("manifest.json");
-        let text = std::fs::read_to_string(&manifest_path).map_err(|e| fail(&manifest_path, format!("cannot read ({e})"), "give the folder `relume bake --out` wrote"))?;
+        let text = std::fs::read_to_string(&manifest_path)
+            .map_err(|e| fail(&manifest_path, format!("cannot read ({e})"), "give the folder `relume bake --out` wrote"))?;
         let manifest: Value = serde_json::from_str(&text).map_err(|e| fail(&manifest_path, format!("not valid JSON ({e})"), REBAKE))?;
         check_header(&manifest_path, &manifest, scene)?;
         let file = |name: &str| -> Result<Vec<u8>, ArtifactError> {
@@ -422,7 +455,14 @@ impl Baked {
             let bytes = std::fs::read(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?;
             let expected = manifest["files"][name]["checksum"].as_str().unwrap_or("(none)");
             if checksum(&bytes) != expected {
-                return Err(fail(&path, format!("checksum {} differs from the manifest's {expected}: the file is corrupt or from another bake", checksum(&bytes)), REBAKE));
+                return Err(fail(
+                    &path,
+                    format!(
+                        "checksum {} differs from the manifest's {expected}: the file is corrupt or from another bake",
+                        checksum(&bytes)
+                    ),
+                    REBAKE,
+                ));
             }
             Ok(bytes)
         };
@@ -433,7 +473,11 @@ impl Baked {
         file(&lightmap_name)?;
         let image = read_exr_layer(&lightmap_path, Some("W")).map_err(|e| fail(&lightmap_path, e.to_string(), REBAKE))?;
         if (image.width, image.height) != (layout.width, layout.height * layout.pages) {
-            return Err(fail(&lightmap_path, format!("is {} x {}, the atlas {} x {} x {} pages", image.width, image.height, layout.width, layout.height, layout.pages), REBAKE));
+            return Err(fail(
+                &lightmap_path,
+                format!("is {} x {}, the atlas {} x {} x {} pages", image.width, image.height, layout.width, layout.height, layout.pages),
+                REBAKE,
+            ));
         }
         let transfer = match manifest["files"].get(TRANSFER_BIN) {
             Some(_) => {
@@ -467,11 +511,24 @@ fn check_header(path: &Path, manifest: &Value, scene: &Scene) -> Result<(), Arti
         return Err(fail(path, "not a relume bake manifest (no \"format\": \"relume-bake\")", "give the folder `relume bake --out` wrote"));
     }
     if manifest["version"] != VERSION {
-        return Err(fail(path, format!("bake format version {} (relume {}); this relume reads version {VERSION}", manifest["version"], manifest["relume"]), REBAKE));
+        return Err(fail(
+            path,
+            format!("bake format version {} (relume {}); this relume reads version {VERSION}", manifest["version"], manifest["relume"]),
+            REBAKE,
+        ));
     }
     let expected = scene_checksum(scene);
     if manifest["scene"]["checksum"] != expected.as_str() {
-        return Err(fail(path, format!("baked for scene {} with checksum {}, but {} has checksum {expected}", manifest["scene"]["file"], manifest["scene"]["checksum"], scene.source.display()), "bake this scene, or give the scene this bake was made for"));
+        return Err(fail(
+            path,
+            format!(
+                "baked for scene {} with checksum {}, but {} has checksum {expected}",
+                manifest["scene"]["file"],
+                manifest["scene"]["checksum"],
+                scene.source.display()
+            ),
+            "bake this scene, or give the scene this bake was made for",
+        ));
     }
     Ok(())
 }

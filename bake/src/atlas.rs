@@ -12,8 +12,8 @@
 //! always have the same integer part.
 
 pub use crate::artifact::{AtlasMesh, Texel, EMPTY};
-use crate::settings::first_failed_check;
 use crate::scene::{Mesh, Scene};
+use crate::settings::first_failed_check;
 use glam::{UVec2, Vec2, Vec3};
 use std::collections::HashMap;
 
@@ -43,7 +43,10 @@ impl AtlasSettings {
             (self.texel_density.is_finite() && self.texel_density > 0.0, "texel density must be finite and > 0 texels per metre"),
             ((1..=64).contains(&self.gutter), "gutter must be 1..=64 texels"),
             ((16..=16384).contains(&self.max_size), "atlas maximum size must be 16..=16384 texels"),
-            (self.discontinuity_angle > 0.0 && self.discontinuity_angle < std::f32::consts::FRAC_PI_2, "discontinuity angle must be in (0, 90) degrees"),
+            (
+                self.discontinuity_angle > 0.0 && self.discontinuity_angle < std::f32::consts::FRAC_PI_2,
+                "discontinuity angle must be in (0, 90) degrees",
+            ),
         ];
         first_failed_check(&checks)
     }
@@ -148,12 +151,8 @@ impl Atlas {
                 }
             }
         }
-        let meshes = scene
-            .meshes
-            .iter()
-            .enumerate()
-            .map(|(m, mesh)| split_vertices(mesh, m as u32, &charts, &flat, (width, height)))
-            .collect();
+        let meshes =
+            scene.meshes.iter().enumerate().map(|(m, mesh)| split_vertices(mesh, m as u32, &charts, &flat, (width, height))).collect();
         let (texels, pieces, piece_start) = raster.finish();
         Ok(Atlas { width, height, pages, charts, texels, pieces, piece_start, meshes, too_small })
     }
@@ -200,7 +199,8 @@ impl Atlas {
         let page = uv1.x.floor();
         let x = ((uv1.x - page) * self.width as f32).floor();
         let y = (uv1.y * self.height as f32).floor();
-        let inside = page >= 0.0 && (page as u32) < self.pages && (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
+        let inside =
+            page >= 0.0 && (page as u32) < self.pages && (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
         inside.then(|| ((page as u32 * self.height + y as u32) * self.width + x as u32) as usize)
     }
 }
@@ -269,10 +269,11 @@ fn segment_mesh(mesh: &Mesh, max_angle: f32) -> Vec<(Vec<u32>, ChartMapping)> {
             (None, ChartMapping::Projection { axis }) => triangle_positions(mesh, t).map(|p| project(p, axis)),
             (None, ChartMapping::Uv0 { .. }) => unreachable!("uv0 charts only exist with uv0"),
         };
-        let axis_normal = normals[seed as usize].signum() * Vec3::from(match mapping {
-            ChartMapping::Projection { axis } => [0, 1, 2].map(|k| (k == axis) as u32 as f32),
-            ChartMapping::Uv0 { .. } => [0.0; 3],
-        });
+        let axis_normal = normals[seed as usize].signum()
+            * Vec3::from(match mapping {
+                ChartMapping::Projection { axis } => [0, 1, 2].map(|k| (k == axis) as u32 as f32),
+                ChartMapping::Uv0 { .. } => [0.0; 3],
+            });
         let seed_orientation = signed_area_2d(flatten(seed)).signum();
         let mut placed = OverlapGrid::new(flatten(seed));
         let mut members = vec![seed];
@@ -434,7 +435,8 @@ fn bounds_2d(points: &[Vec2]) -> (Vec2, Vec2) {
 /// six edge normals); faces that only share an edge or a corner do not overlap.
 fn triangles_overlap(a: &[Vec2; 3], b: &[Vec2; 3], tolerance: f32) -> bool {
     let separated_along = |axis: Vec2| {
-        let span = |t: &[Vec2; 3]| t.iter().map(|p| p.dot(axis)).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+        let span =
+            |t: &[Vec2; 3]| t.iter().map(|p| p.dot(axis)).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
         let ((a0, a1), (b0, b1)) = (span(a), span(b));
         a1.min(b1) - a0.max(b0) <= tolerance * axis.length()
     };
@@ -522,7 +524,12 @@ struct Raster {
 
 impl Raster {
     fn new(width: u32, height: u32, pages: u32) -> Self {
-        Raster { width, height, texels: vec![Accumulator { best: (0.0, EMPTY), ..Default::default() }; (width * height * pages) as usize], pieces: Vec::new() }
+        Raster {
+            width,
+            height,
+            texels: vec![Accumulator { best: (0.0, EMPTY), ..Default::default() }; (width * height * pages) as usize],
+            pieces: Vec::new(),
+        }
     }
 
     /// Clips the face (corners in page texels) against every texel square it touches and
@@ -577,12 +584,9 @@ impl Raster {
             .texels
             .iter()
             .map(|a| match a.area > 0.0 {
-                true => Texel {
-                    coverage: a.area.min(1.0),
-                    centre: a.centre / a.area,
-                    normal: a.normal.normalize_or_zero(),
-                    triangle: a.best.1,
-                },
+                true => {
+                    Texel { coverage: a.area.min(1.0), centre: a.centre / a.area, normal: a.normal.normalize_or_zero(), triangle: a.best.1 }
+                }
                 false => Texel { triangle: EMPTY, ..Default::default() },
             })
             .collect::<Vec<_>>();

@@ -101,21 +101,13 @@ impl SceneBvh {
         }
         let triangles: Vec<Triangle> = primitives
             .iter()
-            .map(|p| Triangle {
-                v0: p.positions[0].into(),
-                v1: p.positions[1].into(),
-                v2: p.positions[2].into(),
-            })
+            .map(|p| Triangle { v0: p.positions[0].into(), v1: p.positions[1].into(), v2: p.positions[2].into() })
             .collect();
         let (bvh, leaf_triangles, leaf_primitive) = if triangles.is_empty() {
             (None, Vec::new(), Vec::new())
         } else {
             // medium_build does not split triangles, so the leaf order is a permutation.
-            let bvh = build_cwbvh_from_tris(
-                &triangles,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            );
+            let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default());
             let leaf_triangles = bvh
                 .primitive_indices
                 .iter()
@@ -129,19 +121,8 @@ impl SceneBvh {
         };
 
         let (lo, hi) = scene.bounds();
-        let magnitude = if primitives.is_empty() {
-            0.0
-        } else {
-            lo.abs().max(hi.abs()).max_element()
-        };
-        SceneBvh {
-            bvh,
-            leaf_triangles,
-            leaf_primitive,
-            primitives,
-            mesh_offsets,
-            epsilon: 1e-4 + 1e-5 * magnitude,
-        }
+        let magnitude = if primitives.is_empty() { 0.0 } else { lo.abs().max(hi.abs()).max_element() };
+        SceneBvh { bvh, leaf_triangles, leaf_primitive, primitives, mesh_offsets, epsilon: 1e-4 + 1e-5 * magnitude }
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -175,11 +156,7 @@ impl SceneBvh {
     /// cannot hit the surface it starts on.
     #[inline]
     pub fn offset_origin(&self, point: Vec3, geometric_normal: Vec3, dir: Vec3) -> Vec3 {
-        let side = if geometric_normal.dot(dir) >= 0.0 {
-            1.0
-        } else {
-            -1.0
-        };
+        let side = if geometric_normal.dot(dir) >= 0.0 { 1.0 } else { -1.0 };
         point + geometric_normal * (side * self.epsilon)
     }
 
@@ -191,14 +168,12 @@ impl SceneBvh {
         let wt = WatertightRay::new(origin, dir);
         let mut hit = RayHit::none();
         let mut best = (0.0f32, 0.0f32);
-        let found = bvh.ray_traverse(ray, &mut hit, |r, leaf| {
-            match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
-                Some((t, b1, b2)) => {
-                    best = (b1, b2);
-                    t
-                }
-                None => f32::INFINITY,
+        let found = bvh.ray_traverse(ray, &mut hit, |r, leaf| match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
+            Some((t, b1, b2)) => {
+                best = (b1, b2);
+                t
             }
+            None => f32::INFINITY,
         });
         if !found {
             return None;
@@ -215,10 +190,7 @@ impl SceneBvh {
         };
         let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
         let wt = WatertightRay::new(origin, dir);
-        !bvh.ray_traverse_miss(ray, |r, leaf| {
-            wt.intersect(&self.leaf_triangles[leaf], r.tmax)
-                .map_or(f32::INFINITY, |h| h.0)
-        })
+        !bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
     }
 
     fn make_hit(&self, primitive: u32, t: f32, bary: Vec2) -> Hit {
@@ -279,10 +251,7 @@ impl WatertightRay {
         } else {
             axis_shear((y, Vec3A::Y), (z, Vec3A::Z), (x, Vec3A::X))
         };
-        WatertightRay {
-            origin: origin.into(),
-            shear: Mat3A::from_cols(shear[0], shear[1], shear[2]).transpose(),
-        }
+        WatertightRay { origin: origin.into(), shear: Mat3A::from_cols(shear[0], shear[1], shear[2]).transpose() }
     }
 
     /// (t, b1, b2) of a hit with 0 < t < t_max, or None.
@@ -297,9 +266,7 @@ impl WatertightRay {
         if u == 0.0 || v == 0.0 || w == 0.0 {
             // On an edge in single precision: decide it in double, as the paper does, so the
             // two triangles sharing the edge still agree.
-            let e = |px: f32, py: f32, qx: f32, qy: f32| {
-                (px as f64 * qy as f64 - py as f64 * qx as f64) as f32
-            };
+            let e = |px: f32, py: f32, qx: f32, qy: f32| (px as f64 * qy as f64 - py as f64 * qx as f64) as f32;
             u = e(c.x, c.y, b.x, b.y);
             v = e(a.x, a.y, c.x, c.y);
             w = e(b.x, b.y, a.x, a.y);
@@ -331,11 +298,7 @@ mod tests {
 
     #[test]
     fn watertight_test_reports_distance_and_barycentrics() {
-        let tri = single([
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ]);
+        let tri = single([Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]);
         let ray = WatertightRay::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z);
         let (t, b1, b2) = ray.intersect(&tri, f32::INFINITY).unwrap();
         assert!((t - 2.0).abs() < 1e-6 && (b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
@@ -351,26 +314,16 @@ mod tests {
     #[test]
     fn shared_edge_is_hit_by_exactly_one_or_both_never_neither() {
         // Two triangles of a quad, rays aimed along the shared diagonal in many directions.
-        let q = [
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ];
+        let q = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(-1.0, 1.0, 0.0)];
         let t0 = single([q[0], q[1], q[2]]);
         let t1 = single([q[0], q[2], q[3]]);
         for i in 0..2000 {
             let s = i as f32 / 2000.0;
             let target = Vec3::new(-0.9 + 1.8 * s, -0.9 + 1.8 * s, 0.0);
-            let origin = Vec3::new(
-                0.3 * (i as f32).sin(),
-                0.7 * (i as f32 * 1.3).cos(),
-                1.0 + s,
-            );
+            let origin = Vec3::new(0.3 * (i as f32).sin(), 0.7 * (i as f32 * 1.3).cos(), 1.0 + s);
             let dir = (target - origin).normalize();
             let ray = WatertightRay::new(origin, dir);
-            let hits = ray.intersect(&t0, f32::INFINITY).is_some() as u32
-                + ray.intersect(&t1, f32::INFINITY).is_some() as u32;
+            let hits = ray.intersect(&t0, f32::INFINITY).is_some() as u32 + ray.intersect(&t1, f32::INFINITY).is_some() as u32;
             assert!(hits >= 1, "ray {i} slipped through the shared edge");
         }
     }

@@ -61,14 +61,23 @@ impl ClusteredTransfer {
             && self.cluster_starts.last() == Some(&(entries as u32))
             && self.cluster_starts.windows(2).all(|w| w[0] <= w[1]);
         if !starts_ok {
-            return Err(format!("cluster starts {:?}.. do not split the {entries} entry points in order", &self.cluster_starts[..self.cluster_starts.len().min(4)]));
+            return Err(format!(
+                "cluster starts {:?}.. do not split the {entries} entry points in order",
+                &self.cluster_starts[..self.cluster_starts.len().min(4)]
+            ));
         }
         if self.weights.len() != entries * self.basis_count as usize {
             return Err(format!("{} weights for {entries} entry points of {} each", self.weights.len(), self.basis_count));
         }
         let textures = self.cluster_count() * self.terms_per_cluster() * self.texel_count;
         if self.textures.len() != textures {
-            return Err(format!("{} texture values; {} clusters of {} textures of {} texels need {textures}", self.textures.len(), self.cluster_count(), self.terms_per_cluster(), self.texel_count));
+            return Err(format!(
+                "{} texture values; {} clusters of {} textures of {} texels need {textures}",
+                self.textures.len(),
+                self.cluster_count(),
+                self.terms_per_cluster(),
+                self.texel_count
+            ));
         }
         let finite = self.entry_points.iter().all(|e| e.position.is_finite() && e.normal.is_finite())
             && self.weights.iter().all(|w| w.is_finite())

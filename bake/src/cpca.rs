@@ -183,8 +183,7 @@ impl Centred {
     /// run in parallel and the bytes do not depend on the thread count.
     fn gram(&self) -> DMatrix<f64> {
         let (rows, n) = (self.rows(), self.values.len() / self.cols);
-        let lower: Vec<Vec<f64>> =
-            (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(rows.row(i), rows.row(j))).collect()).collect();
+        let lower: Vec<Vec<f64>> = (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(rows.row(i), rows.row(j))).collect()).collect();
         DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
     }
 
@@ -236,8 +235,7 @@ pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> 
         order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| centred.basis_vector(eigenvector(i))).collect();
     basis_vectors.resize(basis, vec![0.0; cols]);
     let rows = centred.rows();
-    let weights = (0..members.len()).into_par_iter()
-        .map(|e| basis_vectors.iter().map(|b| dot(rows.row(e), b) as f32).collect()).collect();
+    let weights = (0..members.len()).into_par_iter().map(|e| basis_vectors.iter().map(|b| dot(rows.row(e), b) as f32).collect()).collect();
     ClusterPca {
         members: members.to_vec(),
         mean: centred.mean,
@@ -273,8 +271,7 @@ pub struct Cpca {
 /// Fits a clustered PCA of `data` (row-major, `cols` per row) clustered by `features`
 /// (`feature_dims` per row) into `clusters` clusters (fewer if the features have fewer distinct
 /// points) of `basis` vectors. Refuses malformed or non-finite input, naming the problem.
-pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clusters: usize, basis: usize)
-    -> Result<Cpca, String> {
+pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clusters: usize, basis: usize) -> Result<Cpca, String> {
     validate(data, cols, features, feature_dims, &[clusters])?;
     let tree = divisive_clusters(features, feature_dims, clusters);
     let assignment = tree.assignment(tree.max_clusters());
@@ -297,17 +294,24 @@ impl Cpca {
     /// sqrt(sum_e |x_e - x~_e|^2 / sum_e |x_e|^2) over the fitted `data`, by reconstruction.
     pub fn relative_error(&self, data: &[f32]) -> f64 {
         let rows = Rows { values: data, cols: data.len() / self.assignment.len() };
-        let per_row: Vec<(f64, f64)> = (0..self.assignment.len()).into_par_iter().map(|e| {
-            let (x, r) = (rows.row(e), self.reconstruct(e));
-            (x.iter().zip(&r).map(|(&a, &b)| (a as f64 - b as f64).powi(2)).sum(), dot(x, x))
-        }).collect();
+        let per_row: Vec<(f64, f64)> = (0..self.assignment.len())
+            .into_par_iter()
+            .map(|e| {
+                let (x, r) = (rows.row(e), self.reconstruct(e));
+                (x.iter().zip(&r).map(|(&a, &b)| (a as f64 - b as f64).powi(2)).sum(), dot(x, x))
+            })
+            .collect();
         let (error, total) = per_row.iter().fold((0.0, 0.0), |s, r| (s.0 + r.0, s.1 + r.1));
         relative(error, total)
     }
 }
 
 fn relative(squared_error: f64, squared_total: f64) -> f64 {
-    if squared_total > 0.0 { (squared_error / squared_total).sqrt() } else { 0.0 }
+    if squared_total > 0.0 {
+        (squared_error / squared_total).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// One (C, D) configuration: its relative error and its size.
@@ -324,8 +328,14 @@ pub struct Candidate {
 /// The relative error of every (C, D) with C in `cluster_counts` (those the features allow)
 /// and D in 0..=max_basis, from one cluster tree and one eigen-decomposition per distinct
 /// cluster, without reconstructing anything. Refuses what [`fit`] refuses.
-pub fn error_table(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cluster_counts: &[usize],
-    max_basis: usize) -> Result<Vec<Candidate>, String> {
+pub fn error_table(
+    data: &[f32],
+    cols: usize,
+    features: &[f32],
+    feature_dims: usize,
+    cluster_counts: &[usize],
+    max_basis: usize,
+) -> Result<Vec<Candidate>, String> {
     validate(data, cols, features, feature_dims, cluster_counts)?;
     let tree = divisive_clusters(features, feature_dims, *cluster_counts.iter().max().unwrap());
     let (rows, total) = (data.len() / cols, dot(data, data));
@@ -350,12 +360,14 @@ pub fn error_table(data: &[f32], cols: usize, features: &[f32], feature_dims: us
 /// The candidate with the fewest stored values whose relative error is within `budget`, ties
 /// going to the smaller error (then the earlier entry); None if none is.
 pub fn choose(table: &[Candidate], budget: f64) -> Option<Candidate> {
-    table.iter().filter(|c| c.relative_error <= budget).copied()
+    table
+        .iter()
+        .filter(|c| c.relative_error <= budget)
+        .copied()
         .min_by(|a, b| a.stored_values.cmp(&b.stored_values).then(a.relative_error.total_cmp(&b.relative_error)))
 }
 
-fn validate(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cluster_counts: &[usize])
-    -> Result<(), String> {
+fn validate(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, cluster_counts: &[usize]) -> Result<(), String> {
     if data.is_empty() || cols == 0 {
         return Err("no data: at least one row of at least one value is needed".into());
     }
@@ -401,8 +413,7 @@ mod tests {
                 let (a, b) = (noise(e, 3), noise(e, 4));
                 data.extend((0..P).map(|p| {
                     let t = p as f32 / P as f32;
-                    (t * (g + 1.0)).sin() + a * (7.0 * t + g).cos() + b * (3.0 * t * (g + 1.0)).sin()
-                        + 0.01 * noise(e, 5 + p as u32)
+                    (t * (g + 1.0)).sin() + a * (7.0 * t + g).cos() + b * (3.0 * t * (g + 1.0)).sin() + 0.01 * noise(e, 5 + p as u32)
                 }));
                 e += 1;
             }
@@ -474,10 +485,16 @@ mod tests {
     #[test]
     fn two_lines_need_two_clusters_of_one_vector() {
         // Points 0..4 on the line (1 + t, 2, 3), points 4..8 on (0, 5 + t, 5 + t), apart in features.
-        let data: Vec<f32> = (0..8).flat_map(|e| {
-            let t = (e % 4) as f32;
-            if e < 4 { [1.0 + t, 2.0, 3.0] } else { [0.0, 5.0 + t, 5.0 + t] }
-        }).collect();
+        let data: Vec<f32> = (0..8)
+            .flat_map(|e| {
+                let t = (e % 4) as f32;
+                if e < 4 {
+                    [1.0 + t, 2.0, 3.0]
+                } else {
+                    [0.0, 5.0 + t, 5.0 + t]
+                }
+            })
+            .collect();
         let features: Vec<f32> = (0..8).flat_map(|e| [if e < 4 { 0.0 } else { 10.0 }, 0.1 * e as f32]).collect();
         let cpca = fit(&data, 3, &features, 2, 2, 3).unwrap();
         assert_eq!(cpca.assignment, [0, 0, 0, 0, 1, 1, 1, 1]);

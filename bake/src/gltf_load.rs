@@ -114,9 +114,7 @@ pub struct CameraOverride {
 
 /// Why a camera override was refused (one line, with the syntax as the fix).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error(
-    "camera \"{input}\": {problem}; write it as eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]"
-)]
+#[error("camera \"{input}\": {problem}; write it as eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]")]
 pub struct CameraOverrideError {
     pub input: String,
     pub problem: String,
@@ -125,12 +123,7 @@ pub struct CameraOverrideError {
 impl CameraOverride {
     pub const DEFAULT_YFOV_DEGREES: f32 = 45.0;
 
-    pub fn new(
-        eye: Vec3,
-        target: Vec3,
-        up: Vec3,
-        yfov_degrees: f32,
-    ) -> Result<Self, CameraOverrideError> {
+    pub fn new(eye: Vec3, target: Vec3, up: Vec3, yfov_degrees: f32) -> Result<Self, CameraOverrideError> {
         let fail = |problem: String| CameraOverrideError {
             input: format!(
                 "eye={},{},{};target={},{},{};up={},{},{};yfov={}",
@@ -143,26 +136,15 @@ impl CameraOverride {
         }
         let forward = target - eye;
         if forward.length() <= 1e-6 * eye.length().max(1.0) {
-            return Err(fail(
-                "eye and target are the same point, so there is no view direction".into(),
-            ));
+            return Err(fail("eye and target are the same point, so there is no view direction".into()));
         }
         if forward.normalize().cross(up.normalize_or_zero()).length() < 1e-4 {
-            return Err(fail(
-                "up is zero or parallel to the view direction (target - eye)".into(),
-            ));
+            return Err(fail("up is zero or parallel to the view direction (target - eye)".into()));
         }
         if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
-            return Err(fail(format!(
-                "yfov {yfov_degrees} is not between 0 and 180 degrees"
-            )));
+            return Err(fail(format!("yfov {yfov_degrees} is not between 0 and 180 degrees")));
         }
-        Ok(CameraOverride {
-            eye,
-            target,
-            up,
-            yfov_degrees,
-        })
+        Ok(CameraOverride { eye, target, up, yfov_degrees })
     }
 
     /// Parses `eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]` (see the type's docs).
@@ -188,12 +170,7 @@ impl CameraOverride {
     pub fn camera(&self, scene_bounds: (Vec3, Vec3)) -> Camera {
         let world_from_camera = look_at(self.eye, self.target, self.up);
         let (znear, zfar) = clip_planes(self.eye, scene_bounds);
-        Camera {
-            world_from_camera,
-            yfov: self.yfov_degrees.to_radians(),
-            znear,
-            zfar,
-        }
+        Camera { world_from_camera, yfov: self.yfov_degrees.to_radians(), znear, zfar }
     }
 }
 
@@ -201,17 +178,12 @@ impl FromStr for CameraOverride {
     type Err = CameraOverrideError;
 
     fn from_str(text: &str) -> Result<Self, Self::Err> {
-        let fail = |problem: String| CameraOverrideError {
-            input: text.to_string(),
-            problem,
-        };
+        let fail = |problem: String| CameraOverrideError { input: text.to_string(), problem };
         let vec3 = |key: &str, value: &str| -> Result<Vec3, CameraOverrideError> {
             let parts: Vec<&str> = value.split(',').map(str::trim).collect();
             let numbers: Vec<f32> = parts.iter().filter_map(|p| p.parse().ok()).collect();
             if parts.len() != 3 || numbers.len() != 3 {
-                return Err(fail(format!(
-                    "{key} needs three numbers x,y,z, got \"{value}\""
-                )));
+                return Err(fail(format!("{key} needs three numbers x,y,z, got \"{value}\"")));
             }
             Ok(Vec3::new(numbers[0], numbers[1], numbers[2]))
         };
@@ -226,16 +198,10 @@ impl FromStr for CameraOverride {
                 "target" => target.replace(vec3(key, value)?).is_some(),
                 "up" => up.replace(vec3(key, value)?).is_some(),
                 "yfov" => {
-                    let degrees: f32 = value.parse().map_err(|_| {
-                        fail(format!("yfov needs a number of degrees, got \"{value}\""))
-                    })?;
+                    let degrees: f32 = value.parse().map_err(|_| fail(format!("yfov needs a number of degrees, got \"{value}\"")))?;
                     yfov.replace(degrees).is_some()
                 }
-                _ => {
-                    return Err(fail(format!(
-                        "unknown key \"{key}\" (keys: eye, target, up, yfov)"
-                    )))
-                }
+                _ => return Err(fail(format!("unknown key \"{key}\" (keys: eye, target, up, yfov)"))),
             };
             if slot_taken {
                 return Err(fail(format!("{key} is given twice")));
@@ -243,13 +209,7 @@ impl FromStr for CameraOverride {
         }
         let eye = eye.ok_or_else(|| fail("eye is missing".into()))?;
         let target = target.ok_or_else(|| fail("target is missing".into()))?;
-        CameraOverride::new(
-            eye,
-            target,
-            up.unwrap_or(Vec3::Y),
-            yfov.unwrap_or(Self::DEFAULT_YFOV_DEGREES),
-        )
-        .map_err(|e| fail(e.problem))
+        CameraOverride::new(eye, target, up.unwrap_or(Vec3::Y), yfov.unwrap_or(Self::DEFAULT_YFOV_DEGREES)).map_err(|e| fail(e.problem))
     }
 }
 
@@ -259,10 +219,7 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
 }
 
 /// Loads a scene; `camera`, when given, replaces the file's camera.
-pub fn load_with_camera(
-    path: &Path,
-    camera: Option<&CameraOverride>,
-) -> Result<Loaded, SceneError> {
+pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
     let bytes = std::fs::read(path).map_err(|e| {
         let err = Ctx { path };
         if e.kind() == std::io::ErrorKind::NotFound {
@@ -273,12 +230,7 @@ pub fn load_with_camera(
                 "check the path (`relume scenes --out scenes/` writes the generated scenes)",
             )
         } else {
-            err.fail(
-                ErrorKind::Io,
-                "",
-                format!("cannot read the file: {e}"),
-                "check its permissions",
-            )
+            err.fail(ErrorKind::Io, "", format!("cannot read the file: {e}"), "check its permissions")
         }
     })?;
     Loader::new(path, &bytes)?.load(camera)
@@ -293,20 +245,8 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    fn fail(
-        &self,
-        kind: ErrorKind,
-        item: impl Into<String>,
-        problem: impl Into<String>,
-        fix: impl Into<String>,
-    ) -> SceneError {
-        SceneError {
-            path: self.path.to_path_buf(),
-            kind,
-            item: item.into(),
-            problem: problem.into(),
-            fix: fix.into(),
-        }
+    fn fail(&self, kind: ErrorKind, item: impl Into<String>, problem: impl Into<String>, fix: impl Into<String>) -> SceneError {
+        SceneError { path: self.path.to_path_buf(), kind, item: item.into(), problem: problem.into(), fix: fix.into() }
     }
 
     fn warning(&self, item: &str, message: &str) -> String {
@@ -330,12 +270,7 @@ struct Loader<'a> {
 
 /// The glTF default material: white base colour, no emission.
 fn default_material() -> Material {
-    Material {
-        name: "default".into(),
-        base_color: Vec4::ONE,
-        base_color_texture: None,
-        emission: Vec3::ZERO,
-    }
+    Material { name: "default".into(), base_color: Vec4::ONE, base_color_texture: None, emission: Vec3::ZERO }
 }
 
 fn quoted_name(kind: &str, name: Option<&str>, index: usize) -> String {
@@ -354,26 +289,10 @@ fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
 /// gltf crate because its GLB reader subtracts from the header length unchecked (a
 /// malformed header would panic in debug builds) and its errors do not say which part is bad.
 fn split_glb<'b>(ctx: Ctx, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]>), SceneError> {
-    let bad = |problem: String| {
-        ctx.fail(
-            ErrorKind::Parse,
-            "GLB container",
-            problem,
-            "re-export the .glb; the file is damaged or truncated",
-        )
-    };
-    let version = u32_at(bytes, 4).ok_or_else(|| {
-        bad(format!(
-            "the header needs 12 bytes, the file has {}",
-            bytes.len()
-        ))
-    })?;
-    let length = u32_at(bytes, 8).ok_or_else(|| {
-        bad(format!(
-            "the header needs 12 bytes, the file has {}",
-            bytes.len()
-        ))
-    })? as usize;
+    let bad =
+        |problem: String| ctx.fail(ErrorKind::Parse, "GLB container", problem, "re-export the .glb; the file is damaged or truncated");
+    let version = u32_at(bytes, 4).ok_or_else(|| bad(format!("the header needs 12 bytes, the file has {}", bytes.len())))?;
+    let length = u32_at(bytes, 8).ok_or_else(|| bad(format!("the header needs 12 bytes, the file has {}", bytes.len())))? as usize;
     if version != 2 {
         return Err(ctx.fail(
             ErrorKind::Unsupported,
@@ -383,10 +302,7 @@ fn split_glb<'b>(ctx: Ctx, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]
         ));
     }
     if length > bytes.len() || length < 12 {
-        return Err(bad(format!(
-            "the header says {length} bytes, the file has {}",
-            bytes.len()
-        )));
+        return Err(bad(format!("the header says {length} bytes, the file has {}", bytes.len())));
     }
     let bytes = &bytes[..length];
     // (chunk type, chunk data, offset of the next chunk)
@@ -396,19 +312,12 @@ fn split_glb<'b>(ctx: Ctx, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]
             return Ok(None);
         }
         let (Some(len), Some(ty)) = (u32_at(bytes, at), u32_at(bytes, at + 4)) else {
-            return Err(bad(format!(
-                "the {name} chunk header is cut off at byte {at}"
-            )));
+            return Err(bad(format!("the {name} chunk header is cut off at byte {at}")));
         };
         let start = at + 8;
-        let end = start
-            .checked_add(len as usize)
-            .filter(|&e| e <= bytes.len());
+        let end = start.checked_add(len as usize).filter(|&e| e <= bytes.len());
         let Some(end) = end else {
-            return Err(bad(format!(
-                "the {name} chunk says {len} bytes, only {} follow",
-                bytes.len() - start
-            )));
+            return Err(bad(format!("the {name} chunk says {len} bytes, only {} follow", bytes.len() - start)));
         };
         Ok(Some((ty, &bytes[start..end], end)))
     };
@@ -418,9 +327,7 @@ fn split_glb<'b>(ctx: Ctx, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]
         return Err(bad("there is no JSON chunk".into()));
     };
     if ty != JSON {
-        return Err(bad(format!(
-            "the first chunk has type 0x{ty:08x}, not JSON"
-        )));
+        return Err(bad(format!("the first chunk has type 0x{ty:08x}, not JSON")));
     }
     let bin = match chunk(next, "BIN")? {
         Some((BIN, data, _)) => Some(data),
@@ -433,11 +340,7 @@ fn split_glb<'b>(ctx: Ctx, bytes: &'b [u8]) -> Result<(&'b [u8], Option<&'b [u8]
 impl<'a> Loader<'a> {
     fn new(path: &'a Path, bytes: &'a [u8]) -> Result<Self, SceneError> {
         let ctx = Ctx { path };
-        let (json, blob) = if bytes.starts_with(b"glTF") {
-            split_glb(ctx, bytes)?
-        } else {
-            (bytes, None)
-        };
+        let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(ctx, bytes)? } else { (bytes, None) };
         let root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json).map_err(|e| {
             ctx.fail(
                 ErrorKind::Parse,
@@ -458,15 +361,8 @@ impl<'a> Loader<'a> {
                         };
                         return Err(ctx.fail(
                             ErrorKind::Parse,
-                            format!(
-                                "{} primitive {p}",
-                                quoted_name("mesh", mesh.name.as_deref(), m)
-                            ),
-                            format!(
-                                "{semantic} refers to accessor {} but the file has {}",
-                                accessor.value(),
-                                root.accessors.len()
-                            ),
+                            format!("{} primitive {p}", quoted_name("mesh", mesh.name.as_deref(), m)),
+                            format!("{semantic} refers to accessor {} but the file has {}", accessor.value(), root.accessors.len()),
                             "fix the attribute's accessor index",
                         ));
                     }
@@ -475,39 +371,16 @@ impl<'a> Loader<'a> {
         }
         let document = gltf::Document::from_json(root).map_err(|e| match e {
             gltf::Error::Validation(errors) => {
-                let list: Vec<String> = errors
-                    .iter()
-                    .take(5)
-                    .map(|(p, e)| format!("{p}: {e}"))
-                    .collect();
-                let more = if errors.len() > 5 {
-                    format!(" (and {} more)", errors.len() - 5)
-                } else {
-                    String::new()
-                };
-                ctx.fail(
-                    ErrorKind::Parse,
-                    "",
-                    format!("not valid glTF 2.0: {}{more}", list.join(", ")),
-                    "fix those fields",
-                )
+                let list: Vec<String> = errors.iter().take(5).map(|(p, e)| format!("{p}: {e}")).collect();
+                let more = if errors.len() > 5 { format!(" (and {} more)", errors.len() - 5) } else { String::new() };
+                ctx.fail(ErrorKind::Parse, "", format!("not valid glTF 2.0: {}{more}", list.join(", ")), "fix those fields")
             }
-            other => ctx.fail(
-                ErrorKind::Parse,
-                "",
-                format!("not valid glTF: {other}"),
-                "fix the file or re-export it",
-            ),
+            other => ctx.fail(ErrorKind::Parse, "", format!("not valid glTF: {other}"), "fix the file or re-export it"),
         })?;
         let buffers = load_buffers(ctx, &document, blob)?;
         let material_map = vec![None; document.materials().len()];
         let image_map = vec![None; document.images().len()];
-        let placeholder_camera = Camera {
-            world_from_camera: Mat4::IDENTITY,
-            yfov: 1.0,
-            znear: 0.1,
-            zfar: 100.0,
-        };
+        let placeholder_camera = Camera { world_from_camera: Mat4::IDENTITY, yfov: 1.0, znear: 0.1, zfar: 100.0 };
         Ok(Loader {
             ctx,
             document,
@@ -531,24 +404,15 @@ impl<'a> Loader<'a> {
     fn load(mut self, camera_override: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
         let ctx = self.ctx;
         let document = self.document.clone();
-        let Some(gltf_scene) = document
-            .default_scene()
-            .or_else(|| document.scenes().next())
-        else {
-            return Err(ctx.fail(
-                ErrorKind::Empty,
-                "",
-                "the file has no scene",
-                "add a scene whose nodes hold the meshes",
-            ));
+        let Some(gltf_scene) = document.default_scene().or_else(|| document.scenes().next()) else {
+            return Err(ctx.fail(ErrorKind::Empty, "", "the file has no scene", "add a scene whose nodes hold the meshes"));
         };
         let scene_item = quoted_name("scene", gltf_scene.name(), gltf_scene.index());
 
         // Depth-first, pre-order, children in file order: the order meshes and lights appear
         // in the Scene (and the camera that counts as "first") is the file's order.
         let mut visited = vec![false; document.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4)> =
-            gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(gltf::Node, Mat4)> = gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
         stack.reverse();
         let mut camera_node: Option<(Perspective, Mat4, String)> = None;
         while let Some((node, parent)) = stack.pop() {
@@ -590,21 +454,14 @@ impl<'a> Loader<'a> {
                 match cam.projection() {
                     gltf::camera::Projection::Perspective(p) if camera_node.is_none() => {
                         camera_node = Some((
-                            Perspective {
-                                yfov: p.yfov(),
-                                znear: p.znear(),
-                                zfar: p.zfar(),
-                            },
+                            Perspective { yfov: p.yfov(), znear: p.znear(), zfar: p.zfar() },
                             world,
                             format!("{node_item} {cam_item}"),
                         ));
                     }
                     gltf::camera::Projection::Perspective(_) => {}
                     gltf::camera::Projection::Orthographic(_) => {
-                        self.warnings.push(ctx.warning(
-                            &cam_item,
-                            "orthographic camera ignored (relume renders perspective views)",
-                        ));
+                        self.warnings.push(ctx.warning(&cam_item, "orthographic camera ignored (relume renders perspective views)"));
                     }
                 }
             }
@@ -614,12 +471,7 @@ impl<'a> Loader<'a> {
         }
 
         if self.scene.meshes.is_empty() {
-            return Err(ctx.fail(
-                ErrorKind::Empty,
-                scene_item,
-                "has no triangles",
-                "add meshes with triangles to the scene's nodes",
-            ));
+            return Err(ctx.fail(ErrorKind::Empty, scene_item, "has no triangles", "add meshes with triangles to the scene's nodes"));
         }
         let bounds = self.scene.bounds();
         let defaults = LightingSettings::defaults_for(bounds);
@@ -632,11 +484,7 @@ impl<'a> Loader<'a> {
                 })?,
             None => defaults,
         };
-        let emissive = self
-            .scene
-            .materials
-            .iter()
-            .any(|m| m.emission.max_element() > 0.0);
+        let emissive = self.scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
         if self.scene.lights.is_empty() && !emissive && self.scene.settings.ambient.max_element() <= 0.0 {
             return Err(ctx.fail(
                 ErrorKind::NoLight,
@@ -650,17 +498,11 @@ impl<'a> Loader<'a> {
             (Some(o), _) => o.camera(bounds),
             (None, Some((p, world, item))) => perspective_camera(ctx, &item, &p, world, bounds)?,
             (None, None) => {
-                self.warnings.push(ctx.warning(
-                    &scene_item,
-                    "no perspective camera; using a default one that frames the scene",
-                ));
+                self.warnings.push(ctx.warning(&scene_item, "no perspective camera; using a default one that frames the scene"));
                 framing_camera(bounds)
             }
         };
-        Ok(Loaded {
-            scene: self.scene,
-            warnings: self.warnings,
-        })
+        Ok(Loaded { scene: self.scene, warnings: self.warnings })
     }
 
     fn load_primitive(
@@ -693,33 +535,16 @@ impl<'a> Loader<'a> {
         }
 
         let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
-            return Err(ctx.fail(
-                ErrorKind::Accessor,
-                item,
-                "has no POSITION attribute",
-                "add a POSITION accessor",
-            ));
+            return Err(ctx.fail(ErrorKind::Accessor, item, "has no POSITION attribute", "add a POSITION accessor"));
         };
-        let positions: Vec<Vec3> = self
-            .read_vectors::<3>(&item, "POSITION", &position_accessor, false)?
-            .into_iter()
-            .map(Vec3::from)
-            .collect();
+        let positions: Vec<Vec3> =
+            self.read_vectors::<3>(&item, "POSITION", &position_accessor, false)?.into_iter().map(Vec3::from).collect();
         let vertex_count = positions.len();
-        check_finite(
-            ctx,
-            &item,
-            "POSITION",
-            positions.iter().map(|p| p.to_array()),
-        )?;
+        check_finite(ctx, &item, "POSITION", positions.iter().map(|p| p.to_array()))?;
 
         let normals_in: Option<Vec<Vec3>> = match primitive.get(&gltf::Semantic::Normals) {
             Some(a) => {
-                let n: Vec<Vec3> = self
-                    .read_vectors::<3>(&item, "NORMAL", &a, false)?
-                    .into_iter()
-                    .map(Vec3::from)
-                    .collect();
+                let n: Vec<Vec3> = self.read_vectors::<3>(&item, "NORMAL", &a, false)?.into_iter().map(Vec3::from).collect();
                 self.check_count(&item, "NORMAL", n.len(), vertex_count)?;
                 check_finite(ctx, &item, "NORMAL", n.iter().map(|v| v.to_array()))?;
                 Some(n)
@@ -730,11 +555,7 @@ impl<'a> Loader<'a> {
         for (set, slot) in uvs.iter_mut().enumerate() {
             if let Some(a) = primitive.get(&gltf::Semantic::TexCoords(set as u32)) {
                 let what = format!("TEXCOORD_{set}");
-                let uv: Vec<Vec2> = self
-                    .read_vectors::<2>(&item, &what, &a, true)?
-                    .into_iter()
-                    .map(Vec2::from)
-                    .collect();
+                let uv: Vec<Vec2> = self.read_vectors::<2>(&item, &what, &a, true)?.into_iter().map(Vec2::from).collect();
                 self.check_count(&item, &what, uv.len(), vertex_count)?;
                 check_finite(ctx, &item, &what, uv.iter().map(|v| v.to_array()))?;
                 *slot = Some(uv);
@@ -757,11 +578,7 @@ impl<'a> Loader<'a> {
             }
         };
         if !indices.len().is_multiple_of(3) {
-            let what = if primitive.indices().is_some() {
-                "index"
-            } else {
-                "vertex (no indices)"
-            };
+            let what = if primitive.indices().is_some() { "index" } else { "vertex (no indices)" };
             return Err(ctx.fail(
                 ErrorKind::NotTriangles,
                 item,
@@ -769,11 +586,7 @@ impl<'a> Loader<'a> {
                 "a triangle list needs three indices per triangle; fix the indices accessor count",
             ));
         }
-        if let Some((at, &bad)) = indices
-            .iter()
-            .enumerate()
-            .find(|(_, &i)| i as usize >= vertex_count)
-        {
+        if let Some((at, &bad)) = indices.iter().enumerate().find(|(_, &i)| i as usize >= vertex_count) {
             return Err(ctx.fail(
                 ErrorKind::IndexOutOfRange,
                 item,
@@ -786,10 +599,7 @@ impl<'a> Loader<'a> {
         // matrix (columns b×c, c×a, a×b) so that singular scales do not divide by zero; the
         // sign of the determinant keeps its orientation, and a mirroring transform (negative
         // determinant) flips the winding so the front face stays the one the normals face.
-        let world_positions: Vec<Vec3> = positions
-            .iter()
-            .map(|&p| world.transform_point3(p))
-            .collect();
+        let world_positions: Vec<Vec3> = positions.iter().map(|&p| world.transform_point3(p)).collect();
         if let Some(v) = world_positions.iter().position(|p| !p.is_finite()) {
             return Err(ctx.fail(
                 ErrorKind::NonFinite,
@@ -800,11 +610,8 @@ impl<'a> Loader<'a> {
         }
         let linear = Mat3::from_mat4(world);
         let det = linear.determinant();
-        let cofactor = Mat3::from_cols(
-            linear.y_axis.cross(linear.z_axis),
-            linear.z_axis.cross(linear.x_axis),
-            linear.x_axis.cross(linear.y_axis),
-        );
+        let cofactor =
+            Mat3::from_cols(linear.y_axis.cross(linear.z_axis), linear.z_axis.cross(linear.x_axis), linear.x_axis.cross(linear.y_axis));
         let normal_matrix = if det < 0.0 { -cofactor } else { cofactor };
         if det < 0.0 {
             for tri in indices.chunks_exact_mut(3) {
@@ -820,24 +627,17 @@ impl<'a> Loader<'a> {
         for tri in indices.chunks_exact(3) {
             let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| world_positions[i as usize]);
             let area2 = (b - a).cross(c - a).length();
-            let longest = (b - a)
-                .length_squared()
-                .max((c - b).length_squared())
-                .max((a - c).length_squared());
+            let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
             if area2 > 1e-7 * longest && area2 > 0.0 {
                 kept.extend_from_slice(tri);
             }
         }
         let dropped = before - kept.len() / 3;
         if dropped > 0 {
-            self.warnings.push(ctx.warning(
-                &item,
-                &format!("dropped {dropped} degenerate (zero-area) triangles of {before}"),
-            ));
+            self.warnings.push(ctx.warning(&item, &format!("dropped {dropped} degenerate (zero-area) triangles of {before}")));
         }
         if kept.is_empty() {
-            self.warnings
-                .push(ctx.warning(&item, "has no triangles left; primitive skipped"));
+            self.warnings.push(ctx.warning(&item, "has no triangles left; primitive skipped"));
             return Ok(None);
         }
         let indices = kept;
@@ -846,10 +646,7 @@ impl<'a> Loader<'a> {
         // used where the file has none, or where its normal vanishes under the transform.
         let mut geometric = vec![Vec3::ZERO; vertex_count];
         let mut normals: Vec<Vec3> = match &normals_in {
-            Some(n) => n
-                .iter()
-                .map(|&v| (normal_matrix * v).normalize_or_zero())
-                .collect(),
+            Some(n) => n.iter().map(|&v| (normal_matrix * v).normalize_or_zero()).collect(),
             None => vec![Vec3::ZERO; vertex_count],
         };
         if normals.contains(&Vec3::ZERO) {
@@ -873,29 +670,18 @@ impl<'a> Loader<'a> {
             return Err(ctx.fail(
                 ErrorKind::Accessor,
                 item,
-                format!("its material \"{}\" has a baseColorTexture but the primitive has no TEXCOORD_0", self.scene.materials[material].name),
+                format!(
+                    "its material \"{}\" has a baseColorTexture but the primitive has no TEXCOORD_0",
+                    self.scene.materials[material].name
+                ),
                 "add TEXCOORD_0 to the primitive or remove the texture from the material",
             ));
         }
 
-        Ok(Some(Mesh {
-            name,
-            positions: world_positions,
-            normals,
-            uv0,
-            uv1,
-            indices,
-            material,
-        }))
+        Ok(Some(Mesh { name, positions: world_positions, normals, uv0, uv1, indices, material }))
     }
 
-    fn check_count(
-        &self,
-        item: &str,
-        what: &str,
-        count: usize,
-        vertex_count: usize,
-    ) -> Result<(), SceneError> {
+    fn check_count(&self, item: &str, what: &str, count: usize, vertex_count: usize) -> Result<(), SceneError> {
         if count != vertex_count {
             return Err(self.ctx.fail(
                 ErrorKind::Accessor,
@@ -918,12 +704,7 @@ impl<'a> Loader<'a> {
         let ctx = self.ctx;
         let acc_item = format!("{item}: {what} accessor {}", accessor.index());
         if accessor.sparse().is_some() {
-            return Err(ctx.fail(
-                ErrorKind::Unsupported,
-                acc_item,
-                "is sparse",
-                "export without sparse accessors",
-            ));
+            return Err(ctx.fail(ErrorKind::Unsupported, acc_item, "is sparse", "export without sparse accessors"));
         }
         let Some(view) = accessor.view() else {
             return Err(ctx.fail(
@@ -934,11 +715,7 @@ impl<'a> Loader<'a> {
             ));
         };
         let buffer = view.buffer();
-        let data: &[u8] = self
-            .buffers
-            .get(buffer.index())
-            .map(|b| b.as_ref())
-            .unwrap_or(&[]);
+        let data: &[u8] = self.buffers.get(buffer.index()).map(|b| b.as_ref()).unwrap_or(&[]);
         let view_end = view.offset().checked_add(view.length());
         match view_end {
             Some(end) if end <= data.len() => {}
@@ -959,15 +736,18 @@ impl<'a> Loader<'a> {
         }
         let stride = view.stride().unwrap_or(element_size);
         if stride < element_size {
-            return Err(ctx.fail(ErrorKind::Accessor, acc_item, format!("bufferView {} has byteStride {stride}, less than the {element_size}-byte element", view.index()), "fix the bufferView's byteStride"));
+            return Err(ctx.fail(
+                ErrorKind::Accessor,
+                acc_item,
+                format!("bufferView {} has byteStride {stride}, less than the {element_size}-byte element", view.index()),
+                "fix the bufferView's byteStride",
+            ));
         }
         let count = accessor.count();
         let start = view.offset().checked_add(accessor.offset());
         let end = match count {
             0 => start,
-            n => start
-                .and_then(|s| stride.checked_mul(n - 1).and_then(|x| x.checked_add(s)))
-                .and_then(|x| x.checked_add(element_size)),
+            n => start.and_then(|s| stride.checked_mul(n - 1).and_then(|x| x.checked_add(s))).and_then(|x| x.checked_add(element_size)),
         };
         let view_end = view.offset() + view.length();
         match (start, end) {
@@ -1003,29 +783,13 @@ impl<'a> Loader<'a> {
             _ => 0,
         };
         let ty = accessor.data_type();
-        let ok_type = ty == DataType::F32
-            || (normalized_ok
-                && accessor.normalized()
-                && matches!(ty, DataType::U8 | DataType::U16));
+        let ok_type = ty == DataType::F32 || (normalized_ok && accessor.normalized() && matches!(ty, DataType::U8 | DataType::U16));
         if dims != N || !ok_type {
-            let allowed = if normalized_ok {
-                "float, or normalized unsigned byte/short"
-            } else {
-                "float"
-            };
+            let allowed = if normalized_ok { "float, or normalized unsigned byte/short" } else { "float" };
             return Err(self.ctx.fail(
                 ErrorKind::Accessor,
                 format!("{item}: {what} accessor {}", accessor.index()),
-                format!(
-                    "is {:?} {:?}{}",
-                    accessor.dimensions(),
-                    ty,
-                    if accessor.normalized() {
-                        " normalized"
-                    } else {
-                        ""
-                    }
-                ),
+                format!("is {:?} {:?}{}", accessor.dimensions(), ty, if accessor.normalized() { " normalized" } else { "" }),
                 format!("{what} must be VEC{N} of {allowed}"),
             ));
         }
@@ -1053,9 +817,7 @@ impl<'a> Loader<'a> {
     fn read_indices(&self, item: &str, accessor: &gltf::Accessor) -> Result<Vec<u32>, SceneError> {
         use gltf::accessor::{DataType, Dimensions};
         let ty = accessor.data_type();
-        if accessor.dimensions() != Dimensions::Scalar
-            || !matches!(ty, DataType::U8 | DataType::U16 | DataType::U32)
-        {
+        if accessor.dimensions() != Dimensions::Scalar || !matches!(ty, DataType::U8 | DataType::U16 | DataType::U32) {
             return Err(self.ctx.fail(
                 ErrorKind::Accessor,
                 format!("{item}: indices accessor {}", accessor.index()),
@@ -1078,11 +840,7 @@ impl<'a> Loader<'a> {
         Ok(out)
     }
 
-    fn material_for(
-        &mut self,
-        primitive: &gltf::Primitive,
-        item: &str,
-    ) -> Result<usize, SceneError> {
+    fn material_for(&mut self, primitive: &gltf::Primitive, item: &str) -> Result<usize, SceneError> {
         let gm = primitive.material();
         let Some(index) = gm.index() else {
             return Ok(*self.default_material.get_or_insert_with(|| {
@@ -1099,25 +857,16 @@ impl<'a> Loader<'a> {
         let base_color = Vec4::from(pbr.base_color_factor());
         let strength = gm.emissive_strength().unwrap_or(1.0);
         let emission = Vec3::from(gm.emissive_factor()) * strength;
-        if !base_color.is_finite()
-            || base_color.min_element() < 0.0
-            || !emission.is_finite()
-            || emission.min_element() < 0.0
-        {
+        if !base_color.is_finite() || base_color.min_element() < 0.0 || !emission.is_finite() || emission.min_element() < 0.0 {
             return Err(ctx.fail(
                 ErrorKind::Invalid,
                 mat_item,
-                format!(
-                    "baseColorFactor {base_color} or emission {emission} is negative or not finite"
-                ),
+                format!("baseColorFactor {base_color} or emission {emission} is negative or not finite"),
                 "use finite, non-negative factors",
             ));
         }
         if gm.emissive_texture().is_some() {
-            self.warnings.push(ctx.warning(
-                &mat_item,
-                "emissiveTexture ignored (relume uses emissiveFactor only)",
-            ));
+            self.warnings.push(ctx.warning(&mat_item, "emissiveTexture ignored (relume uses emissiveFactor only)"));
         }
         let base_color_texture = match pbr.base_color_texture() {
             None => None,
@@ -1133,16 +882,8 @@ impl<'a> Loader<'a> {
                 Some(self.texture_for(&info.texture().source(), &mat_item)?)
             }
         };
-        let name = gm
-            .name()
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("material {index}"));
-        self.scene.materials.push(Material {
-            name,
-            base_color,
-            base_color_texture,
-            emission,
-        });
+        let name = gm.name().map(str::to_string).unwrap_or_else(|| format!("material {index}"));
+        self.scene.materials.push(Material { name, base_color, base_color_texture, emission });
         let m = self.scene.materials.len() - 1;
         if let Some(slot) = self.material_map.get_mut(index) {
             *slot = Some(m);
@@ -1155,28 +896,20 @@ impl<'a> Loader<'a> {
             return Ok(*t);
         }
         let ctx = self.ctx;
-        let image_item = format!(
-            "{mat_item}: {}",
-            quoted_name("image", image.name(), image.index())
-        );
+        let image_item = format!("{mat_item}: {}", quoted_name("image", image.name(), image.index()));
         let (bytes, name): (Cow<[u8]>, String) = match image.source() {
             gltf::image::Source::View { view, .. } => {
-                let data: &[u8] = self
-                    .buffers
-                    .get(view.buffer().index())
-                    .map(|b| b.as_ref())
-                    .unwrap_or(&[]);
+                let data: &[u8] = self.buffers.get(view.buffer().index()).map(|b| b.as_ref()).unwrap_or(&[]);
                 let range = view.offset()..view.offset().saturating_add(view.length());
                 let Some(bytes) = data.get(range.clone()) else {
-                    return Err(ctx.fail(ErrorKind::Buffer, image_item, format!("its bufferView {} (bytes {range:?}) reaches past its buffer ({} bytes)", view.index(), data.len()), "fix the bufferView"));
+                    return Err(ctx.fail(
+                        ErrorKind::Buffer,
+                        image_item,
+                        format!("its bufferView {} (bytes {range:?}) reaches past its buffer ({} bytes)", view.index(), data.len()),
+                        "fix the bufferView",
+                    ));
                 };
-                (
-                    Cow::Borrowed(bytes),
-                    image
-                        .name()
-                        .map(str::to_string)
-                        .unwrap_or_else(|| format!("image {}", image.index())),
-                )
+                (Cow::Borrowed(bytes), image.name().map(str::to_string).unwrap_or_else(|| format!("image {}", image.index())))
             }
             gltf::image::Source::Uri { uri, .. } => {
                 let bytes = read_uri(ctx, &image_item, uri)?;
@@ -1199,26 +932,13 @@ impl<'a> Loader<'a> {
         Ok(t)
     }
 
-    fn convert_light(
-        &self,
-        light: &gltf::khr_lights_punctual::Light,
-        node: &gltf::Node,
-        world: Mat4,
-    ) -> Result<Light, SceneError> {
+    fn convert_light(&self, light: &gltf::khr_lights_punctual::Light, node: &gltf::Node, world: Mat4) -> Result<Light, SceneError> {
         use gltf::khr_lights_punctual::Kind;
         let ctx = self.ctx;
-        let item = format!(
-            "{} light {}",
-            quoted_name("node", node.name(), node.index()),
-            light.index()
-        );
+        let item = format!("{} light {}", quoted_name("node", node.name(), node.index()), light.index());
         let color = Vec3::from(light.color());
         let intensity = light.intensity();
-        if !color.is_finite()
-            || color.min_element() < 0.0
-            || !intensity.is_finite()
-            || intensity < 0.0
-        {
+        if !color.is_finite() || color.min_element() < 0.0 || !intensity.is_finite() || intensity < 0.0 {
             return Err(ctx.fail(
                 ErrorKind::Invalid,
                 item,
@@ -1229,22 +949,14 @@ impl<'a> Loader<'a> {
         let kind = match light.kind() {
             Kind::Directional => LightKind::Directional,
             Kind::Point => LightKind::Point,
-            Kind::Spot {
-                inner_cone_angle,
-                outer_cone_angle,
-            } => {
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                 // Allow for outerConeAngle written as a rounded pi/2.
-                let outer = if outer_cone_angle > std::f32::consts::FRAC_PI_2
-                    && outer_cone_angle < std::f32::consts::FRAC_PI_2 + 1e-5
-                {
+                let outer = if outer_cone_angle > std::f32::consts::FRAC_PI_2 && outer_cone_angle < std::f32::consts::FRAC_PI_2 + 1e-5 {
                     std::f32::consts::FRAC_PI_2
                 } else {
                     outer_cone_angle
                 };
-                if !(inner_cone_angle >= 0.0
-                    && inner_cone_angle < outer
-                    && outer <= std::f32::consts::FRAC_PI_2)
-                {
+                if !(inner_cone_angle >= 0.0 && inner_cone_angle < outer && outer <= std::f32::consts::FRAC_PI_2) {
                     return Err(ctx.fail(
                         ErrorKind::Invalid,
                         item,
@@ -1252,10 +964,7 @@ impl<'a> Loader<'a> {
                         "KHR_lights_punctual needs 0 <= innerConeAngle < outerConeAngle <= pi/2",
                     ));
                 }
-                LightKind::Spot {
-                    inner_cone: inner_cone_angle,
-                    outer_cone: outer,
-                }
+                LightKind::Spot { inner_cone: inner_cone_angle, outer_cone: outer }
             }
         };
         let range = light.range();
@@ -1278,32 +987,19 @@ impl<'a> Loader<'a> {
                 "give the light's node a non-zero scale",
             ));
         }
-        let name = light
-            .name()
-            .or(node.name())
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("light {}", light.index()));
+        let name = light.name().or(node.name()).map(str::to_string).unwrap_or_else(|| format!("light {}", light.index()));
         Ok(Light {
             name,
             kind,
             intensity: color * intensity,
             range,
             position: world.w_axis.truncate(),
-            direction: if direction == Vec3::ZERO {
-                Vec3::NEG_Z
-            } else {
-                direction
-            },
+            direction: if direction == Vec3::ZERO { Vec3::NEG_Z } else { direction },
         })
     }
 }
 
-fn check_finite<const N: usize>(
-    ctx: Ctx,
-    item: &str,
-    what: &str,
-    values: impl Iterator<Item = [f32; N]>,
-) -> Result<(), SceneError> {
+fn check_finite<const N: usize>(ctx: Ctx, item: &str, what: &str, values: impl Iterator<Item = [f32; N]>) -> Result<(), SceneError> {
     for (v, value) in values.enumerate() {
         if value.iter().any(|c| !c.is_finite()) {
             return Err(ctx.fail(
@@ -1326,16 +1022,9 @@ struct Perspective {
 
 /// The file's camera, with any scale removed from its node matrix (Gram-Schmidt on the
 /// -Z and +Y axes, so a scaled or slightly sheared node still gives a rigid view).
-fn perspective_camera(
-    ctx: Ctx,
-    item: &str,
-    p: &Perspective,
-    world: Mat4,
-    bounds: (Vec3, Vec3),
-) -> Result<Camera, SceneError> {
+fn perspective_camera(ctx: Ctx, item: &str, p: &Perspective, world: Mat4, bounds: (Vec3, Vec3)) -> Result<Camera, SceneError> {
     let back = world.z_axis.truncate().normalize_or_zero();
-    let up =
-        (world.y_axis.truncate() - back * back.dot(world.y_axis.truncate())).normalize_or_zero();
+    let up = (world.y_axis.truncate() - back * back.dot(world.y_axis.truncate())).normalize_or_zero();
     if back == Vec3::ZERO || up == Vec3::ZERO {
         return Err(ctx.fail(
             ErrorKind::Invalid,
@@ -1346,28 +1035,13 @@ fn perspective_camera(
     }
     let right = up.cross(back);
     let eye = world.w_axis.truncate();
-    let world_from_camera = Mat4::from_cols(
-        right.extend(0.0),
-        up.extend(0.0),
-        back.extend(0.0),
-        eye.extend(1.0),
-    );
+    let world_from_camera = Mat4::from_cols(right.extend(0.0), up.extend(0.0), back.extend(0.0), eye.extend(1.0));
     let (yfov, znear) = (p.yfov, p.znear);
     if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
-        return Err(ctx.fail(
-            ErrorKind::Invalid,
-            item,
-            format!("yfov {yfov} rad"),
-            "yfov must be between 0 and pi radians",
-        ));
+        return Err(ctx.fail(ErrorKind::Invalid, item, format!("yfov {yfov} rad"), "yfov must be between 0 and pi radians"));
     }
     if !(znear > 0.0 && znear.is_finite()) {
-        return Err(ctx.fail(
-            ErrorKind::Invalid,
-            item,
-            format!("znear {znear}"),
-            "znear must be a positive number",
-        ));
+        return Err(ctx.fail(ErrorKind::Invalid, item, format!("znear {znear}"), "znear must be a positive number"));
     }
     // An infinite far plane (zfar absent) becomes a finite one that holds the whole scene,
     // because the renderer's projection and depth buffer need one.
@@ -1376,19 +1050,9 @@ fn perspective_camera(
         None => clip_planes(eye, bounds).1.max(znear * 2.0),
     };
     if !(zfar > znear && zfar.is_finite()) {
-        return Err(ctx.fail(
-            ErrorKind::Invalid,
-            item,
-            format!("zfar {zfar} is not beyond znear {znear}"),
-            "make zfar larger than znear",
-        ));
+        return Err(ctx.fail(ErrorKind::Invalid, item, format!("zfar {zfar} is not beyond znear {znear}"), "make zfar larger than znear"));
     }
-    Ok(Camera {
-        world_from_camera,
-        yfov,
-        znear,
-        zfar,
-    })
+    Ok(Camera { world_from_camera, yfov, znear, zfar })
 }
 
 /// A right-handed view from `eye` to `target`: the camera looks down its -Z, +Y up.
@@ -1396,12 +1060,7 @@ fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
     let forward = (target - eye).normalize();
     let right = forward.cross(up).normalize();
     let true_up = right.cross(forward);
-    Mat4::from_cols(
-        right.extend(0.0),
-        true_up.extend(0.0),
-        (-forward).extend(0.0),
-        eye.extend(1.0),
-    )
+    Mat4::from_cols(right.extend(0.0), true_up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0))
 }
 
 /// Near and far planes that hold the whole box as seen from `eye`: far beyond its farthest
@@ -1410,11 +1069,8 @@ fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
 fn clip_planes(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> (f32, f32) {
     let farthest = (0..8)
         .map(|i| {
-            let corner = Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
+            let corner =
+                Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z });
             (corner - eye).length()
         })
         .fold(0.0f32, f32::max);
@@ -1435,19 +1091,10 @@ fn framing_camera(bounds: (Vec3, Vec3)) -> Camera {
     let elevation = 20f32.to_radians();
     let eye = centre + Vec3::new(0.0, elevation.sin(), elevation.cos()) * distance;
     let (znear, zfar) = clip_planes(eye, bounds);
-    Camera {
-        world_from_camera: look_at(eye, centre, Vec3::Y),
-        yfov,
-        znear,
-        zfar,
-    }
+    Camera { world_from_camera: look_at(eye, centre, Vec3::Y), yfov, znear, zfar }
 }
 
-fn load_buffers<'b>(
-    ctx: Ctx,
-    document: &gltf::Document,
-    blob: Option<&'b [u8]>,
-) -> Result<Vec<Cow<'b, [u8]>>, SceneError> {
+fn load_buffers<'b>(ctx: Ctx, document: &gltf::Document, blob: Option<&'b [u8]>) -> Result<Vec<Cow<'b, [u8]>>, SceneError> {
     let mut out = Vec::with_capacity(document.buffers().len());
     for buffer in document.buffers() {
         let (data, label): (Cow<[u8]>, String) = match buffer.source() {
@@ -1471,11 +1118,7 @@ fn load_buffers<'b>(
             return Err(ctx.fail(
                 ErrorKind::Buffer,
                 format!("buffer {}", buffer.index()),
-                format!(
-                    "{label} has {} bytes but the buffer's byteLength is {}",
-                    data.len(),
-                    buffer.length()
-                ),
+                format!("{label} has {} bytes but the buffer's byteLength is {}", data.len(), buffer.length()),
                 "the data is truncated: re-export the scene (or regenerate it), or fix byteLength",
             ));
         }
@@ -1532,19 +1175,9 @@ fn read_uri(ctx: Ctx, item: &str, uri: &str) -> Result<Vec<u8>, SceneError> {
     let file = ctx.path.parent().unwrap_or(Path::new("")).join(&relative);
     std::fs::read(&file).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
-            ctx.fail(
-                ErrorKind::NotFound,
-                item,
-                format!("{} not found", file.display()),
-                "put the file next to the .gltf, or fix the uri",
-            )
+            ctx.fail(ErrorKind::NotFound, item, format!("{} not found", file.display()), "put the file next to the .gltf, or fix the uri")
         } else {
-            ctx.fail(
-                ErrorKind::Io,
-                item,
-                format!("cannot read {}: {e}", file.display()),
-                "check the file's permissions",
-            )
+            ctx.fail(ErrorKind::Io, item, format!("cannot read {}: {e}", file.display()), "check the file's permissions")
         }
     })
 }
@@ -1607,40 +1240,18 @@ fn decode_base64(text: &str) -> Result<Vec<u8>, usize> {
 /// linear already). Other formats are refused by their signature, whatever the mimeType says.
 fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Texture, SceneError> {
     if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-        return Err(ctx.fail(
-            ErrorKind::Unsupported,
-            item,
-            "is a JPEG image",
-            "convert the image to PNG",
-        ));
+        return Err(ctx.fail(ErrorKind::Unsupported, item, "is a JPEG image", "convert the image to PNG"));
     }
     if !bytes.starts_with(&[0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A]) {
-        return Err(ctx.fail(
-            ErrorKind::Unsupported,
-            item,
-            "is not a PNG image",
-            "convert the image to PNG",
-        ));
+        return Err(ctx.fail(ErrorKind::Unsupported, item, "is not a PNG image", "convert the image to PNG"));
     }
-    let bad = |e: png::DecodingError| {
-        ctx.fail(
-            ErrorKind::Image,
-            item,
-            format!("cannot decode the PNG: {e}"),
-            "re-save the image as PNG",
-        )
-    };
+    let bad = |e: png::DecodingError| ctx.fail(ErrorKind::Image, item, format!("cannot decode the PNG: {e}"), "re-save the image as PNG");
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     // Palette to RGB, tRNS to alpha, low bit depths to 8; 16-bit stays 16-bit.
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(bad)?;
     let Some(size) = reader.output_buffer_size() else {
-        return Err(ctx.fail(
-            ErrorKind::Image,
-            item,
-            "the PNG is too large",
-            "use a smaller image",
-        ));
+        return Err(ctx.fail(ErrorKind::Image, item, "the PNG is too large", "use a smaller image"));
     };
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(bad)?;
@@ -1650,19 +1261,10 @@ fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Textur
         png::ColorType::Rgb => 3,
         png::ColorType::Rgba => 4,
         png::ColorType::Indexed => {
-            return Err(ctx.fail(
-                ErrorKind::Image,
-                item,
-                "the PNG palette was not expanded",
-                "re-save the image as RGB(A) PNG",
-            ))
+            return Err(ctx.fail(ErrorKind::Image, item, "the PNG palette was not expanded", "re-save the image as RGB(A) PNG"))
         }
     };
-    let bytes_per_sample = if info.bit_depth == png::BitDepth::Sixteen {
-        2
-    } else {
-        1
-    };
+    let bytes_per_sample = if info.bit_depth == png::BitDepth::Sixteen { 2 } else { 1 };
     let (width, height) = (info.width, info.height);
     let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
     let sample = |row: &[u8], i: usize| -> f32 {
@@ -1676,12 +1278,7 @@ fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Textur
     for y in 0..height as usize {
         let row_start = y * info.line_size;
         let Some(row) = buf.get(row_start..row_start + info.line_size) else {
-            return Err(ctx.fail(
-                ErrorKind::Image,
-                item,
-                "the decoded PNG is shorter than its size",
-                "re-save the image",
-            ));
+            return Err(ctx.fail(ErrorKind::Image, item, "the decoded PNG is shorter than its size", "re-save the image"));
         };
         for x in 0..width as usize {
             let s = |c: usize| sample(row, x * channels + c);
@@ -1698,20 +1295,10 @@ fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Textur
                 3 => (Vec3::new(s(0), s(1), s(2)), 1.0),
                 _ => (Vec3::new(s(0), s(1), s(2)), s(3)),
             };
-            texels.push(Vec4::new(
-                to_linear(rgb.x),
-                to_linear(rgb.y),
-                to_linear(rgb.z),
-                a,
-            ));
+            texels.push(Vec4::new(to_linear(rgb.x), to_linear(rgb.y), to_linear(rgb.z), a));
         }
     }
-    Ok(Texture {
-        name,
-        width,
-        height,
-        texels,
-    })
+    Ok(Texture { name, width, height, texels })
 }
 
 #[cfg(test)]
@@ -1762,15 +1349,10 @@ mod tests {
 
     #[test]
     fn glb_splitter_refuses_damaged_headers_without_panicking() {
-        let ctx = Ctx {
-            path: Path::new("x.glb"),
-        };
-        for bytes in [
-            &b"glTF"[..],
-            b"glTF\x02\0\0\0\x04\0\0\0",
-            b"glTF\x02\0\0\0\xff\xff\xff\xff",
-            b"glTF\x02\0\0\0\x20\0\0\0\xff\xff\0\0JSON",
-        ] {
+        let ctx = Ctx { path: Path::new("x.glb") };
+        for bytes in
+            [&b"glTF"[..], b"glTF\x02\0\0\0\x04\0\0\0", b"glTF\x02\0\0\0\xff\xff\xff\xff", b"glTF\x02\0\0\0\x20\0\0\0\xff\xff\0\0JSON"]
+        {
             assert!(split_glb(ctx, bytes).is_err());
         }
     }

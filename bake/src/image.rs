@@ -42,10 +42,7 @@ fn io_error(path: &Path, message: impl std::fmt::Display) -> ImageError {
 
 /// Writes a file through a temporary sibling and a rename, so a failure never leaves a
 /// half-written file under the final name.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), ImageError> {
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
     let file_name = path.file_name().ok_or_else(|| io_error(path, "not a file path"))?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
@@ -81,12 +78,7 @@ pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), Im
     let exr_layers: Vec<_> = layers
         .iter()
         .map(|(name, image)| {
-            Layer::new(
-                size,
-                LayerAttributes::named(*name),
-                Encoding::SMALL_LOSSLESS,
-                SpecificChannels::rgb(LayerPixels(image)),
-            )
+            Layer::new(size, LayerAttributes::named(*name), Encoding::SMALL_LOSSLESS, SpecificChannels::rgb(LayerPixels(image)))
         })
         .collect();
     let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(size));
@@ -128,12 +120,15 @@ const MAX_PIXELS: usize = 16384 * 16384;
 /// Refuses a file whose header claims a size no relume image has, before anything is
 /// allocated for it (a corrupt header must not become a huge allocation or an overflow).
 fn check_exr_size(path: &Path) -> Result<(), ImageError> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
     for header in meta.headers.iter() {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         if w.checked_mul(h).is_none_or(|pixels| pixels > MAX_PIXELS) {
-            return Err(io_error(path, format!("a layer claims {w}x{h} pixels, more than relume reads (16384x16384); the file is corrupt or not one of relume's")));
+            return Err(io_error(
+                path,
+                format!("a layer claims {w}x{h} pixels, more than relume reads (16384x16384); the file is corrupt or not one of relume's"),
+            ));
         }
     }
     Ok(())
@@ -196,8 +191,7 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
 
 /// Tonemaps a linear image (see [`tonemap_to_srgb8`]) and writes it as PNG.
 pub fn write_png_tonemapped(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
-    let rgb: Vec<u8> =
-        image.pixels.iter().flat_map(|p| tonemap_to_srgb8(*p, exposure)).collect();
+    let rgb: Vec<u8> = image.pixels.iter().flat_map(|p| tonemap_to_srgb8(*p, exposure)).collect();
     write_png_rgb8(path, image.width, image.height, &rgb)
 }
 

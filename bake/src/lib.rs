@@ -11,18 +11,18 @@ pub mod settings;
 pub mod testing;
 
 #[cfg(feature = "baking")]
-pub mod bvh;
-#[cfg(feature = "baking")]
-pub mod sampling;
-#[cfg(feature = "baking")]
-pub mod reference;
-#[cfg(feature = "baking")]
-pub mod work;
-#[cfg(feature = "baking")]
 pub mod atlas;
 #[cfg(feature = "baking")]
-pub mod obscurance;
+pub mod bvh;
 #[cfg(feature = "baking")]
 pub mod cpca;
 #[cfg(feature = "baking")]
 pub mod light_path_maps;
+#[cfg(feature = "baking")]
+pub mod obscurance;
+#[cfg(feature = "baking")]
+pub mod reference;
+#[cfg(feature = "baking")]
+pub mod sampling;
+#[cfg(feature = "baking")]
+pub mod work;

@@ -9,7 +9,6 @@
 //! density d(e), so that sum_e I_e T_e[t] estimates the indirect irradiance at t
 //! (`clustered_transfer` holds the formula the renderer evaluates).
 
-use crate::settings::first_failed_check;
 use crate::artifact::Texel;
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
@@ -17,6 +16,7 @@ use crate::clustered_transfer::{entry_irradiance_unshadowed, ClusteredTransfer, 
 use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Scene};
+use crate::settings::first_failed_check;
 use crate::settings::LightRegion;
 use crate::work::{progress_bar, with_threads};
 use glam::{Vec2, Vec3};
@@ -350,7 +350,13 @@ fn exit_point(atlas: &Atlas, bvh: &SceneBvh, t: u32, seed: u64) -> Texel {
 /// T_e for every entry point and covered texel of `texels` (the atlas's). Passes of one
 /// walk per entry point until `walks` are done or the time limit is reached; the result is
 /// the same whatever the thread count.
-pub fn bake_transfers(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, entries: &[BakedEntry], settings: &LightPathMapSettings) -> Result<Transfers, String> {
+pub fn bake_transfers(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    atlas: &Atlas,
+    entries: &[BakedEntry],
+    settings: &LightPathMapSettings,
+) -> Result<Transfers, String> {
     settings.validate()?;
     let covered: Vec<u32> = (0..atlas.texels.len() as u32).filter(|&t| atlas.texels[t as usize].coverage > 0.0).collect();
     if covered.is_empty() {
@@ -433,7 +439,13 @@ pub struct Compressed {
 
 /// Clusters the entry points by position and normal and compresses their transfers by
 /// clustered PCA (`cpca`), into the atlas's texel grid of `texel_count` texels.
-pub fn compress(transfers: &Transfers, entries: &[BakedEntry], texel_count: usize, light_area: f32, compression: Compression) -> Result<Compressed, String> {
+pub fn compress(
+    transfers: &Transfers,
+    entries: &[BakedEntry],
+    texel_count: usize,
+    light_area: f32,
+    compression: Compression,
+) -> Result<Compressed, String> {
     let cols = 3 * transfers.texels.len();
     let data: Vec<f32> = transfers.values.iter().flat_map(|v| v.to_array()).collect();
     let features = entry_features(entries);
@@ -461,9 +473,13 @@ const FEATURE_DIMS: usize = 6;
 const NORMAL_WEIGHT: f32 = 0.5;
 
 fn entry_features(entries: &[BakedEntry]) -> Vec<f32> {
-    let (lo, hi) = entries.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), e| (lo.min(e.point.position), hi.max(e.point.position)));
+    let (lo, hi) =
+        entries.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), e| (lo.min(e.point.position), hi.max(e.point.position)));
     let extent = (hi - lo).length().max(1e-6);
-    entries.iter().flat_map(|e| (e.point.position / extent).to_array().into_iter().chain((e.point.normal * NORMAL_WEIGHT).to_array())).collect()
+    entries
+        .iter()
+        .flat_map(|e| (e.point.position / extent).to_array().into_iter().chain((e.point.normal * NORMAL_WEIGHT).to_array()))
+        .collect()
 }
 
 /// A covered-texel vector (3 floats a texel) spread over the whole texel grid.
@@ -491,7 +507,8 @@ fn uncompressed(transfers: &Transfers, entries: &[BakedEntry], texel_count: usiz
 
 fn clustered(fit: &cpca::Cpca, transfers: &Transfers, entries: &[BakedEntry], texel_count: usize, light_area: f32) -> ClusteredTransfer {
     let as_rgb = |v: &[f32]| v.chunks_exact(3).map(Vec3::from_slice).collect::<Vec<_>>();
-    let mut out = ClusteredTransfer { basis_count: fit.basis as u32, texel_count, light_area, cluster_starts: vec![0], ..Default::default() };
+    let mut out =
+        ClusteredTransfer { basis_count: fit.basis as u32, texel_count, light_area, cluster_starts: vec![0], ..Default::default() };
     for cluster in &fit.clusters {
         out.entry_points.extend(cluster.members.iter().map(|&e| entries[e as usize].point));
         out.cluster_starts.push(out.entry_points.len() as u32);

@@ -88,8 +88,7 @@ pub fn add_scaled(base: &Image, unit: &Image, scale: f32) -> Result<Image, Image
 /// Non-finite pixels are magenta.
 pub fn false_colour(image: &Image, reference: &Image, scale: f32) -> Result<Vec<u8>, ImageError> {
     check_sizes(image, reference)?;
-    let rms = (reference.pixels.iter().map(|r| r.length_squared() as f64).sum::<f64>()
-        / (3 * reference.pixels.len()).max(1) as f64)
+    let rms = (reference.pixels.iter().map(|r| r.length_squared() as f64).sum::<f64>() / (3 * reference.pixels.len()).max(1) as f64)
         .sqrt()
         .max(f64::MIN_POSITIVE) as f32;
     Ok(image

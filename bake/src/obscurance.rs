@@ -9,11 +9,11 @@
 //! ray's estimate is rho(L) itself (the 1/pi and the cosine cancel the density).
 //! The lightmap holds the front side: a two-sided surface shows the same value on its back.
 
-use crate::settings::first_failed_check;
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
+use crate::settings::first_failed_check;
 use crate::work::{progress_bar, with_threads};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;

@@ -33,8 +33,8 @@ use crate::bvh::{Hit, SceneBvh};
 use crate::image::Image;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
-use glam::{Vec2, Vec3};
 use crate::work::{progress_bar, with_threads};
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::time::{Duration, Instant};
@@ -104,11 +104,7 @@ pub struct ReferenceImages {
 }
 
 /// Renders the scene's camera view with the reference path tracer.
-pub fn render_reference(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    settings: &ReferenceSettings,
-) -> ReferenceImages {
+pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSettings) -> ReferenceImages {
     let integrator = Integrator::new(scene, bvh, settings);
     let (width, height) = (settings.width, settings.height);
     let pixel_count = (width as usize) * (height as usize);
@@ -133,15 +129,12 @@ pub fn render_reference(
                 pass = pass.min(fit as u32);
             }
             let samples = taken..taken + pass.min(settings.samples_per_pixel - taken);
-            sums.par_chunks_mut(width as usize)
-                .zip(nonfinite.par_iter_mut())
-                .enumerate()
-                .for_each(|(y, (row, bad))| {
-                    for (x, sum) in row.iter_mut().enumerate() {
-                        *bad += integrator.pixel(x as u32, y as u32, samples.clone(), sum);
-                    }
-                    progress.inc(samples.len() as u64);
-                });
+            sums.par_chunks_mut(width as usize).zip(nonfinite.par_iter_mut()).enumerate().for_each(|(y, (row, bad))| {
+                for (x, sum) in row.iter_mut().enumerate() {
+                    *bad += integrator.pixel(x as u32, y as u32, samples.clone(), sum);
+                }
+                progress.inc(samples.len() as u64);
+            });
             taken = samples.end;
             pass = (pass * 2).min(MAX_PASS_SAMPLES);
         }
@@ -155,16 +148,8 @@ pub fn render_reference(
     if taken > 0 {
         let scale = 1.0 / taken as f64;
         for (i, s) in sums.iter().enumerate() {
-            let d = Vec3::new(
-                (s[0] * scale) as f32,
-                (s[1] * scale) as f32,
-                (s[2] * scale) as f32,
-            );
-            let n = Vec3::new(
-                (s[3] * scale) as f32,
-                (s[4] * scale) as f32,
-                (s[5] * scale) as f32,
-            );
+            let d = Vec3::new((s[0] * scale) as f32, (s[1] * scale) as f32, (s[2] * scale) as f32);
+            let n = Vec3::new((s[3] * scale) as f32, (s[4] * scale) as f32, (s[5] * scale) as f32);
             direct.pixels[i] = d;
             indirect.pixels[i] = n;
             combined.pixels[i] = d + n;
@@ -186,12 +171,7 @@ pub fn render_reference(
 /// paths, same seed); `max_time` and `progress` are ignored, every sample is taken. For a
 /// closed scene with albedo a and no emitters in view, element k + 1 is about a times
 /// element k: what the energy test checks.
-pub fn radiance_by_bounce(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    settings: &ReferenceSettings,
-    last_bounce: u32,
-) -> Vec<Vec3> {
+pub fn radiance_by_bounce(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSettings, last_bounce: u32) -> Vec<Vec3> {
     let integrator = Integrator::new(scene, bvh, settings);
     let slots = last_bounce as usize + 1;
     let rows: Vec<Vec<[f64; 3]>> = with_threads(settings.threads, || {
@@ -225,16 +205,7 @@ pub fn radiance_by_bounce(
     }
     let n = settings.samples_per_pixel as f64 * settings.width as f64 * settings.height as f64;
     let scale = if n > 0.0 { 1.0 / n } else { 0.0 };
-    total
-        .iter()
-        .map(|t| {
-            Vec3::new(
-                (t[0] * scale) as f32,
-                (t[1] * scale) as f32,
-                (t[2] * scale) as f32,
-            )
-        })
-        .collect()
+    total.iter().map(|t| Vec3::new((t[0] * scale) as f32, (t[1] * scale) as f32, (t[2] * scale) as f32)).collect()
 }
 
 /// Irradiance from the scene's punctual lights at `point` on a surface with unit `normal`,
@@ -242,24 +213,13 @@ pub fn radiance_by_bounce(
 /// for lights in front of the surface and not blocked. Shadow rays start
 /// [`SceneBvh::epsilon`] off the point along `normal`. Emissive triangles are not included.
 pub fn direct_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal: Vec3) -> Vec3 {
-    scene
-        .lights
-        .iter()
-        .filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true))
-        .sum()
+    scene.lights.iter().filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true)).sum()
 }
 
 /// Irradiance on the shading normal `ns` from one punctual light, or None when the light is
 /// behind the surface (either normal), outside its cone or range, or blocked.
 #[inline]
-fn punctual_irradiance(
-    bvh: &SceneBvh,
-    light: &Light,
-    point: Vec3,
-    ns: Vec3,
-    ng: Vec3,
-    shadows: bool,
-) -> Option<Vec3> {
+fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<Vec3> {
     let incident = light.incident(point);
     if incident.irradiance.max_element() <= 0.0 {
         return None;
@@ -341,20 +301,13 @@ impl Emitters {
             let previous = if i == 0 { 0.0 } else { cdf[i - 1] };
             pdf_area[prim as usize] = ((cdf[i] - previous) / areas[i] as f64) as f32;
         }
-        Emitters {
-            primitives,
-            cdf,
-            pdf_area,
-        }
+        Emitters { primitives, cdf, pdf_area }
     }
 
     /// The emitter a uniform number in [0, 1) picks.
     #[inline]
     fn pick(&self, u: f64) -> u32 {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.cdf.len() - 1);
+        let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
         self.primitives[i]
     }
 }
@@ -427,22 +380,11 @@ impl<'a> Integrator<'a> {
             Vec2::new(u[0], u[1])
         };
         let camera = &self.scene.camera;
-        let dir = camera.ray_direction(
-            x as f32 + jitter.x,
-            y as f32 + jitter.y,
-            self.width,
-            self.height,
-        );
+        let dir = camera.ray_direction(x as f32 + jitter.x, y as f32 + jitter.y, self.width, self.height);
         self.trace_path(&sampler, camera.position(), dir, sink);
     }
 
-    fn trace_path(
-        &self,
-        sampler: &PathSampler,
-        mut origin: Vec3,
-        mut dir: Vec3,
-        sink: &mut impl FnMut(u32, Vec3),
-    ) {
+    fn trace_path(&self, sampler: &PathSampler, mut origin: Vec3, mut dir: Vec3, sink: &mut impl FnMut(u32, Vec3)) {
         let scene = self.scene;
         let mut throughput = Vec3::ONE;
         // Solid-angle density with which `dir` was sampled and the point it left from (both
@@ -463,8 +405,7 @@ impl<'a> Integrator<'a> {
                     1.0
                 } else {
                     let distance2 = (hit.position - previous).length_squared();
-                    let light_pdf =
-                        self.emitters.pdf_area[hit.primitive as usize] * distance2 / cos_light;
+                    let light_pdf = self.emitters.pdf_area[hit.primitive as usize] * distance2 / cos_light;
                     power_heuristic(bsdf_pdf, light_pdf)
                 };
                 sink(bounce, throughput * material.emission * weight);
@@ -478,16 +419,8 @@ impl<'a> Integrator<'a> {
             }
             let f = albedo * (1.0 / PI);
             // Two-sided scattering: both normals on the side the ray came from.
-            let ng = if hit.geometric_normal.dot(wo) >= 0.0 {
-                hit.geometric_normal
-            } else {
-                -hit.geometric_normal
-            };
-            let ns = if hit.shading_normal.dot(wo) >= 0.0 {
-                hit.shading_normal
-            } else {
-                -hit.shading_normal
-            };
+            let ng = if hit.geometric_normal.dot(wo) >= 0.0 { hit.geometric_normal } else { -hit.geometric_normal };
+            let ns = if hit.shading_normal.dot(wo) >= 0.0 { hit.shading_normal } else { -hit.shading_normal };
             let p = hit.position;
 
             for light in &scene.lights {
@@ -529,15 +462,7 @@ impl<'a> Integrator<'a> {
     /// Next-event estimate from the emissive triangles at `p`, MIS-weighted against BSDF
     /// sampling: Le cos / pdf times the weight, still to be multiplied by f and the
     /// throughput. None when the sample contributes nothing.
-    fn sample_emitter(
-        &self,
-        hit: &Hit,
-        p: Vec3,
-        ns: Vec3,
-        ng: Vec3,
-        pick: f64,
-        u: Vec2,
-    ) -> Option<Vec3> {
+    fn sample_emitter(&self, hit: &Hit, p: Vec3, ns: Vec3, ng: Vec3, pick: f64, u: Vec2) -> Option<Vec3> {
         let prim = self.emitters.pick(pick);
         if prim == hit.primitive {
             return None; // A flat emitter cannot light itself.

@@ -55,10 +55,7 @@ pub struct PathSampler {
 
 impl PathSampler {
     pub fn new(seed: u64, pixel: u32, sample: u32) -> Self {
-        PathSampler {
-            key: pixel_key(seed, pixel),
-            sample,
-        }
+        PathSampler { key: pixel_key(seed, pixel), sample }
     }
 
     /// An independent uniform number in [0, 1) for dimension `dim` of this path.
@@ -80,8 +77,7 @@ impl PathSampler {
     /// independent shuffle and scramble, so groups are decorrelated from one another.
     #[inline]
     pub fn sobol4(&self, group: u32) -> [f32; 4] {
-        let group_seed =
-            mix64(self.key ^ (0x5851_f42d_4c95_7f2d_u64.wrapping_mul(group as u64 + 1)));
+        let group_seed = mix64(self.key ^ (0x5851_f42d_4c95_7f2d_u64.wrapping_mul(group as u64 + 1)));
         let index = nested_uniform_scramble(self.sample, group_seed as u32);
         let mut out = [0.0; 4];
         for (d, o) in out.iter_mut().enumerate() {
@@ -95,12 +91,8 @@ impl PathSampler {
 /// Sobol direction numbers of the first four dimensions, built by the Bratley-Fox recurrence
 /// from Joe and Kuo's primitive polynomials and initial numbers (d = 2: s = 1, a = 0, m = 1;
 /// d = 3: s = 2, a = 1, m = 1 3; d = 4: s = 3, a = 1, m = 1 3 1); dimension 1 is van der Corput.
-const SOBOL_DIRECTIONS: [[u32; 32]; 4] = [
-    van_der_corput_directions(),
-    sobol_directions(1, 0, &[1]),
-    sobol_directions(2, 1, &[1, 3]),
-    sobol_directions(3, 1, &[1, 3, 1]),
-];
+const SOBOL_DIRECTIONS: [[u32; 32]; 4] =
+    [van_der_corput_directions(), sobol_directions(1, 0, &[1]), sobol_directions(2, 1, &[1, 3]), sobol_directions(3, 1, &[1, 3, 1])];
 
 const fn van_der_corput_directions() -> [u32; 32] {
     let mut v = [0u32; 32];
@@ -225,11 +217,7 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if a.x == 0.0 && a.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, phi) = if a.x.abs() > a.y.abs() {
-        (a.x, FRAC_PI_4 * (a.y / a.x))
-    } else {
-        (a.y, FRAC_PI_2 - FRAC_PI_4 * (a.x / a.y))
-    };
+    let (r, phi) = if a.x.abs() > a.y.abs() { (a.x, FRAC_PI_4 * (a.y / a.x)) } else { (a.y, FRAC_PI_2 - FRAC_PI_4 * (a.x / a.y)) };
     let (s, c) = phi.sin_cos();
     Vec2::new(r * c, r * s)
 }
@@ -280,10 +268,7 @@ mod tests {
         assert!((mean - 0.5).abs() < 0.005, "mean {mean}");
         assert!((var - 1.0 / 12.0).abs() < 0.002, "variance {var}");
         let expected = n as f64 / 16.0;
-        let chi2: f64 = bins
-            .iter()
-            .map(|&b| (b as f64 - expected).powi(2) / expected)
-            .sum();
+        let chi2: f64 = bins.iter().map(|&b| (b as f64 - expected).powi(2) / expected).sum();
         // 15 degrees of freedom: P(chi2 > 40) is about 5e-4.
         assert!(chi2 < 40.0, "chi2 {chi2} bins {bins:?}");
     }
@@ -359,8 +344,7 @@ mod tests {
     fn basis_is_orthonormal_and_right_handed() {
         for i in 0..1000 {
             let s = PathSampler::new(0, i, 0);
-            let n =
-                Vec3::new(s.uniform(0) - 0.5, s.uniform(1) - 0.5, s.uniform(2) - 0.5).normalize();
+            let n = Vec3::new(s.uniform(0) - 0.5, s.uniform(1) - 0.5, s.uniform(2) - 0.5).normalize();
             let n = if i == 0 {
                 Vec3::NEG_Z
             } else if i == 1 {
@@ -406,10 +390,7 @@ mod tests {
             corner += (b.x > 0.5) as u32;
         }
         mean /= n as f32;
-        assert!(
-            (mean - Vec3::splat(1.0 / 3.0)).abs().max_element() < 0.003,
-            "{mean}"
-        );
+        assert!((mean - Vec3::splat(1.0 / 3.0)).abs().max_element() < 0.003, "{mean}");
         assert!((corner as f32 / n as f32 - 0.25).abs() < 0.005);
     }
 }

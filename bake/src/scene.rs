@@ -6,8 +6,8 @@
 //! relume treats photometric units as radiometric ones one to one (1 cd is 1 W/sr of
 //! linear radiance units), so the path tracer and the renderer agree by construction.
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
 use crate::settings::LightingSettings;
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
@@ -61,7 +61,10 @@ pub struct Texture {
 pub enum LightKind {
     Point,
     /// Cone angles in radians from the spot axis; 0 <= inner < outer <= pi/2.
-    Spot { inner_cone: f32, outer_cone: f32 },
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
     Directional,
 }
 
@@ -147,17 +150,12 @@ impl Light {
     /// and the smooth spot cone attenuation. The renderer's `lights.glsl` is the same formula.
     pub fn incident(&self, point: Vec3) -> Incident {
         if self.kind == LightKind::Directional {
-            return Incident {
-                to_light: -self.direction,
-                distance: f32::INFINITY,
-                irradiance: self.intensity,
-            };
+            return Incident { to_light: -self.direction, distance: f32::INFINITY, irradiance: self.intensity };
         }
         let offset = self.position - point;
         let distance = offset.length();
         let to_light = offset / distance;
-        let attenuation = range_window(distance, self.range) / (distance * distance)
-            * self.cone_attenuation(-to_light);
+        let attenuation = range_window(distance, self.range) / (distance * distance) * self.cone_attenuation(-to_light);
         Incident { to_light, distance, irradiance: self.intensity * attenuation }
     }
 

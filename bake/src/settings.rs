@@ -152,8 +152,14 @@ fn read_light_path_maps(block: &Map<String, Value>, s: &mut LightingSettings) ->
         known_keys(r, &format!("{key}.region"), &["box", "test_points", "points"])?;
         s.light_region = Some(match (r.get("box"), r.get("points")) {
             (Some(b), None) => {
-                let corners = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| format!("{key}.region.box must be [[min x, y, z], [max x, y, z]]"))?;
-                let test_points = r.get("test_points").map_or(Some(64), Value::as_u64).ok_or_else(|| format!("{key}.region.test_points must be a whole number"))?;
+                let corners = b
+                    .as_array()
+                    .filter(|a| a.len() == 2)
+                    .ok_or_else(|| format!("{key}.region.box must be [[min x, y, z], [max x, y, z]]"))?;
+                let test_points = r
+                    .get("test_points")
+                    .map_or(Some(64), Value::as_u64)
+                    .ok_or_else(|| format!("{key}.region.test_points must be a whole number"))?;
                 LightRegion::Box {
                     min: vec3(&corners[0], &format!("{key}.region.box[0]"))?,
                     max: vec3(&corners[1], &format!("{key}.region.box[1]"))?,
@@ -212,11 +218,7 @@ mod tests {
     #[test]
     fn missing_block_keeps_defaults_and_keys_override() {
         assert_eq!(LightingSettings::from_extras(&json!({}), defaults()), Ok(defaults()));
-        let s = LightingSettings::from_extras(
-            &json!({"relume": {"beta": 0.5, "obscurance": {"l_max": 2.0}}}),
-            defaults(),
-        )
-        .unwrap();
+        let s = LightingSettings::from_extras(&json!({"relume": {"beta": 0.5, "obscurance": {"l_max": 2.0}}}), defaults()).unwrap();
         assert_eq!((s.beta, s.l_max, s.tau), (0.5, 2.0, defaults().tau));
         let s = LightingSettings::from_extras(
             &json!({"relume": {"light_path_maps": {"region": {"points": [[0, 1, 2]]}, "light_area": 0.5}}}),

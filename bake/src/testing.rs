@@ -7,8 +7,8 @@
 //! builder checks each triangle's winding against the side it must face and flips it if
 //! needed.
 
-use crate::settings::LightingSettings;
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene};
+use crate::settings::LightingSettings;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
@@ -21,22 +21,11 @@ pub enum Facing {
 
 /// A Lambertian material with constant albedo and emitted radiance.
 pub fn material(name: &str, albedo: Vec3, emission: Vec3) -> Material {
-    Material {
-        name: name.to_string(),
-        base_color: albedo.extend(1.0),
-        base_color_texture: None,
-        emission,
-    }
+    Material { name: name.to_string(), base_color: albedo.extend(1.0), base_color_texture: None, emission }
 }
 
 /// A scene from parts; its `source` names it as built in code.
-pub fn scene(
-    name: &str,
-    meshes: Vec<Mesh>,
-    materials: Vec<Material>,
-    lights: Vec<Light>,
-    camera: Camera,
-) -> Scene {
+pub fn scene(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, lights: Vec<Light>, camera: Camera) -> Scene {
     let mut scene = Scene {
         source: PathBuf::from(format!("<built in code: {name}>")),
         meshes,
@@ -57,12 +46,7 @@ pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Camera {
     let right = forward.cross(up).normalize();
     let camera_up = right.cross(forward);
     Camera {
-        world_from_camera: Mat4::from_cols(
-            right.extend(0.0),
-            camera_up.extend(0.0),
-            (-forward).extend(0.0),
-            eye.extend(1.0),
-        ),
+        world_from_camera: Mat4::from_cols(right.extend(0.0), camera_up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0)),
         yfov,
         znear: 0.01,
         zfar: 1.0e4,
@@ -70,29 +54,13 @@ pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Camera {
 }
 
 pub fn point_light(position: Vec3, intensity: Vec3) -> Light {
-    Light {
-        name: "point".to_string(),
-        kind: LightKind::Point,
-        intensity,
-        range: None,
-        position,
-        direction: Vec3::NEG_Z,
-    }
+    Light { name: "point".to_string(), kind: LightKind::Point, intensity, range: None, position, direction: Vec3::NEG_Z }
 }
 
-pub fn spot_light(
-    position: Vec3,
-    direction: Vec3,
-    intensity: Vec3,
-    inner_cone: f32,
-    outer_cone: f32,
-) -> Light {
+pub fn spot_light(position: Vec3, direction: Vec3, intensity: Vec3, inner_cone: f32, outer_cone: f32) -> Light {
     Light {
         name: "spot".to_string(),
-        kind: LightKind::Spot {
-            inner_cone,
-            outer_cone,
-        },
+        kind: LightKind::Spot { inner_cone, outer_cone },
         intensity,
         range: None,
         position,
@@ -102,12 +70,7 @@ pub fn spot_light(
 
 /// A flat-shaded mesh from a triangle soup; `facing` decides each triangle's winding: it
 /// is flipped when its normal disagrees with `wanted(centroid)`.
-fn soup(
-    name: &str,
-    triangles: &[[Vec3; 3]],
-    material: usize,
-    wanted: impl Fn(Vec3) -> Vec3,
-) -> Mesh {
+fn soup(name: &str, triangles: &[[Vec3; 3]], material: usize, wanted: impl Fn(Vec3) -> Vec3) -> Mesh {
     let mut positions = Vec::with_capacity(triangles.len() * 3);
     let mut normals = Vec::with_capacity(triangles.len() * 3);
     for &[a, b, c] in triangles {
@@ -134,13 +97,7 @@ fn soup(
 
 /// A closed sphere: an icosahedron subdivided `subdivisions` times (20 * 4^n triangles),
 /// vertices on the sphere.
-pub fn sphere(
-    center: Vec3,
-    radius: f32,
-    subdivisions: u32,
-    facing: Facing,
-    material: usize,
-) -> Mesh {
+pub fn sphere(center: Vec3, radius: f32, subdivisions: u32, facing: Facing, material: usize) -> Mesh {
     let t = (1.0 + 5.0f32.sqrt()) / 2.0;
     let v = [
         Vec3::new(-1.0, t, 0.0),
@@ -168,19 +125,12 @@ pub fn sphere(
     for _ in 0..subdivisions {
         let mut next = Vec::with_capacity(tris.len() * 4);
         for [a, b, c] in tris {
-            let (ab, bc, ca) = (
-                (a + b).normalize(),
-                (b + c).normalize(),
-                (c + a).normalize(),
-            );
+            let (ab, bc, ca) = ((a + b).normalize(), (b + c).normalize(), (c + a).normalize());
             next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
         }
         tris = next;
     }
-    let tris: Vec<[Vec3; 3]> = tris
-        .iter()
-        .map(|t| t.map(|p| center + p * radius))
-        .collect();
+    let tris: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| center + p * radius)).collect();
     let sign = if facing == Facing::Outward { 1.0 } else { -1.0 };
     soup("sphere", &tris, material, |c| (c - center) * sign)
 }
@@ -189,18 +139,11 @@ pub fn sphere(
 /// `n` x `n` cells (two triangles each); its front faces the direction of `u x v`.
 pub fn square(center: Vec3, u: Vec3, v: Vec3, n: u32, material: usize) -> Mesh {
     let normal = u.cross(v);
-    let corner = |i: u32, j: u32| {
-        center + u * (2.0 * i as f32 / n as f32 - 1.0) + v * (2.0 * j as f32 / n as f32 - 1.0)
-    };
+    let corner = |i: u32, j: u32| center + u * (2.0 * i as f32 / n as f32 - 1.0) + v * (2.0 * j as f32 / n as f32 - 1.0);
     let mut tris = Vec::with_capacity((2 * n * n) as usize);
     for i in 0..n {
         for j in 0..n {
-            let (a, b, c, d) = (
-                corner(i, j),
-                corner(i + 1, j),
-                corner(i + 1, j + 1),
-                corner(i, j + 1),
-            );
+            let (a, b, c, d) = (corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1));
             tris.push([a, b, c]);
             tris.push([a, c, d]);
         }
@@ -212,11 +155,7 @@ pub fn square(center: Vec3, u: Vec3, v: Vec3, n: u32, material: usize) -> Mesh {
 pub fn closed_box(min: Vec3, max: Vec3, n: u32, facing: Facing, material: usize) -> Mesh {
     let c = (min + max) * 0.5;
     let h = (max - min) * 0.5;
-    let faces = [
-        (Vec3::X, Vec3::Y, Vec3::Z),
-        (Vec3::Y, Vec3::Z, Vec3::X),
-        (Vec3::Z, Vec3::X, Vec3::Y),
-    ];
+    let faces = [(Vec3::X, Vec3::Y, Vec3::Z), (Vec3::Y, Vec3::Z, Vec3::X), (Vec3::Z, Vec3::X, Vec3::Y)];
     let mut tris = Vec::new();
     for (axis, a, b) in faces {
         for side in [-1.0f32, 1.0] {

@@ -6,11 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// Runs `f` on a pool of `threads` workers, or on rayon's global pool (all cores) for None.
 pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
     match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .expect("could not start the worker threads")
-            .install(f),
+        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("could not start the worker threads").install(f),
         None => f(),
     }
 }

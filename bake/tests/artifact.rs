@@ -12,7 +12,13 @@ use std::path::{Path, PathBuf};
 fn test_scene(size: f32) -> Scene {
     let camera = look_at(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 1.0);
     let room = closed_box(Vec3::ZERO, Vec3::splat(size), 2, Facing::Inward, 0);
-    scene("artifact test", vec![room], vec![material("grey", Vec3::splat(0.5), Vec3::ZERO)], vec![point_light(Vec3::ONE, Vec3::ONE)], camera)
+    scene(
+        "artifact test",
+        vec![room],
+        vec![material("grey", Vec3::splat(0.5), Vec3::ZERO)],
+        vec![point_light(Vec3::ONE, Vec3::ONE)],
+        camera,
+    )
 }
 
 fn temp_dir(tag: &str) -> PathBuf {

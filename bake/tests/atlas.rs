@@ -71,7 +71,14 @@ fn no_texel_is_shared_by_two_charts_and_every_triangle_is_covered() {
         let chart = atlas.charts.iter().position(|c| c.mesh == mesh as u32 && c.triangles.contains(&local)).unwrap() as u32;
         assert!(owner[i] == u32::MAX || owner[i] == chart, "texel {i}");
     }
-    println!("charts {}, pages {}, {}x{}, utilization {:.3}", atlas.charts.len(), atlas.pages, atlas.width, atlas.height, atlas.utilization());
+    println!(
+        "charts {}, pages {}, {}x{}, utilization {:.3}",
+        atlas.charts.len(),
+        atlas.pages,
+        atlas.width,
+        atlas.height,
+        atlas.utilization()
+    );
 }
 
 #[test]
@@ -95,7 +102,11 @@ fn texel_geometry_of_a_flat_square_lies_on_it() {
     let atlas = Atlas::build(&scene, &settings(13.0)).unwrap();
     assert_eq!(atlas.charts.len(), 1);
     for (i, t) in atlas.texels.iter().enumerate().filter(|(_, t)| t.coverage > 0.0) {
-        assert!((t.centre.y - 0.5).abs() < 1e-5 && t.centre.x.abs() <= 0.7 + 1e-5 && t.centre.z.abs() <= 0.7 + 1e-5, "texel {i}: {:?}", t.centre);
+        assert!(
+            (t.centre.y - 0.5).abs() < 1e-5 && t.centre.x.abs() <= 0.7 + 1e-5 && t.centre.z.abs() <= 0.7 + 1e-5,
+            "texel {i}: {:?}",
+            t.centre
+        );
         assert!((t.normal - Vec3::Y).length() < 1e-5, "texel {i}: {:?}", t.normal);
         let piece_area: f32 = atlas.pieces_of(i).iter().map(|p| p.area).sum();
         assert!((piece_area - t.coverage / 169.0).abs() < 1e-6, "texel {i}: pieces {piece_area}, coverage {}", t.coverage);
@@ -145,7 +156,9 @@ fn the_atlas_is_deterministic_and_bad_settings_are_refused() {
     let b = Atlas::build(&scene, &settings(20.0)).unwrap();
     assert_eq!(a.texels, b.texels);
     assert_eq!(a.meshes, b.meshes);
-    for bad in [AtlasSettings { gutter: 0, ..settings(20.0) }, settings(f32::NAN), AtlasSettings { discontinuity_angle: 2.0, ..settings(20.0) }] {
+    for bad in
+        [AtlasSettings { gutter: 0, ..settings(20.0) }, settings(f32::NAN), AtlasSettings { discontinuity_angle: 2.0, ..settings(20.0) }]
+    {
         assert!(matches!(Atlas::build(&scene, &bad), Err(AtlasError::Settings(_))));
     }
 }

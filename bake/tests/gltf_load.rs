@@ -31,8 +31,7 @@ impl Drop for TempDir {
 fn temp_dir(tag: &str) -> TempDir {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let dir =
-        std::env::temp_dir().join(format!("relume-gltf-load-{}-{tag}-{n}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("relume-gltf-load-{}-{tag}-{n}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     TempDir(dir)
@@ -48,10 +47,7 @@ fn load_err(path: &Path) -> SceneError {
         Err(e) => {
             let line = e.to_string();
             assert!(!line.contains('\n'), "not one line: {line}");
-            assert!(
-                line.starts_with(&path.display().to_string()),
-                "does not name the file: {line}"
-            );
+            assert!(line.starts_with(&path.display().to_string()), "does not name the file: {line}");
             e
         }
     }
@@ -60,8 +56,7 @@ fn load_err(path: &Path) -> SceneError {
 /// A generated scene's JSON and binary buffer.
 fn read_scene(name: &str) -> (Value, Vec<u8>) {
     let dir = scenes_dir();
-    let json: Value =
-        serde_json::from_slice(&std::fs::read(dir.join(format!("{name}.gltf"))).unwrap()).unwrap();
+    let json: Value = serde_json::from_slice(&std::fs::read(dir.join(format!("{name}.gltf"))).unwrap()).unwrap();
     let bin = std::fs::read(dir.join(format!("{name}.bin"))).unwrap();
     (json, bin)
 }
@@ -111,11 +106,7 @@ fn accessor_offset(json: &Value, a: usize) -> usize {
 }
 
 fn mesh<'a>(scene: &'a Scene, name: &str) -> &'a relume_bake::scene::Mesh {
-    scene
-        .meshes
-        .iter()
-        .find(|m| m.name == name)
-        .unwrap_or_else(|| panic!("no mesh {name}"))
+    scene.meshes.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no mesh {name}"))
 }
 
 fn assert_same_scene(a: &Scene, b: &Scene) {
@@ -136,10 +127,7 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         );
     }
     assert_eq!(a.camera.world_from_camera, b.camera.world_from_camera);
-    assert_eq!(
-        (a.camera.yfov, a.camera.znear, a.camera.zfar),
-        (b.camera.yfov, b.camera.znear, b.camera.zfar)
-    );
+    assert_eq!((a.camera.yfov, a.camera.znear, a.camera.zfar), (b.camera.yfov, b.camera.znear, b.camera.zfar));
 }
 
 // --- the generated scenes -----------------------------------------------------------------
@@ -153,13 +141,7 @@ fn cornell_box_loads() {
     assert_eq!(mesh(s, "ShortBlock").indices.len(), 30);
     assert_eq!(mesh(s, "TallBlock").indices.len(), 30);
     assert_eq!(s.lights.len(), 1);
-    let LightKind::Spot {
-        inner_cone,
-        outer_cone,
-    } = s.lights[0].kind
-    else {
-        panic!("not a spot light")
-    };
+    let LightKind::Spot { inner_cone, outer_cone } = s.lights[0].kind else { panic!("not a spot light") };
     assert!(inner_cone < outer_cone && outer_cone <= std::f32::consts::FRAC_PI_2);
     assert!((s.lights[0].direction - Vec3::NEG_Y).length() < 1e-6);
     assert!((s.camera.position() - Vec3::new(0.0, 0.273, 0.8)).length() < 1e-6);
@@ -183,16 +165,8 @@ fn occluder_scenes_load() {
         assert_eq!(s.triangle_count(), triangles, "{name}");
         assert_eq!(s.meshes.len(), 1 + occluders);
         assert!(matches!(s.lights[0].kind, LightKind::Spot { .. }));
-        let (lo, hi) = mesh(s, "Ground")
-            .positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
-                (l.min(*p), h.max(*p))
-            });
-        assert_eq!(
-            (lo, hi),
-            (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 0.0, 2.0))
-        );
+        let (lo, hi) = mesh(s, "Ground").positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+        assert_eq!((lo, hi), (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 0.0, 2.0)));
         // The camera looks down at the scene.
         let forward = s.camera.world_from_camera.transform_vector3(Vec3::NEG_Z);
         assert!(forward.y < -0.2, "{name}: camera does not look down");
@@ -200,16 +174,8 @@ fn occluder_scenes_load() {
     // The box: a unit cube scaled by 0.5 and lifted by 1 in its node: 0.75..1.25 m.
     let s = load_ok(&scenes_dir().join("occluder-plane.gltf")).scene;
     let b = mesh(&s, "Box");
-    let (lo, hi) = b
-        .positions
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
-            (l.min(*p), h.max(*p))
-        });
-    assert_eq!(
-        (lo, hi),
-        (Vec3::new(-0.25, 0.75, -0.25), Vec3::new(0.25, 1.25, 0.25))
-    );
+    let (lo, hi) = b.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+    assert_eq!((lo, hi), (Vec3::new(-0.25, 0.75, -0.25), Vec3::new(0.25, 1.25, 0.25)));
 }
 
 #[test]
@@ -231,11 +197,7 @@ fn data_uri_buffer_loads_identically() {
     let (mut json, bin) = read_scene("occluder-plane");
     let mut encoded = String::new();
     for chunk in bin.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
         let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
         for i in 0..4 {
             if i <= chunk.len() {
@@ -249,10 +211,7 @@ fn data_uri_buffer_loads_identically() {
     let dir = temp_dir("datauri");
     let path = dir.join("embedded.gltf");
     std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
-    assert_same_scene(
-        &load_ok(&scenes_dir().join("occluder-plane.gltf")).scene,
-        &load_ok(&path).scene,
-    );
+    assert_same_scene(&load_ok(&scenes_dir().join("occluder-plane.gltf")).scene, &load_ok(&path).scene);
 }
 
 // --- transforms ------------------------------------------------------------------------------
@@ -261,12 +220,7 @@ fn data_uri_buffer_loads_identically() {
 fn box_with_transform(dir: &Path, tag: &str, transform: Value) -> relume_bake::scene::Mesh {
     let (mut json, bin) = read_scene("occluder-plane");
     let nodes = json["nodes"].as_array_mut().unwrap();
-    let node = nodes
-        .iter_mut()
-        .find(|n| n["name"] == "Box")
-        .unwrap()
-        .as_object_mut()
-        .unwrap();
+    let node = nodes.iter_mut().find(|n| n["name"] == "Box").unwrap().as_object_mut().unwrap();
     for key in ["translation", "rotation", "scale", "matrix"] {
         node.remove(key);
     }
@@ -284,39 +238,21 @@ fn node_transforms_move_positions_and_normals() {
     let rotation = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
     let (t, s) = (Vec3::new(1.0, 2.0, -3.0), Vec3::new(2.0, 0.5, 1.5));
     let trs = Mat4::from_scale_rotation_translation(s, rotation, t);
-    let moved = box_with_transform(
-        &dir,
-        "trs",
-        json!({ "translation": t.to_array(), "rotation": rotation.to_array(), "scale": s.to_array() }),
-    );
+    let moved =
+        box_with_transform(&dir, "trs", json!({ "translation": t.to_array(), "rotation": rotation.to_array(), "scale": s.to_array() }));
     let normal_matrix = Mat3::from_mat4(trs).inverse().transpose();
     assert_eq!(raw.indices, moved.indices);
     for i in 0..raw.positions.len() {
         assert!((trs.transform_point3(raw.positions[i]) - moved.positions[i]).length() < 1e-5);
         let expected = (normal_matrix * raw.normals[i]).normalize();
-        assert!(
-            (expected - moved.normals[i]).length() < 1e-5,
-            "normal {i}: {expected} vs {}",
-            moved.normals[i]
-        );
+        assert!((expected - moved.normals[i]).length() < 1e-5, "normal {i}: {expected} vs {}", moved.normals[i]);
     }
     // A parent's transform composes with the child's: the same TRS given as a column-major
     // matrix on a new parent node.
     let (mut json, bin) = read_scene("occluder-plane");
-    let box_index = json["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["name"] == "Box")
-        .unwrap();
-    json["nodes"][box_index]
-        .as_object_mut()
-        .unwrap()
-        .retain(|k, _| k == "name" || k == "mesh");
-    json["nodes"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({ "name": "Parent", "matrix": trs.to_cols_array(), "children": [box_index] }));
+    let box_index = json["nodes"].as_array().unwrap().iter().position(|n| n["name"] == "Box").unwrap();
+    json["nodes"][box_index].as_object_mut().unwrap().retain(|k, _| k == "name" || k == "mesh");
+    json["nodes"].as_array_mut().unwrap().push(json!({ "name": "Parent", "matrix": trs.to_cols_array(), "children": [box_index] }));
     let parent = json["nodes"].as_array().unwrap().len() - 1;
     let roots = json["scenes"][0]["nodes"].as_array_mut().unwrap();
     roots.retain(|n| n.as_u64() != Some(box_index as u64));
@@ -350,45 +286,26 @@ fn camera_defaults_and_override() {
     let (mut json, bin) = read_scene("occluder-plane");
     // No camera: a default one frames the scene.
     let nodes = json["nodes"].as_array_mut().unwrap();
-    let cam = nodes
-        .iter()
-        .position(|n| n.get("camera").is_some())
-        .unwrap();
+    let cam = nodes.iter().position(|n| n.get("camera").is_some()).unwrap();
     let mut no_camera = json.clone();
-    no_camera["nodes"][cam]
-        .as_object_mut()
-        .unwrap()
-        .remove("camera");
+    no_camera["nodes"][cam].as_object_mut().unwrap().remove("camera");
     let loaded = load_ok(&write_scene(&dir, "nocam", &no_camera, Some(&bin)));
     assert!(loaded.warnings.iter().any(|w| w.contains("default")));
     let s = &loaded.scene;
     let (lo, hi) = s.bounds();
     let view = s.camera.clip_from_world(1, 1);
-    for corner in [
-        lo,
-        hi,
-        Vec3::new(lo.x, hi.y, lo.z),
-        Vec3::new(hi.x, lo.y, hi.z),
-    ] {
+    for corner in [lo, hi, Vec3::new(lo.x, hi.y, lo.z), Vec3::new(hi.x, lo.y, hi.z)] {
         let clip = view * corner.extend(1.0);
         let ndc = clip.truncate() / clip.w;
-        assert!(
-            ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0 && ndc.z > 0.0 && ndc.z < 1.0,
-            "{corner} out of view: {ndc}"
-        );
+        assert!(ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0 && ndc.z > 0.0 && ndc.z < 1.0, "{corner} out of view: {ndc}");
     }
     // Infinite far plane (zfar absent) becomes finite and beyond the scene.
-    json["cameras"][0]["perspective"]
-        .as_object_mut()
-        .unwrap()
-        .remove("zfar");
+    json["cameras"][0]["perspective"].as_object_mut().unwrap().remove("zfar");
     let s = load_ok(&write_scene(&dir, "infinite", &json, Some(&bin))).scene;
     assert!(s.camera.zfar.is_finite() && s.camera.zfar > 7.0);
     // Override from the command line.
     let o = CameraOverride::parse("eye=0,5,0.001; target=0,0,0; yfov=30").unwrap();
-    let s = gltf_load::load_with_camera(&scenes_dir().join("occluder-plane.gltf"), Some(&o))
-        .unwrap()
-        .scene;
+    let s = gltf_load::load_with_camera(&scenes_dir().join("occluder-plane.gltf"), Some(&o)).unwrap().scene;
     assert!((s.camera.position() - Vec3::new(0.0, 5.0, 0.001)).length() < 1e-6);
     assert!((s.camera.yfov - 30f32.to_radians()).abs() < 1e-6);
     assert!(s.camera.world_from_camera.transform_vector3(Vec3::NEG_Z).y < -0.99);
@@ -411,32 +328,17 @@ fn missing_bin() {
     let e = load_err(&write_scene(&dir, "occluder-plane", &json, None));
     assert_eq!(e.kind, ErrorKind::NotFound);
     let line = e.to_string();
-    assert!(
-        line.contains("buffer 0 (\"occluder-plane.bin\")") && line.contains("fix the uri"),
-        "{line}"
-    );
+    assert!(line.contains("buffer 0 (\"occluder-plane.bin\")") && line.contains("fix the uri"), "{line}");
 }
 
 #[test]
 fn truncated_bin() {
     let dir = temp_dir("truncated");
     let (json, bin) = read_scene("occluder-plane");
-    let e = load_err(&write_scene(
-        &dir,
-        "occluder-plane",
-        &json,
-        Some(&bin[..bin.len() - 10]),
-    ));
+    let e = load_err(&write_scene(&dir, "occluder-plane", &json, Some(&bin[..bin.len() - 10])));
     assert_eq!(e.kind, ErrorKind::Buffer);
     let line = e.to_string();
-    assert!(
-        line.contains(&format!(
-            "has {} bytes but the buffer's byteLength is {}",
-            bin.len() - 10,
-            bin.len()
-        )),
-        "{line}"
-    );
+    assert!(line.contains(&format!("has {} bytes but the buffer's byteLength is {}", bin.len() - 10, bin.len())), "{line}");
 }
 
 #[test]
@@ -446,11 +348,7 @@ fn accessor_past_its_buffer_view() {
     json["accessors"][0]["count"] = json!(7);
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::Accessor);
-    assert!(
-        e.to_string()
-            .contains("mesh \"Ground\" primitive 0: POSITION accessor 0"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("mesh \"Ground\" primitive 0: POSITION accessor 0"), "{e}");
 }
 
 #[test]
@@ -463,40 +361,34 @@ fn nan_position() {
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::NonFinite);
     let line = e.to_string();
-    assert!(
-        line.contains("mesh \"Ground\" primitive 0: vertex 2 has a non-finite POSITION"),
-        "{line}"
-    );
+    assert!(line.contains("mesh \"Ground\" primitive 0: vertex 2 has a non-finite POSITION"), "{line}");
 }
 
 #[test]
 fn index_out_of_range() {
     let dir = temp_dir("index");
     let (json, mut bin) = read_scene("occluder-plane");
-    let indices = json["meshes"][0]["primitives"][0]["indices"]
-        .as_u64()
-        .unwrap() as usize;
+    let indices = json["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize;
     let at = accessor_offset(&json, indices) + 4;
     bin[at..at + 4].copy_from_slice(&17u32.to_le_bytes());
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::IndexOutOfRange);
     let line = e.to_string();
-    assert!(line.ends_with("mesh \"Ground\" primitive 0: index 17 (at position 1) out of range (6 vertices); fix the indices accessor"), "{line}");
+    assert!(
+        line.ends_with("mesh \"Ground\" primitive 0: index 17 (at position 1) out of range (6 vertices); fix the indices accessor"),
+        "{line}"
+    );
 }
 
 #[test]
 fn index_count_not_a_multiple_of_three() {
     let dir = temp_dir("count");
     let (mut json, bin) = read_scene("occluder-plane");
-    let indices = json["meshes"][0]["primitives"][0]["indices"]
-        .as_u64()
-        .unwrap() as usize;
+    let indices = json["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize;
     json["accessors"][indices]["count"] = json!(5);
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::NotTriangles);
-    assert!(e
-        .to_string()
-        .contains("index count 5 is not a multiple of 3"));
+    assert!(e.to_string().contains("index count 5 is not a multiple of 3"));
 }
 
 #[test]
@@ -513,9 +405,7 @@ fn degenerate_triangles_are_dropped_and_counted() {
     let dir = temp_dir("degenerate");
     let (json, mut bin) = read_scene("occluder-plane");
     // Ground triangle 1: all three indices 3.
-    let indices = json["meshes"][0]["primitives"][0]["indices"]
-        .as_u64()
-        .unwrap() as usize;
+    let indices = json["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize;
     let at = accessor_offset(&json, indices) + 12;
     for k in 0..3 {
         bin[at + 4 * k..at + 4 * k + 4].copy_from_slice(&3u32.to_le_bytes());
@@ -524,9 +414,7 @@ fn degenerate_triangles_are_dropped_and_counted() {
     assert_eq!(loaded.scene.triangle_count(), 13);
     assert_eq!(loaded.warnings.len(), 1);
     assert!(
-        loaded.warnings[0].contains(
-            "mesh \"Ground\" primitive 0: dropped 1 degenerate (zero-area) triangles of 2"
-        ),
+        loaded.warnings[0].contains("mesh \"Ground\" primitive 0: dropped 1 degenerate (zero-area) triangles of 2"),
         "{}",
         loaded.warnings[0]
     );
@@ -537,10 +425,7 @@ fn missing_normals_are_computed() {
     let dir = temp_dir("normals");
     let (mut json, bin) = read_scene("occluder-plane");
     for m in json["meshes"].as_array_mut().unwrap() {
-        m["primitives"][0]["attributes"]
-            .as_object_mut()
-            .unwrap()
-            .remove("NORMAL");
+        m["primitives"][0]["attributes"].as_object_mut().unwrap().remove("NORMAL");
     }
     let without = load_ok(&write_scene(&dir, "x", &json, Some(&bin))).scene;
     let with = load_ok(&scenes_dir().join("occluder-plane.gltf")).scene;
@@ -566,14 +451,10 @@ fn no_light() {
     // An emissive material is light enough.
     json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
     json["materials"][1]["emissiveFactor"] = json!([1.0, 0.5, 0.25]);
-    json["materials"][1]["extensions"] =
-        json!({ "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 } });
+    json["materials"][1]["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 } });
     let s = load_ok(&write_scene(&dir, "y", &json, Some(&bin))).scene;
     assert!(s.lights.is_empty());
-    assert_eq!(
-        s.materials[mesh(&s, "Box").material].emission,
-        Vec3::new(4.0, 2.0, 1.0)
-    );
+    assert_eq!(s.materials[mesh(&s, "Box").material].emission, Vec3::new(4.0, 2.0, 1.0));
 }
 
 #[test]
@@ -607,13 +488,7 @@ fn spot_cone_defaults_follow_the_extension() {
     let (mut json, bin) = read_scene("occluder-plane");
     json["extensions"]["KHR_lights_punctual"]["lights"][0]["spot"] = json!({});
     let s = load_ok(&write_scene(&dir, "x", &json, Some(&bin))).scene;
-    assert_eq!(
-        s.lights[0].kind,
-        LightKind::Spot {
-            inner_cone: 0.0,
-            outer_cone: std::f32::consts::FRAC_PI_4
-        }
-    );
+    assert_eq!(s.lights[0].kind, LightKind::Spot { inner_cone: 0.0, outer_cone: std::f32::consts::FRAC_PI_4 });
 }
 
 #[test]
@@ -625,12 +500,11 @@ fn point_and_directional_lights() {
         { "type": "directional", "intensity": 3.0 },
     ]);
     let nodes = json["nodes"].as_array_mut().unwrap();
-    nodes.push(json!({ "name": "Sun", "rotation": [-0.70710677, 0.0, 0.0, 0.70710677], "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
+    nodes.push(
+        json!({ "name": "Sun", "rotation": [-0.70710677, 0.0, 0.0, 0.70710677], "extensions": { "KHR_lights_punctual": { "light": 1 } } }),
+    );
     let sun = nodes.len() - 1;
-    json["scenes"][0]["nodes"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!(sun));
+    json["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(sun));
     let s = load_ok(&write_scene(&dir, "x", &json, Some(&bin))).scene;
     assert_eq!(s.lights.len(), 2);
     assert_eq!(s.lights[0].kind, LightKind::Point);
@@ -651,9 +525,7 @@ fn png_base_color_texture_is_decoded_to_linear() {
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         let mut writer = encoder.write_header().unwrap();
-        writer
-            .write_image_data(&[255, 0, 0, 128, 128, 128])
-            .unwrap();
+        writer.write_image_data(&[255, 0, 0, 128, 128, 128]).unwrap();
     }
     std::fs::write(dir.join("tex.png"), &png_bytes).unwrap();
     let (mut json, bin) = read_scene("occluder-plane");
@@ -671,15 +543,9 @@ fn png_base_color_texture_is_decoded_to_linear() {
         bin.extend_from_slice(&0.5f32.to_le_bytes());
     }
     json["buffers"][0]["byteLength"] = json!(bin.len());
-    json["bufferViews"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 48 }));
+    json["bufferViews"].as_array_mut().unwrap().push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 48 }));
     let view = json["bufferViews"].as_array().unwrap().len() - 1;
-    json["accessors"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({ "bufferView": view, "componentType": 5126, "count": 6, "type": "VEC2" }));
+    json["accessors"].as_array_mut().unwrap().push(json!({ "bufferView": view, "componentType": 5126, "count": 6, "type": "VEC2" }));
     let acc = json["accessors"].as_array().unwrap().len() - 1;
     json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(acc);
     let s = load_ok(&write_scene(&dir, "y", &json, Some(&bin))).scene;
@@ -748,12 +614,7 @@ fn damaged_json_never_panics() {
     let text = serde_json::to_string(&json).unwrap();
     std::fs::write(dir.join("occluder-stacked.bin"), &bin).unwrap();
     let path = dir.join("fuzz.gltf");
-    let digits: Vec<usize> = text
-        .bytes()
-        .enumerate()
-        .filter(|(_, b)| b.is_ascii_digit())
-        .map(|(i, _)| i)
-        .collect();
+    let digits: Vec<usize> = text.bytes().enumerate().filter(|(_, b)| b.is_ascii_digit()).map(|(i, _)| i).collect();
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     let mut next = move || {
         state ^= state << 13;
@@ -776,8 +637,5 @@ fn damaged_json_never_panics() {
     cyclic["nodes"][0]["children"] = json!([1]);
     cyclic["nodes"][1]["children"] = json!([0]);
     let e = load_err(&write_scene(&dir, "cycle", &cyclic, None));
-    assert!(
-        matches!(e.kind, ErrorKind::Invalid | ErrorKind::Parse),
-        "{e}"
-    );
+    assert!(matches!(e.kind, ErrorKind::Invalid | ErrorKind::Parse), "{e}");
 }

@@ -20,7 +20,16 @@ fn cornell() -> Scene {
 }
 
 fn settings(threads: usize) -> LightPathMapSettings {
-    LightPathMapSettings { entry_points: 256, walks: 2, threshold: 0.05, max_depth: 64, seed: 3, threads: Some(threads), time_limit: None, progress: false }
+    LightPathMapSettings {
+        entry_points: 256,
+        walks: 2,
+        threshold: 0.05,
+        max_depth: 64,
+        seed: 3,
+        threads: Some(threads),
+        time_limit: None,
+        progress: false,
+    }
 }
 
 struct Baked256 {
@@ -65,13 +74,20 @@ fn cpca_error_of_real_transfers_falls_with_clusters_and_basis_and_is_exact_at_fu
     let b = bake(&scene, 2);
     let cols = 3 * b.transfers.texels.len();
     let data: Vec<f32> = b.transfers.values.iter().flat_map(|v| v.to_array()).collect();
-    let features: Vec<f32> = b.entries.entries.iter().flat_map(|e| e.point.position.to_array().into_iter().chain(e.point.normal.to_array())).collect();
+    let features: Vec<f32> =
+        b.entries.entries.iter().flat_map(|e| e.point.position.to_array().into_iter().chain(e.point.normal.to_array())).collect();
     let counts = [1, 2, 4, 8, 16];
     let table = cpca::error_table(&data, cols, &features, 6, &counts, 6).unwrap();
     let error = |c: usize, d: usize| table.iter().find(|x| x.clusters == c && x.basis == d).unwrap().relative_error;
     for &c in &counts {
         for d in 1..=6 {
-            assert!(error(c, d) <= error(c, d - 1) * (1.0 + 1e-6), "C = {c}: D = {d} error {} > D = {} error {}", error(c, d), d - 1, error(c, d - 1));
+            assert!(
+                error(c, d) <= error(c, d - 1) * (1.0 + 1e-6),
+                "C = {c}: D = {d} error {} > D = {} error {}",
+                error(c, d),
+                d - 1,
+                error(c, d - 1)
+            );
         }
     }
     for pair in counts.windows(2) {

@@ -119,7 +119,8 @@ fn the_bake_is_deterministic_across_thread_counts_and_honours_its_time_limit() {
     let one = bake(&scene, 8.0, &ObscuranceSettings { threads: Some(1), ..settings(Variant::Obscurance, 0.3, 1.0, 64) }).1;
     let two = bake(&scene, 8.0, &ObscuranceSettings { threads: Some(2), ..settings(Variant::Obscurance, 0.3, 1.0, 64) }).1;
     assert_eq!(one.values, two.values);
-    let limited = bake(&scene, 8.0, &ObscuranceSettings { time_limit: Some(Duration::ZERO), ..settings(Variant::Obscurance, 0.3, 1.0, 1024) }).1;
+    let limited =
+        bake(&scene, 8.0, &ObscuranceSettings { time_limit: Some(Duration::ZERO), ..settings(Variant::Obscurance, 0.3, 1.0, 1024) }).1;
     assert_eq!(limited.rays_per_texel, 32, "one whole pass, then the limit");
 }
 

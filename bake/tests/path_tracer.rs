@@ -5,14 +5,10 @@
 use glam::{Vec2, Vec3};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
-use relume_bake::reference::{
-    direct_irradiance, radiance_by_bounce, render_reference, ReferenceImages, ReferenceSettings,
-};
+use relume_bake::reference::{direct_irradiance, radiance_by_bounce, render_reference, ReferenceImages, ReferenceSettings};
 use relume_bake::sampling::PathSampler;
 use relume_bake::scene::{Camera, Mesh, Scene};
-use relume_bake::testing::{
-    closed_box, look_at, material, point_light, scene, sphere, spot_light, square, Facing,
-};
+use relume_bake::testing::{closed_box, look_at, material, point_light, scene, sphere, spot_light, square, Facing};
 use std::f32::consts::{FRAC_PI_2, PI};
 use std::time::Duration;
 
@@ -59,45 +55,20 @@ fn furnace(albedo: f32, emission: Vec3, size: u32, samples: u32, pixel_tolerance
         vec![mesh],
         vec![material("wall", Vec3::splat(albedo), emission)],
         vec![],
-        look_at(
-            Vec3::new(0.5, 0.0, 0.2),
-            Vec3::new(1.0, 0.3, -1.0),
-            Vec3::Y,
-            FRAC_PI_2,
-        ),
+        look_at(Vec3::new(0.5, 0.0, 0.2), Vec3::new(1.0, 0.3, -1.0), Vec3::Y, FRAC_PI_2),
     );
-    let settings = ReferenceSettings {
-        samples_per_pixel: samples,
-        width: size,
-        height: size,
-        seed: 1,
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: samples, width: size, height: size, seed: 1, ..Default::default() };
     let images = render(&s, &settings);
     let expected = emission / (1.0 - albedo);
     let m = mean(&images.combined);
     // The image mean's standard error is about 0.1 % at these sample counts.
-    assert!(
-        relative_error(m, expected) < 0.005,
-        "furnace a={albedo}: mean {m}, expected {expected}"
-    );
+    assert!(relative_error(m, expected) < 0.005, "furnace a={albedo}: mean {m}, expected {expected}");
     // Direct: Le seen plus one bounce of the uniform irradiance pi Le: Le (1 + a).
     let d = mean(&images.direct);
     let expected_direct = emission * (1.0 + albedo);
-    assert!(
-        relative_error(d, expected_direct) < 0.005,
-        "direct {d}, expected {expected_direct}"
-    );
-    let worst = images
-        .combined
-        .pixels
-        .iter()
-        .map(|&p| relative_error(p, expected))
-        .fold(0.0f32, f32::max);
-    assert!(
-        worst < pixel_tolerance,
-        "furnace a={albedo}: worst pixel off by {worst}"
-    );
+    assert!(relative_error(d, expected_direct) < 0.005, "direct {d}, expected {expected_direct}");
+    let worst = images.combined.pixels.iter().map(|&p| relative_error(p, expected)).fold(0.0f32, f32::max);
+    assert!(worst < pixel_tolerance, "furnace a={albedo}: worst pixel off by {worst}");
 }
 
 #[test]
@@ -111,17 +82,8 @@ fn emitters_emit_from_their_front_face_only() {
         vec![],
         look_at(Vec3::ZERO, Vec3::X, Vec3::Y, FRAC_PI_2),
     );
-    let settings = ReferenceSettings {
-        samples_per_pixel: 16,
-        width: 8,
-        height: 8,
-        ..Default::default()
-    };
-    assert!(render(&s, &settings)
-        .combined
-        .pixels
-        .iter()
-        .all(|&p| p == Vec3::ZERO));
+    let settings = ReferenceSettings { samples_per_pixel: 16, width: 8, height: 8, ..Default::default() };
+    assert!(render(&s, &settings).combined.pixels.iter().all(|&p| p == Vec3::ZERO));
     // Seen from outside, the front faces show exactly their emission: a convex surface sees
     // nothing of itself, so nothing is reflected.
     let outside = scene(
@@ -156,25 +118,14 @@ fn furnace_albedo_080() {
 fn plane_scene(albedo: f32, lights: Vec<relume_bake::scene::Light>, camera: Camera) -> Scene {
     // 1000 m square at y = 0 facing +Y (X x -Z = +Y).
     let ground = square(Vec3::ZERO, Vec3::X * 500.0, Vec3::NEG_Z * 500.0, 4, 0);
-    scene(
-        "plane",
-        vec![ground],
-        vec![material("ground", Vec3::splat(albedo), Vec3::ZERO)],
-        lights,
-        camera,
-    )
+    scene("plane", vec![ground], vec![material("ground", Vec3::splat(albedo), Vec3::ZERO)], lights, camera)
 }
 
 #[test]
 fn point_light_over_plane() {
     let light_pos = Vec3::new(1.0, 3.0, -2.0);
     let intensity = Vec3::new(100.0, 50.0, 25.0);
-    let camera = look_at(
-        Vec3::new(0.0, 8.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        70f32.to_radians(),
-    );
+    let camera = look_at(Vec3::new(0.0, 8.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 70f32.to_radians());
     let albedo = 0.6;
     let plane = plane_scene(albedo, vec![point_light(light_pos, intensity)], camera);
     let bvh = SceneBvh::new(&plane);
@@ -191,42 +142,23 @@ fn point_light_over_plane() {
         let p = Vec3::new(radius * angle.cos(), 0.0, radius * angle.sin());
         let e = direct_irradiance(&plane, &bvh, p, Vec3::Y);
         let expected = analytic(p);
-        assert!(
-            relative_error(e, expected) < 0.005,
-            "at {p}: {e}, expected {expected}"
-        );
+        assert!(relative_error(e, expected) < 0.005, "at {p}: {e}, expected {expected}");
     }
     // A receiver facing away from the light gets nothing.
-    assert_eq!(
-        direct_irradiance(&plane, &bvh, Vec3::new(0.0, 0.0, 0.0), Vec3::NEG_Y),
-        Vec3::ZERO
-    );
+    assert_eq!(direct_irradiance(&plane, &bvh, Vec3::new(0.0, 0.0, 0.0), Vec3::NEG_Y), Vec3::ZERO);
 
     // The rendered direct layer at pixel centres: albedo / pi times the irradiance, exactly
     // (one sample suffices: no randomness reaches a point light's contribution).
     let (w, h) = (32, 24);
-    let settings = ReferenceSettings {
-        samples_per_pixel: 2,
-        width: w,
-        height: h,
-        pixel_centres: true,
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: 2, width: w, height: h, pixel_centres: true, ..Default::default() };
     let images = render(&plane, &settings);
     for y in 0..h {
         for x in 0..w {
             let p = ground_point(&plane.camera, x, y, w, h).expect("camera looks down");
             let expected = analytic(p) * (albedo / PI);
             let got = images.direct.get(x, y);
-            assert!(
-                relative_error(got, expected) < 0.005,
-                "pixel ({x}, {y}): {got}, expected {expected}"
-            );
-            assert_eq!(
-                images.indirect.get(x, y),
-                Vec3::ZERO,
-                "a lone plane lit itself at ({x}, {y})"
-            );
+            assert!(relative_error(got, expected) < 0.005, "pixel ({x}, {y}): {got}, expected {expected}");
+            assert_eq!(images.indirect.get(x, y), Vec3::ZERO, "a lone plane lit itself at ({x}, {y})");
         }
     }
 }
@@ -237,19 +169,10 @@ fn shadow_rays_see_occluders() {
     let light_pos = Vec3::new(0.0, 3.0, 0.0);
     let camera = look_at(Vec3::new(0.0, 8.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 1.0);
     let mut s = plane_scene(0.5, vec![point_light(light_pos, Vec3::splat(10.0))], camera);
-    s.meshes.push(square(
-        Vec3::new(0.0, 1.5, 0.0),
-        Vec3::X * 0.5,
-        Vec3::NEG_Z * 0.5,
-        1,
-        0,
-    ));
+    s.meshes.push(square(Vec3::new(0.0, 1.5, 0.0), Vec3::X * 0.5, Vec3::NEG_Z * 0.5, 1, 0));
     let bvh = SceneBvh::new(&s);
     assert_eq!(direct_irradiance(&s, &bvh, Vec3::ZERO, Vec3::Y), Vec3::ZERO);
-    assert_eq!(
-        direct_irradiance(&s, &bvh, Vec3::new(0.9, 0.0, 0.9), Vec3::Y),
-        Vec3::ZERO
-    );
+    assert_eq!(direct_irradiance(&s, &bvh, Vec3::new(0.9, 0.0, 0.9), Vec3::Y), Vec3::ZERO);
     // Outside the shadow (the umbra reaches 1 m from the centre).
     assert!(direct_irradiance(&s, &bvh, Vec3::new(1.5, 0.0, 0.0), Vec3::Y).x > 0.0);
     // Rendered: ground in the umbra is black unless shadows are off (the debug mode);
@@ -257,21 +180,9 @@ fn shadow_rays_see_occluders() {
     // past the blocker to ground farther than 0.5 * 8 / 6.5 = 0.62 m from the axis (per
     // axis); the umbra reaches 1 m.
     let (w, h) = (33, 33);
-    let settings = ReferenceSettings {
-        samples_per_pixel: 1,
-        width: w,
-        height: h,
-        pixel_centres: true,
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: 1, width: w, height: h, pixel_centres: true, ..Default::default() };
     let shadowed = render(&s, &settings);
-    let unshadowed = render(
-        &s,
-        &ReferenceSettings {
-            shadows: false,
-            ..settings
-        },
-    );
+    let unshadowed = render(&s, &ReferenceSettings { shadows: false, ..settings });
     let (mut umbra, mut lit) = (0, 0);
     for y in 0..h {
         for x in 0..w {
@@ -280,11 +191,7 @@ fn shadow_rays_see_occluders() {
             let expected = direct_irradiance(&s, &bvh, p, Vec3::Y) * (0.5 / PI);
             if (0.7..0.95).contains(&reach) {
                 umbra += 1;
-                assert_eq!(
-                    shadowed.direct.get(x, y),
-                    Vec3::ZERO,
-                    "({x}, {y}) is in the umbra"
-                );
+                assert_eq!(shadowed.direct.get(x, y), Vec3::ZERO, "({x}, {y}) is in the umbra");
                 assert_eq!(expected, Vec3::ZERO);
                 let unblocked = point_light(light_pos, Vec3::splat(10.0)).incident(p);
                 let e = unblocked.irradiance * unblocked.to_light.y * (0.5 / PI);
@@ -296,10 +203,7 @@ fn shadow_rays_see_occluders() {
             }
         }
     }
-    assert!(
-        umbra > 10 && lit > 100,
-        "{umbra} pixels in the umbra, {lit} lit"
-    );
+    assert!(umbra > 10 && lit > 100, "{umbra} pixels in the umbra, {lit} lit");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -309,26 +213,11 @@ fn spot_light_cone() {
     let light_pos = Vec3::new(0.0, 4.0, 0.0);
     let (inner, outer) = (15f32.to_radians(), 25f32.to_radians());
     let intensity = Vec3::splat(200.0);
-    let camera = look_at(
-        Vec3::new(0.0, 6.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        80f32.to_radians(),
-    );
+    let camera = look_at(Vec3::new(0.0, 6.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 80f32.to_radians());
     let albedo = 0.5;
-    let s = plane_scene(
-        albedo,
-        vec![spot_light(light_pos, Vec3::NEG_Y, intensity, inner, outer)],
-        camera,
-    );
+    let s = plane_scene(albedo, vec![spot_light(light_pos, Vec3::NEG_Y, intensity, inner, outer)], camera);
     let (w, h) = (40, 40);
-    let settings = ReferenceSettings {
-        samples_per_pixel: 1,
-        width: w,
-        height: h,
-        pixel_centres: true,
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: 1, width: w, height: h, pixel_centres: true, ..Default::default() };
     let images = render(&s, &settings);
     let (mut outside, mut inside) = (0, 0);
     for y in 0..h {
@@ -338,28 +227,17 @@ fn spot_light_cone() {
             let angle = to_point.dot(Vec3::NEG_Y).clamp(-1.0, 1.0).acos();
             let got = images.combined.get(x, y);
             if angle > outer + 1e-3 {
-                assert_eq!(
-                    got,
-                    Vec3::ZERO,
-                    "pixel ({x}, {y}) at {}° is outside the cone",
-                    angle.to_degrees()
-                );
+                assert_eq!(got, Vec3::ZERO, "pixel ({x}, {y}) at {}° is outside the cone", angle.to_degrees());
                 outside += 1;
             } else if angle < inner - 1e-3 {
                 let r2 = (light_pos - p).length_squared();
                 let expected = intensity * (albedo / PI) * angle.cos() / r2;
-                assert!(
-                    relative_error(got, expected) < 0.005,
-                    "pixel ({x}, {y}): {got}, expected {expected}"
-                );
+                assert!(relative_error(got, expected) < 0.005, "pixel ({x}, {y}): {got}, expected {expected}");
                 inside += 1;
             }
         }
     }
-    assert!(
-        outside > 100 && inside > 50,
-        "the view must cover both: {outside} outside, {inside} inside"
-    );
+    assert!(outside > 100 && inside > 50, "the view must cover both: {outside} outside, {inside} inside");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -371,16 +249,14 @@ fn spot_light_cone() {
 
 fn corner_factor(x: f32, y: f32, h: f32) -> f64 {
     let (a, b) = ((x.abs() / h) as f64, (y.abs() / h) as f64);
-    let f = (a / (1.0 + a * a).sqrt() * (b / (1.0 + a * a).sqrt()).atan()
-        + b / (1.0 + b * b).sqrt() * (a / (1.0 + b * b).sqrt()).atan())
+    let f = (a / (1.0 + a * a).sqrt() * (b / (1.0 + a * a).sqrt()).atan() + b / (1.0 + b * b).sqrt() * (a / (1.0 + b * b).sqrt()).atan())
         / (2.0 * std::f64::consts::PI);
     f * (x.signum() * y.signum()) as f64
 }
 
 fn rectangle_factor(p: Vec3, lo: Vec2, hi: Vec2, h: f32) -> f64 {
     let (x0, x1, z0, z1) = (lo.x - p.x, hi.x - p.x, lo.y - p.z, hi.y - p.z);
-    corner_factor(x1, z1, h) - corner_factor(x0, z1, h) - corner_factor(x1, z0, h)
-        + corner_factor(x0, z0, h)
+    corner_factor(x1, z1, h) - corner_factor(x0, z1, h) - corner_factor(x1, z0, h) + corner_factor(x0, z0, h)
 }
 
 /// `pixel_tolerance` is 4 to 5 times the per-pixel noise measured at 2048 samples.
@@ -389,38 +265,18 @@ fn area_light_over_plane(half: f32, height: f32, samples: u32, pixel_tolerance: 
     let albedo = 0.5;
     let ground = square(Vec3::ZERO, Vec3::X * 100.0, Vec3::NEG_Z * 100.0, 2, 0);
     // Facing down (Z x X = +Y, so X x Z = -Y); black, so nothing reflects off it.
-    let lamp = square(
-        Vec3::new(0.0, height, 0.0),
-        Vec3::X * half,
-        Vec3::Z * half,
-        2,
-        1,
-    );
-    let camera = look_at(
-        Vec3::new(0.0, 0.5 * height, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        100f32.to_radians(),
-    );
+    let lamp = square(Vec3::new(0.0, height, 0.0), Vec3::X * half, Vec3::Z * half, 2, 1);
+    let camera = look_at(Vec3::new(0.0, 0.5 * height, 0.0), Vec3::ZERO, Vec3::NEG_Z, 100f32.to_radians());
     let s = scene(
         "area light",
         vec![ground, lamp],
-        vec![
-            material("ground", Vec3::splat(albedo), Vec3::ZERO),
-            material("lamp", Vec3::ZERO, le),
-        ],
+        vec![material("ground", Vec3::splat(albedo), Vec3::ZERO), material("lamp", Vec3::ZERO, le)],
         vec![],
         camera,
     );
     let (w, h) = (12, 12);
-    let settings = ReferenceSettings {
-        samples_per_pixel: samples,
-        width: w,
-        height: h,
-        pixel_centres: true,
-        seed: 7,
-        ..Default::default()
-    };
+    let settings =
+        ReferenceSettings { samples_per_pixel: samples, width: w, height: h, pixel_centres: true, seed: 7, ..Default::default() };
     let images = render(&s, &settings);
     let (mut sum_got, mut sum_expected) = (Vec3::ZERO, Vec3::ZERO);
     let mut worst = 0.0f32;
@@ -436,10 +292,7 @@ fn area_light_over_plane(half: f32, height: f32, samples: u32, pixel_tolerance: 
             assert_eq!(images.indirect.get(x, y), Vec3::ZERO);
         }
     }
-    assert!(
-        relative_error(sum_got, sum_expected) < 0.002,
-        "mean {sum_got} vs {sum_expected}"
-    );
+    assert!(relative_error(sum_got, sum_expected) < 0.002, "mean {sum_got} vs {sum_expected}");
     assert!(worst < pixel_tolerance, "worst pixel off by {worst}");
 }
 
@@ -474,42 +327,21 @@ fn energy_decreases_by_bounce() {
         vec![walls],
         vec![material("white", Vec3::splat(albedo), Vec3::ZERO)],
         vec![point_light(Vec3::new(0.2, 0.3, -0.1), Vec3::splat(5.0))],
-        look_at(
-            Vec3::new(0.8, 0.8, 0.8),
-            Vec3::splat(-1.0),
-            Vec3::Y,
-            100f32.to_radians(),
-        ),
+        look_at(Vec3::new(0.8, 0.8, 0.8), Vec3::splat(-1.0), Vec3::Y, 100f32.to_radians()),
     );
     let bvh = SceneBvh::new(&s);
-    let settings = ReferenceSettings {
-        samples_per_pixel: 64,
-        width: 16,
-        height: 16,
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: 64, width: 16, height: 16, ..Default::default() };
     let by_bounce = radiance_by_bounce(&s, &bvh, &settings, 8);
     assert_eq!(by_bounce.len(), 9);
     assert_eq!(by_bounce[0], Vec3::ZERO, "no emitter is in view");
     for k in 1..=6 {
         let ratio = by_bounce[k + 1].x / by_bounce[k].x;
-        assert!(
-            by_bounce[k + 1].x < by_bounce[k].x,
-            "bounce {} brighter than {k}",
-            k + 1
-        );
-        assert!(
-            (0.8 * albedo..1.08 * albedo).contains(&ratio),
-            "bounce {k} -> {}: ratio {ratio}",
-            k + 1
-        );
+        assert!(by_bounce[k + 1].x < by_bounce[k].x, "bounce {} brighter than {k}", k + 1);
+        assert!((0.8 * albedo..1.08 * albedo).contains(&ratio), "bounce {k} -> {}: ratio {ratio}", k + 1);
     }
     // The per-bounce sums add up to the rendered image.
     let images = render(&s, &settings);
-    let total: Vec3 = radiance_by_bounce(&s, &bvh, &settings, settings.max_bounces)
-        .iter()
-        .copied()
-        .sum();
+    let total: Vec3 = radiance_by_bounce(&s, &bvh, &settings, settings.max_bounces).iter().copied().sum();
     assert!(relative_error(mean(&images.combined), total) < 1e-4);
     assert!(relative_error(mean(&images.direct), by_bounce[0] + by_bounce[1]) < 1e-4);
 }
@@ -520,13 +352,7 @@ fn busy_scene() -> Scene {
     // A box with a sphere, a square area light on the ceiling and a point light.
     let walls = closed_box(Vec3::splat(-1.0), Vec3::splat(1.0), 2, Facing::Inward, 0);
     let ball = sphere(Vec3::new(0.2, -0.5, 0.1), 0.4, 2, Facing::Outward, 1);
-    let lamp = square(
-        Vec3::new(0.0, 0.99, 0.0),
-        Vec3::X * 0.3,
-        Vec3::Z * 0.3,
-        1,
-        2,
-    );
+    let lamp = square(Vec3::new(0.0, 0.99, 0.0), Vec3::X * 0.3, Vec3::Z * 0.3, 1, 2);
     scene(
         "busy",
         vec![walls, ball, lamp],
@@ -536,53 +362,25 @@ fn busy_scene() -> Scene {
             material("lamp", Vec3::splat(0.5), Vec3::splat(5.0)),
         ],
         vec![point_light(Vec3::new(-0.5, 0.5, 0.5), Vec3::splat(2.0))],
-        look_at(
-            Vec3::new(0.0, 0.0, 0.95),
-            Vec3::new(0.0, -0.2, 0.0),
-            Vec3::Y,
-            1.3,
-        ),
+        look_at(Vec3::new(0.0, 0.0, 0.95), Vec3::new(0.0, -0.2, 0.0), Vec3::Y, 1.3),
     )
 }
 
 fn bits(image: &Image) -> Vec<u32> {
-    image
-        .pixels
-        .iter()
-        .flat_map(|p| p.to_array().map(f32::to_bits))
-        .collect()
+    image.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect()
 }
 
 #[test]
 fn deterministic_across_thread_counts() {
     let s = busy_scene();
-    let settings = ReferenceSettings {
-        samples_per_pixel: 8,
-        width: 24,
-        height: 16,
-        seed: 42,
-        threads: Some(1),
-        ..Default::default()
-    };
+    let settings = ReferenceSettings { samples_per_pixel: 8, width: 24, height: 16, seed: 42, threads: Some(1), ..Default::default() };
     let one = render(&s, &settings);
-    let two = render(
-        &s,
-        &ReferenceSettings {
-            threads: Some(2),
-            ..settings.clone()
-        },
-    );
+    let two = render(&s, &ReferenceSettings { threads: Some(2), ..settings.clone() });
     assert_eq!(bits(&one.direct), bits(&two.direct));
     assert_eq!(bits(&one.indirect), bits(&two.indirect));
     assert_eq!(bits(&one.combined), bits(&two.combined));
     assert!(mean(&one.indirect).x > 0.0 && mean(&one.direct).x > 0.0);
-    let other = render(
-        &s,
-        &ReferenceSettings {
-            seed: 43,
-            ..settings.clone()
-        },
-    );
+    let other = render(&s, &ReferenceSettings { seed: 43, ..settings.clone() });
     assert_ne!(bits(&one.combined), bits(&other.combined));
 }
 
@@ -598,19 +396,9 @@ fn time_limit_stops_at_whole_passes() {
     };
     let limited = render(&s, &settings);
     let taken = limited.samples_per_pixel;
-    assert!(
-        taken >= 1 && taken < settings.samples_per_pixel,
-        "took {taken}"
-    );
+    assert!(taken >= 1 && taken < settings.samples_per_pixel, "took {taken}");
     // The same image as asking for exactly that many samples.
-    let exact = render(
-        &s,
-        &ReferenceSettings {
-            samples_per_pixel: taken,
-            max_time: None,
-            ..settings
-        },
-    );
+    let exact = render(&s, &ReferenceSettings { samples_per_pixel: taken, max_time: None, ..settings });
     assert_eq!(bits(&limited.combined), bits(&exact.combined));
 }
 
@@ -626,20 +414,9 @@ fn random_soup(count: u32) -> Mesh {
         tris.push([c + e(3), c + e(6), c + e(9)]);
     }
     let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
-    let normals = tris
-        .iter()
-        .flat_map(|t| [(t[1] - t[0]).cross(t[2] - t[0]).normalize(); 3])
-        .collect();
+    let normals = tris.iter().flat_map(|t| [(t[1] - t[0]).cross(t[2] - t[0]).normalize(); 3]).collect();
     let uv0 = Some(positions.iter().map(|p| Vec2::new(p.x, p.y)).collect());
-    Mesh {
-        name: "soup".into(),
-        indices: (0..positions.len() as u32).collect(),
-        positions,
-        normals,
-        uv0,
-        uv1: None,
-        material: 0,
-    }
+    Mesh { name: "soup".into(), indices: (0..positions.len() as u32).collect(), positions, normals, uv0, uv1: None, material: 0 }
 }
 
 /// Möller-Trumbore in f64, independent of the BVH's own test.
@@ -669,13 +446,7 @@ fn brute_force(mesh: &Mesh, o: Vec3, d: Vec3) -> Option<(f64, usize)> {
 #[test]
 fn bvh_matches_brute_force() {
     let mesh = random_soup(600);
-    let mut s = scene(
-        "soup",
-        vec![],
-        vec![material("m", Vec3::ONE, Vec3::ZERO)],
-        vec![],
-        look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 1.0),
-    );
+    let mut s = scene("soup", vec![], vec![material("m", Vec3::ONE, Vec3::ZERO)], vec![], look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 1.0));
     // Two meshes, so the flattened and per-mesh indices differ.
     let mut first = mesh.clone();
     first.positions.truncate(300 * 3);
@@ -696,26 +467,15 @@ fn bvh_matches_brute_force() {
         let expected = brute_force(&mesh, o, d);
         let got = bvh.closest_hit(o, d, f32::INFINITY);
         assert_eq!(got.is_some(), expected.is_some(), "ray {i}");
-        assert_eq!(
-            bvh.occluded(o, d, f32::INFINITY),
-            expected.is_some(),
-            "ray {i}"
-        );
+        assert_eq!(bvh.occluded(o, d, f32::INFINITY), expected.is_some(), "ray {i}");
         if let (Some(hit), Some((t, tri))) = (got, expected) {
             hits += 1;
-            assert!(
-                (hit.t as f64 - t).abs() < 1e-4 * t.max(1.0),
-                "ray {i}: t {} vs {t}",
-                hit.t
-            );
+            assert!((hit.t as f64 - t).abs() < 1e-4 * t.max(1.0), "ray {i}: t {} vs {t}", hit.t);
             let flat = bvh.primitive_index(hit.mesh as usize, hit.triangle as usize);
             assert_eq!(flat, hit.primitive);
             assert_eq!(hit.primitive as usize, tri, "ray {i}");
             assert!((hit.position - (o + d * hit.t)).length() < 1e-4 * hit.t.max(1.0));
-            assert!(
-                (hit.uv0 - Vec2::new(hit.position.x, hit.position.y)).length()
-                    < 1e-4 * hit.t.max(1.0)
-            );
+            assert!((hit.uv0 - Vec2::new(hit.position.x, hit.position.y)).length() < 1e-4 * hit.t.max(1.0));
             assert!(!bvh.occluded(o, d, hit.t * 0.999));
             assert!(bvh.closest_hit(o, d, hit.t * 0.999).is_none());
         }

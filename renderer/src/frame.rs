@@ -12,7 +12,6 @@
 //! lights. `Renderer::record` writes a frame into any command buffer (the caller's, for
 //! integrators); `Renderer::render` is the headless driver relume's own tools use.
 
-use relume_bake::settings::first_failed_check;
 use crate::gpu_scene::GpuScene;
 use crate::light_path_maps::GpuLightPathMaps;
 use crate::lightmap::{check_uv1, GpuLightmap, LightmapData};
@@ -23,12 +22,15 @@ use crate::passes::lpm_reconstruct::LpmReconstructPass;
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
-use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult};
+use crate::vk::{
+    vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, TimestampQueries, Tracker, VkError, VkResult,
+};
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use relume_bake::clustered_transfer::ClusteredTransfer;
 use relume_bake::image::Image as HdrImage;
 use relume_bake::scene::{Camera, Light, Scene};
+use relume_bake::settings::first_failed_check;
 
 /// How the forward pass adds the light path maps' large-scale indirect irradiance I (000
 /// §3.4) to a surface of albedo a, with W the obscurance and E_d the shadowed direct
@@ -134,16 +136,8 @@ impl RenderSettings {
 /// The passes in frame order; timestamps are written before the first and after each. A pass
 /// a frame does not need (the four light-path-map passes without light path maps, the VSM
 /// passes without shadows) records nothing between its timestamps and takes about 0 ms.
-pub const PASS_NAMES: [&str; 8] = [
-    "vsm_moments",
-    "vsm_blur",
-    "entry_irradiance",
-    "cluster_sums",
-    "lpm_reconstruct",
-    "lpm_padding",
-    "forward",
-    "tonemap",
-];
+pub const PASS_NAMES: [&str; 8] =
+    ["vsm_moments", "vsm_blur", "entry_irradiance", "cluster_sums", "lpm_reconstruct", "lpm_padding", "forward", "tonemap"];
 
 const STAMPS: usize = PASS_NAMES.len() + 1;
 
@@ -519,7 +513,13 @@ impl<'a> Renderer<'a> {
     /// tools: no frame of this renderer may be pending). Refused without light path maps.
     pub fn read_entry_irradiance(&mut self) -> VkResult<Vec<Vec3>> {
         let count = self.maps()?.entry_count as usize;
-        let buffer = Buffer::new(self.ctx, "entry irradiance readback", count as u64 * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer = Buffer::new(
+            self.ctx,
+            "entry irradiance readback",
+            count as u64 * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         self.submit_read(|rec, tracker, maps| {
             tracker.use_buffer(rec, &maps.entry_irradiance, Access::TransferSource);
             rec.copy_buffer(maps.entry_irradiance.raw, 0, buffer.raw, count as u64 * 16);
@@ -534,7 +534,8 @@ impl<'a> Renderer<'a> {
     /// lightmap order, through a one-time submission as [`Renderer::read_entry_irradiance`].
     pub fn read_indirect(&mut self) -> VkResult<Vec<Vec4>> {
         let count = self.maps()?.texel_count();
-        let buffer = Buffer::new(self.ctx, "indirect readback", count as u64 * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer =
+            Buffer::new(self.ctx, "indirect readback", count as u64 * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
         self.submit_read(|rec, tracker, maps| {
             tracker.use_image(rec, &maps.indirect, Access::TransferSource);
             rec.copy_image_to_buffer(&maps.indirect, buffer.raw);
@@ -545,9 +546,9 @@ impl<'a> Renderer<'a> {
     }
 
     fn maps(&self) -> VkResult<&GpuLightPathMaps<'a>> {
-        self.light_path_maps().map(|lpm| &lpm.maps).ok_or_else(|| {
-            VkError::Invalid("this renderer has no light path maps; create it with Renderer::with_transfer".into())
-        })
+        self.light_path_maps()
+            .map(|lpm| &lpm.maps)
+            .ok_or_else(|| VkError::Invalid("this renderer has no light path maps; create it with Renderer::with_transfer".into()))
     }
 
     /// Records `copy` (transfers out of the light path maps, declared to the renderer's

@@ -176,9 +176,11 @@ impl<'a> GpuScene<'a> {
             let layers = &mut self.layer_data[first_layer..first_layer + count];
             let (depth_origin, far) = fill_shadow_layers(light, self.bounds, layers);
             self.light_data[index] = gpu_light(light, first_layer as f32, depth_origin);
-            self.shadow_views.extend(
-                (first_layer..first_layer + count).map(|layer| ShadowView { light: index as u32, layer: layer as u32, far }),
-            );
+            self.shadow_views.extend((first_layer..first_layer + count).map(|layer| ShadowView {
+                light: index as u32,
+                layer: layer as u32,
+                far,
+            }));
             first_layer += count;
         }
         Ok(())
@@ -196,11 +198,17 @@ impl<'a> GpuScene<'a> {
             return Err(VkError::Invalid(format!("mesh {mesh}: translation {translation} is not finite")));
         }
         self.moved.clear();
-        self.moved.extend(self.uploaded[range.clone()].iter().map(|v| GpuVertex { position: (Vec3::from_array(v.position) + translation).to_array(), ..*v }));
+        self.moved.extend(
+            self.uploaded[range.clone()]
+                .iter()
+                .map(|v| GpuVertex { position: (Vec3::from_array(v.position) + translation).to_array(), ..*v }),
+        );
         self.vertices.write_at(range.start * std::mem::size_of::<GpuVertex>(), &self.moved)?;
         self.translations[mesh] = translation;
         self.bounds = self.mesh_ranges.iter().zip(&self.translations).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (r, t)| {
-            self.uploaded[r.clone()].iter().fold((lo, hi), |(lo, hi), v| (lo.min(Vec3::from_array(v.position) + *t), hi.max(Vec3::from_array(v.position) + *t)))
+            self.uploaded[r.clone()]
+                .iter()
+                .fold((lo, hi), |(lo, hi), v| (lo.min(Vec3::from_array(v.position) + *t), hi.max(Vec3::from_array(v.position) + *t)))
         });
         Ok(())
     }
@@ -230,11 +238,7 @@ fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
             let uv1 = mesh.uv1.as_ref().map_or(glam::Vec2::ZERO, |uv| uv[i]);
             vertices.push(GpuVertex { position: p.to_array(), normal: n.to_array(), uv0: uv0.to_array(), uv1: uv1.to_array() });
         }
-        draws.push(Draw {
-            first_index: indices.len() as u32,
-            index_count: mesh.indices.len() as u32,
-            material: mesh.material as u32,
-        });
+        draws.push(Draw { first_index: indices.len() as u32, index_count: mesh.indices.len() as u32, material: mesh.material as u32 });
         indices.extend(mesh.indices.iter().map(|i| i + base));
     }
     (vertices, indices, draws)
@@ -247,14 +251,18 @@ fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image
     let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
     let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
     let extents: Vec<_> = textures.iter().map(|t| vk::Extent2D { width: t.width, height: t.height }).collect();
-    let array = Image::new(ctx, "base colour textures", ImageDesc {
-        width: textures.iter().map(|t| t.width).max().unwrap_or(1),
-        height: textures.iter().map(|t| t.height).max().unwrap_or(1),
-        layers: textures.len() as u32,
-        format: vk::Format::R32G32B32A32_SFLOAT,
-        usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-        view_type: vk::ImageViewType::TYPE_2D_ARRAY,
-    })?;
+    let array = Image::new(
+        ctx,
+        "base colour textures",
+        ImageDesc {
+            width: textures.iter().map(|t| t.width).max().unwrap_or(1),
+            height: textures.iter().map(|t| t.height).max().unwrap_or(1),
+            layers: textures.len() as u32,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+        },
+    )?;
     upload_array_layers(ctx, &array, &all_texels, &extents, |_, _| {})?;
     Ok(array)
 }
@@ -306,9 +314,7 @@ fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {
     };
     let (cos_outer, cone_scale) = match light.kind {
         // The same terms as relume_bake::scene::Light::cone_attenuation.
-        LightKind::Spot { inner_cone, outer_cone } => {
-            (outer_cone.cos(), 1.0 / (inner_cone.cos() - outer_cone.cos()).max(1e-3))
-        }
+        LightKind::Spot { inner_cone, outer_cone } => (outer_cone.cos(), 1.0 / (inner_cone.cos() - outer_cone.cos()).max(1e-3)),
         _ => (-1.0, 1.0),
     };
     GpuLight {

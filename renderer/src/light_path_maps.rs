@@ -51,11 +51,7 @@ impl<'a> GpuLightPathMaps<'a> {
     /// textures exceed the device's largest storage buffer.
     pub fn upload(ctx: &'a Context, transfer: &ClusteredTransfer, lightmap: &LightmapData) -> VkResult<Self> {
         check(ctx, transfer, lightmap)?;
-        let entries: Vec<Vec4> = transfer
-            .entry_points
-            .iter()
-            .flat_map(|e| [e.position.extend(1.0), e.normal.extend(0.0)])
-            .collect();
+        let entries: Vec<Vec4> = transfer.entry_points.iter().flat_map(|e| [e.position.extend(1.0), e.normal.extend(0.0)]).collect();
         let coverage: Vec<f32> = lightmap.texels.iter().map(|t| t.w.max(0.0)).collect();
         let textures: &[Vec3] = &transfer.textures;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
@@ -78,16 +74,21 @@ impl<'a> GpuLightPathMaps<'a> {
 
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let terms = transfer.cluster_count() * transfer.terms_per_cluster();
-        let entry_irradiance = Buffer::new(ctx, "lpm entry irradiance", transfer.entry_points.len() as u64 * 16, per_frame, MemoryLocation::GpuOnly)?;
+        let entry_irradiance =
+            Buffer::new(ctx, "lpm entry irradiance", transfer.entry_points.len() as u64 * 16, per_frame, MemoryLocation::GpuOnly)?;
         let cluster_sums = Buffer::new(ctx, "lpm cluster sums", terms as u64 * 16, per_frame, MemoryLocation::GpuOnly)?;
-        let indirect = Image::new(ctx, "lpm indirect", ImageDesc {
-            width: lightmap.width,
-            height: lightmap.height,
-            layers: lightmap.pages,
-            format: LIGHTMAP_FORMAT,
-            usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
-            view_type: vk::ImageViewType::TYPE_2D_ARRAY,
-        })?;
+        let indirect = Image::new(
+            ctx,
+            "lpm indirect",
+            ImageDesc {
+                width: lightmap.width,
+                height: lightmap.height,
+                layers: lightmap.pages,
+                format: LIGHTMAP_FORMAT,
+                usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+                view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+            },
+        )?;
         let padding = PaddingPass::new(ctx, &indirect)?;
         Ok(GpuLightPathMaps {
             entry_points,

@@ -77,14 +77,11 @@ impl<'a> GpuLightmap<'a> {
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_DST
             | vk::ImageUsageFlags::TRANSFER_SRC;
-        let image = Image::new(ctx, "lightmap", ImageDesc {
-            width,
-            height,
-            layers,
-            format: LIGHTMAP_FORMAT,
-            usage,
-            view_type: vk::ImageViewType::TYPE_2D_ARRAY,
-        })?;
+        let image = Image::new(
+            ctx,
+            "lightmap",
+            ImageDesc { width, height, layers, format: LIGHTMAP_FORMAT, usage, view_type: vk::ImageViewType::TYPE_2D_ARRAY },
+        )?;
         let mut lightmap = GpuLightmap { ctx, padding: PaddingPass::new(ctx, &image)?, image, padding_ms: None };
         let queries = TimestampQueries::new(ctx)?;
         let extents = vec![lightmap.image.desc.extent(); layers as usize];
@@ -130,7 +127,8 @@ impl<'a> GpuLightmap<'a> {
     pub fn read_back(&self) -> VkResult<Vec<Vec4>> {
         let d = self.image.desc;
         let count = d.width as usize * d.height as usize * d.layers as usize;
-        let buffer = Buffer::new(self.ctx, "lightmap readback", count as u64 * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer =
+            Buffer::new(self.ctx, "lightmap readback", count as u64 * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
         submit_once(self.ctx, |rec, tracker| {
             self.register_state(tracker);
             tracker.use_image(rec, &self.image, Access::TransferSource);

@@ -51,15 +51,7 @@ pub fn synthetic_transfer(atlas: &Atlas, cluster_starts: Vec<u32>, basis_count: 
             Vec3::new(value(0), value(1), value(2))
         }));
     }
-    let transfer = ClusteredTransfer {
-        entry_points,
-        cluster_starts,
-        basis_count,
-        weights,
-        texel_count,
-        textures,
-        light_area: 0.01,
-    };
+    let transfer = ClusteredTransfer { entry_points, cluster_starts, basis_count, weights, texel_count, textures, light_area: 0.01 };
     transfer.validate().expect("a valid synthetic transfer");
     transfer
 }

@@ -56,18 +56,11 @@ fn a_frame_on_the_engines_device_matches_one_on_relumes_own() {
     drop(ctx);
     assert_no_validation_messages(&log.lock().unwrap());
 
-
     // SAFETY: the queue family and index were requested at device creation.
     let queue = unsafe { engine.device.get_device_queue(engine.family, 0) };
-    let ctx = Context::from_existing(
-        engine.entry.clone(),
-        engine.instance.clone(),
-        engine.physical,
-        engine.device.clone(),
-        engine.family,
-        queue,
-    )
-    .expect("relume accepts the engine's device");
+    let ctx =
+        Context::from_existing(engine.entry.clone(), engine.instance.clone(), engine.physical, engine.device.clone(), engine.family, queue)
+            .expect("relume accepts the engine's device");
     let mut renderer = Renderer::new(&ctx, &scene, &settings).expect("renderer");
     let (on_engine_device, _) = renderer.render_and_read().expect("frame");
     drop(renderer);

@@ -62,7 +62,14 @@ fn bake(scene: &Scene) -> Bake {
     let entries = entry_points(scene, &bvh, tests, 4096, 0).unwrap();
     let settings = LightPathMapSettings::new(4096, scene.settings.l_max);
     let transfers = bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings).unwrap();
-    let compressed = compress(&transfers, &entries.entries, atlas.texels.len(), scene.settings.light_area, Compression::Fixed { clusters: 32, basis: 2 }).unwrap();
+    let compressed = compress(
+        &transfers,
+        &entries.entries,
+        atlas.texels.len(),
+        scene.settings.light_area,
+        Compression::Fixed { clusters: 32, basis: 2 },
+    )
+    .unwrap();
     println!(
         "bake: {} entry points, {} texels, C {} D {}, relative error of the transfers {:.3}",
         entries.entries.len(),
@@ -144,7 +151,8 @@ impl<'c> Renderers<'c> {
     fn new(ctx: &'c Context, scene: &Scene, bake: &'c Bake) -> Renderers<'c> {
         let settings = RenderSettings { width: SIZE, height: SIZE, ..RenderSettings::default() };
         let ambient = RenderSettings { ambient: scene.settings.ambient, beta: scene.settings.beta, ..settings.clone() };
-        let lightmap = |texels: &'c [Vec4]| LightmapData { width: bake.atlas.width, height: bake.atlas.height, pages: bake.atlas.pages, texels };
+        let lightmap =
+            |texels: &'c [Vec4]| LightmapData { width: bake.atlas.width, height: bake.atlas.height, pages: bake.atlas.pages, texels };
         Renderers {
             direct: Renderer::new(ctx, scene, &settings).unwrap(),
             obscurance: Renderer::with_lightmap(ctx, &bake.scene, &ambient, Some(&lightmap(&bake.obscurance))).unwrap(),
@@ -156,7 +164,13 @@ impl<'c> Renderers<'c> {
         let lights = with_light_at(&scene.lights, position);
         let mut moved = scene.clone();
         moved.lights = lights.clone();
-        let settings = ReferenceSettings { samples_per_pixel: SAMPLES, width: SIZE, height: SIZE, pixel_centres: true, ..ReferenceSettings::default() };
+        let settings = ReferenceSettings {
+            samples_per_pixel: SAMPLES,
+            width: SIZE,
+            height: SIZE,
+            pixel_centres: true,
+            ..ReferenceSettings::default()
+        };
         let reference = render_reference(&moved, bvh, &settings);
         let direct = frame(&mut self.direct, &lights);
         let error = |image: &Image, label: &str| Error {
@@ -189,7 +203,9 @@ fn print_table(title: &str, rows: &[Row]) {
 #[test]
 fn light_path_maps_beat_obscurance_ambient_along_a_light_path_on_cornell() {
     let scene = load_scene("cornell");
-    let Some(LightRegion::Box { min, max, .. }) = scene.settings.light_region.clone() else { panic!("cornell declares a light region box") };
+    let Some(LightRegion::Box { min, max, .. }) = scene.settings.light_region.clone() else {
+        panic!("cornell declares a light region box")
+    };
     let region = scene.settings.light_region.clone().unwrap();
     let bake = bake(&scene);
     let bvh = SceneBvh::new(&scene);
@@ -198,7 +214,8 @@ fn light_path_maps_beat_obscurance_ambient_along_a_light_path_on_cornell() {
     let ctx = validated_context();
     let log = ctx.message_log();
     let mut renderers = Renderers::new(&ctx, &scene, &bake);
-    let inside: Vec<Row> = path_inside(min, max).into_iter().enumerate().map(|(i, p)| renderers.row(&scene, &bvh, p, &format!("inside_{i:02}"))).collect();
+    let inside: Vec<Row> =
+        path_inside(min, max).into_iter().enumerate().map(|(i, p)| renderers.row(&scene, &bvh, p, &format!("inside_{i:02}"))).collect();
     let outside: Vec<Row> = positions_outside()
         .into_iter()
         .enumerate()
@@ -219,6 +236,11 @@ fn light_path_maps_beat_obscurance_ambient_along_a_light_path_on_cornell() {
     }
     for r in &outside {
         let lpm = r.lpm[default_mode].combined;
-        assert!(lpm < r.direct, "light at {} (outside the region): light path maps {lpm:.4} are worse than direct light alone {:.4}", r.position, r.direct);
+        assert!(
+            lpm < r.direct,
+            "light at {} (outside the region): light path maps {lpm:.4} are worse than direct light alone {:.4}",
+            r.position,
+            r.direct
+        );
     }
 }

@@ -10,9 +10,9 @@
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::light_path_maps::entry_irradiance;
 use relume_bake::clustered_transfer::{entry_irradiance_unshadowed, ClusteredTransfer};
 use relume_bake::image::Image;
+use relume_bake::light_path_maps::entry_irradiance;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing;
 use relume_renderer::vk::Context;
@@ -125,7 +125,8 @@ fn entry_irradiance_is_the_cpu_formula_without_shadows_and_never_more_with_them(
     for (e, (s, c)) in with_shadows.iter().zip(&cpu).enumerate() {
         assert!(s.cmpge(Vec3::ZERO).all() && s.cmple(*c * 1.001 + 1e-6 * scale).all(), "entry point {e}: shadowed {s} > unshadowed {c}");
     }
-    let in_shadow = with_shadows.iter().zip(&cpu).filter(|(s, c)| c.max_element() > 1e-3 * scale && s.max_element() < 0.5 * c.max_element()).count();
+    let in_shadow =
+        with_shadows.iter().zip(&cpu).filter(|(s, c)| c.max_element() > 1e-3 * scale && s.max_element() < 0.5 * c.max_element()).count();
     println!("with shadows: {in_shadow} of {lit} lit entry points at least half shadowed");
     assert!(in_shadow > 0, "no entry point is in shadow; the visibility factor went untested");
     // Against ray-traced visibility (the baker's entry_irradiance): the shadow map decides
@@ -137,10 +138,15 @@ fn entry_irradiance_is_the_cpu_formula_without_shadows_and_never_more_with_them(
         .iter()
         .map(|e| scene.lights.iter().map(|l| entry_irradiance(&bvh, l, e, transfer.light_area)).sum())
         .collect();
-    let agree = with_shadows.iter().zip(&traced).filter(|(s, t)| (**s - **t).abs().max_element() <= 0.1 * t.max_element() + 1e-3 * scale).count();
+    let agree =
+        with_shadows.iter().zip(&traced).filter(|(s, t)| (**s - **t).abs().max_element() <= 0.1 * t.max_element() + 1e-3 * scale).count();
     let total_error: f32 = with_shadows.iter().zip(&traced).map(|(s, t)| (*s - *t).abs().element_sum()).sum();
     let total: f32 = traced.iter().map(|t| t.element_sum()).sum();
-    println!("shadow map vs ray tracing: {agree} of {} entry points within 10%; summed |error| {:.1}% of the summed irradiance", traced.len(), 100.0 * total_error / total);
+    println!(
+        "shadow map vs ray tracing: {agree} of {} entry points within 10%; summed |error| {:.1}% of the summed irradiance",
+        traced.len(),
+        100.0 * total_error / total
+    );
     assert!(agree * 10 >= traced.len() * 8, "the shadow map and ray tracing agree on only {agree} of {} entry points", traced.len());
     assert!(total_error <= 0.1 * total, "the shadow map's entry irradiance is off by {:.1}% in sum", 100.0 * total_error / total);
     drop((unshadowed, shadowed));
@@ -275,11 +281,21 @@ fn composition_modes_add_what_their_formulas_say() {
 
     // W = 1: TimesObscurance is Plain, and WithDirect adds the direct light once more.
     assert_images_close("W = 1: TimesObscurance vs Plain", times_w, plain, scale_one);
-    assert_images_close("W = 1: WithDirect - TimesObscurance vs direct", &difference(with_direct, times_w), &difference(&direct, &emission), scale_one);
+    assert_images_close(
+        "W = 1: WithDirect - TimesObscurance vs direct",
+        &difference(with_direct, times_w),
+        &difference(&direct, &emission),
+        scale_one,
+    );
     // W = 0.5: Plain ignores W; the other two are halved.
     assert_images_close("W = 0.5: Plain vs Plain at W = 1", &half[0], plain, scale_half.max(scale_one));
     assert_images_close("W = 0.5: TimesObscurance vs Plain / 2", &half[1], &scaled(plain, 0.5), scale_half);
-    assert_images_close("W = 0.5: WithDirect vs (Plain + direct) / 2", &half[2], &scaled(&sum(plain, &direct), 0.5), scale_half.max(scale_one));
+    assert_images_close(
+        "W = 0.5: WithDirect vs (Plain + direct) / 2",
+        &half[2],
+        &scaled(&sum(plain, &direct), 0.5),
+        scale_half.max(scale_one),
+    );
     assert_clean(ctx);
 }
 

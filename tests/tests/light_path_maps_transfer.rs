@@ -25,7 +25,9 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density: 48.0, ..Default::default() }).unwrap();
     let bvh = SceneBvh::new(scene);
     let region = match scene.settings.light_region.clone() {
-        Some(relume_bake::settings::LightRegion::Box { min, max, .. }) => relume_bake::settings::LightRegion::Box { min, max, test_points: TEST_POINTS },
+        Some(relume_bake::settings::LightRegion::Box { min, max, .. }) => {
+            relume_bake::settings::LightRegion::Box { min, max, test_points: TEST_POINTS }
+        }
         other => other.unwrap(),
     };
     let tests = test_points(scene, Some(&region), 0).unwrap();
@@ -40,11 +42,8 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
         transfers.connections,
         transfers.seconds
     );
-    let irradiance: Vec<Vec3> = entries
-        .entries
-        .iter()
-        .map(|e| scene.lights.iter().map(|l| entry_irradiance(&bvh, l, &e.point, 0.0)).sum())
-        .collect();
+    let irradiance: Vec<Vec3> =
+        entries.entries.iter().map(|e| scene.lights.iter().map(|l| entry_irradiance(&bvh, l, &e.point, 0.0)).sum()).collect();
     let indirect = transfers.irradiance(&irradiance, atlas.texels.len());
     let texels: Vec<_> = indirect.iter().zip(&atlas.texels).map(|(i, t)| i.extend(t.coverage)).collect();
     let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };

@@ -122,7 +122,8 @@ fn layout(atlas: &Atlas) -> PageLayout {
 
 /// The frame's linear radiance with I_A = pi, beta = 0, no shadows: albedo * W.
 fn render(ctx: &Context, scene: &Scene, lightmap: &LightmapData) -> Image {
-    let settings = RenderSettings { width: SIZE, height: SIZE, shadows: false, ambient: Vec3::splat(PI), beta: 0.0, ..RenderSettings::default() };
+    let settings =
+        RenderSettings { width: SIZE, height: SIZE, shadows: false, ambient: Vec3::splat(PI), beta: 0.0, ..RenderSettings::default() };
     let mut renderer = Renderer::with_lightmap(ctx, scene, &settings, Some(lightmap)).expect("renderer");
     renderer.render_and_read().expect("frame").0
 }
@@ -232,14 +233,10 @@ fn a_flat_quad_split_across_two_charts_shows_no_visible_seam_after_padding() {
     let seam_a = seam_stats(&image_a, &image_b, &pairs);
     let seam_b = seam_stats(&image_b, &image_b, &pairs);
     let seam_unpadded = seam_stats(&image_unpadded, &image_b, &pairs);
-    let max_difference = (0..keep.len())
-        .filter(|&i| keep[i])
-        .map(|i| (image_a.pixels[i].x - image_b.pixels[i].x).abs())
-        .fold(0.0f32, f32::max);
-    let max_difference_unpadded = (0..keep.len())
-        .filter(|&i| keep[i])
-        .map(|i| (image_unpadded.pixels[i].x - image_b.pixels[i].x).abs())
-        .fold(0.0f32, f32::max);
+    let max_difference =
+        (0..keep.len()).filter(|&i| keep[i]).map(|i| (image_a.pixels[i].x - image_b.pixels[i].x).abs()).fold(0.0f32, f32::max);
+    let max_difference_unpadded =
+        (0..keep.len()).filter(|&i| keep[i]).map(|i| (image_unpadded.pixels[i].x - image_b.pixels[i].x).abs()).fold(0.0f32, f32::max);
     // The slope of W across the seam in B, from 4 pixels left of the seam pair to 4 right.
     let pixel_metres = 2.0 * HALF_VIEW / SIZE as f32;
     let max_slope = pairs
@@ -252,11 +249,19 @@ fn a_flat_quad_split_across_two_charts_shows_no_visible_seam_after_padding() {
         "atlases: A {}x{}x{} ({} charts), B {}x{}x{} ({} charts); {} seam rows, W along the seam in [{w_min:.3}, {w_max:.3}], largest slope across it {max_slope:.3} per metre",
         a.atlas.width, a.atlas.height, a.atlas.pages, a.atlas.charts.len(), b.atlas.width, b.atlas.height, b.atlas.pages, b.atlas.charts.len(), pairs.len()
     );
-    println!("max jump across the seam: A {:.4} (row {}), B {:.4} (row {}), A with black gutters {:.4} (row {})", seam_a.max_jump.0, seam_a.max_jump.1, seam_b.max_jump.0, seam_b.max_jump.1, seam_unpadded.max_jump.0, seam_unpadded.max_jump.1);
+    println!(
+        "max jump across the seam: A {:.4} (row {}), B {:.4} (row {}), A with black gutters {:.4} (row {})",
+        seam_a.max_jump.0, seam_a.max_jump.1, seam_b.max_jump.0, seam_b.max_jump.1, seam_unpadded.max_jump.0, seam_unpadded.max_jump.1
+    );
     println!("max |A - B| at the seam pixels {:.4} (black gutters {:.4}); over {} floor pixels {max_difference:.4} (black gutters {max_difference_unpadded:.4})", seam_a.max_seam_difference, seam_unpadded.max_seam_difference, keep.iter().filter(|k| **k).count());
 
     let allowance = max_slope * (1.0 / TEXEL_DENSITY - pixel_metres) + NOISE;
-    println!("jump bound: B's {:.4} + slope {max_slope:.3} x (texel {:.4} m - pixel {pixel_metres:.4} m) + noise {NOISE} = {:.4}", seam_b.max_jump.0, 1.0 / TEXEL_DENSITY, seam_b.max_jump.0 + allowance);
+    println!(
+        "jump bound: B's {:.4} + slope {max_slope:.3} x (texel {:.4} m - pixel {pixel_metres:.4} m) + noise {NOISE} = {:.4}",
+        seam_b.max_jump.0,
+        1.0 / TEXEL_DENSITY,
+        seam_b.max_jump.0 + allowance
+    );
     assert!(
         seam_a.max_jump.0 <= seam_b.max_jump.0 + allowance,
         "a seam: jump {} across the chart border (row {}), {} in the one-chart render, allowed {allowance} more",

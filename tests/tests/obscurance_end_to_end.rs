@@ -18,7 +18,8 @@ use relume_tests::*;
 const SIZE: u32 = 128;
 
 fn reference(scene: &Scene) -> ReferenceImages {
-    let settings = ReferenceSettings { samples_per_pixel: 256, width: SIZE, height: SIZE, pixel_centres: true, ..ReferenceSettings::default() };
+    let settings =
+        ReferenceSettings { samples_per_pixel: 256, width: SIZE, height: SIZE, pixel_centres: true, ..ReferenceSettings::default() };
     render_reference(scene, &SceneBvh::new(scene), &settings)
 }
 
@@ -43,7 +44,13 @@ fn renders(scene: &Scene) -> [Image; 3] {
     let texels: Vec<_> = map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect();
     let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
 
-    let with_ambient = RenderSettings { width: SIZE, height: SIZE, ambient: scene.settings.ambient, beta: scene.settings.beta, ..RenderSettings::default() };
+    let with_ambient = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        ambient: scene.settings.ambient,
+        beta: scene.settings.beta,
+        ..RenderSettings::default()
+    };
     let direct_only = RenderSettings { ambient: glam::Vec3::ZERO, beta: 0.0, ..with_ambient.clone() };
     let ctx = validated_context();
     let log = ctx.message_log();

@@ -45,11 +45,7 @@ fn point_light() -> Light {
 /// A smooth, known obscurance per texel: a function of the texel's patch centre, different in
 /// each channel (the spectral variant has three).
 fn synthetic_w(centre: Vec3) -> Vec3 {
-    Vec3::new(
-        0.5 + 0.5 * (3.0 * centre.x).sin(),
-        0.5 + 0.5 * (2.0 * centre.z).cos(),
-        0.5 + 0.25 * (2.0 * centre.y + centre.x).sin(),
-    )
+    Vec3::new(0.5 + 0.5 * (3.0 * centre.x).sin(), 0.5 + 0.5 * (2.0 * centre.z).cos(), 0.5 + 0.25 * (2.0 * centre.y + centre.x).sin())
 }
 
 /// The scene's atlas (small pages, so the floor and the box land on different pages), the
@@ -61,11 +57,8 @@ fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&atlas.meshes) {
         *mesh = atlas_mesh.apply(mesh);
     }
-    let texels = atlas
-        .texels
-        .iter()
-        .map(|t| if t.coverage > 0.0 { synthetic_w(t.centre).extend(t.coverage) } else { Vec4::ZERO })
-        .collect();
+    let texels =
+        atlas.texels.iter().map(|t| if t.coverage > 0.0 { synthetic_w(t.centre).extend(t.coverage) } else { Vec4::ZERO }).collect();
     (atlas, applied, texels)
 }
 
@@ -111,11 +104,9 @@ fn interior_pixels(hits: &[Option<Hit>]) -> Vec<bool> {
     for y in 1..HEIGHT as i64 - 1 {
         for x in 1..WIDTH as i64 - 1 {
             let Some(centre) = at(x, y) else { continue };
-            let same = |h: Option<Hit>| {
-                h.is_some_and(|h| h.mesh == centre.mesh && h.geometric_normal.dot(centre.geometric_normal) > 0.9999)
-            };
-            keep[(y * WIDTH as i64 + x) as usize] =
-                (-1..=1).all(|dy| (-1..=1).all(|dx| same(at(x + dx, y + dy))));
+            let same =
+                |h: Option<Hit>| h.is_some_and(|h| h.mesh == centre.mesh && h.geometric_normal.dot(centre.geometric_normal) > 0.9999);
+            keep[(y * WIDTH as i64 + x) as usize] = (-1..=1).all(|dy| (-1..=1).all(|dx| same(at(x + dx, y + dy))));
         }
     }
     keep
@@ -236,10 +227,8 @@ fn the_ambient_term_through_the_lightmap_matches_the_cpu() {
     // the same (deterministic) GPU pass, read back.
     let padded = {
         let ctx = validated_context();
-        let padded = GpuLightmap::upload(&ctx, atlas.width, atlas.height, atlas.pages, &texels)
-            .expect("upload")
-            .read_back()
-            .expect("read back");
+        let padded =
+            GpuLightmap::upload(&ctx, atlas.width, atlas.height, atlas.pages, &texels).expect("upload").read_back().expect("read back");
         assert_clean(ctx);
         padded
     };
@@ -343,7 +332,10 @@ fn the_beta_term_is_beta_times_every_lights_unshadowed_irradiance() {
 
     // Every light kind's falloff: a spot with its cone and a range window, and a directional
     // light (its lux, whatever the direction), summed.
-    let spot = Light { range: Some(3.0), ..testing::spot_light(Vec3::new(-0.5, 1.8, 0.3), Vec3::new(0.3, -1.0, -0.2), Vec3::new(20.0, 15.0, 10.0), 0.3, 0.6) };
+    let spot = Light {
+        range: Some(3.0),
+        ..testing::spot_light(Vec3::new(-0.5, 1.8, 0.3), Vec3::new(0.3, -1.0, -0.2), Vec3::new(20.0, 15.0, 10.0), 0.3, 0.6)
+    };
     let sun = Light {
         name: "sun".into(),
         kind: LightKind::Directional,

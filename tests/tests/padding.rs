@@ -61,7 +61,11 @@ fn check_layer(layer: u32, input: &[Vec4], padded: &[Vec4]) -> (usize, usize) {
     for p in texels() {
         let (before, after) = (input[index(layer, p)], padded[index(layer, p)]);
         if before.w > 0.0 {
-            assert_eq!(before.to_array().map(f32::to_bits), after.to_array().map(f32::to_bits), "covered texel {p} of layer {layer} changed");
+            assert_eq!(
+                before.to_array().map(f32::to_bits),
+                after.to_array().map(f32::to_bits),
+                "covered texel {p} of layer {layer} changed"
+            );
             continue;
         }
         empty += 1;
@@ -73,7 +77,11 @@ fn check_layer(layer: u32, input: &[Vec4], padded: &[Vec4]) -> (usize, usize) {
             "texel {p} of layer {layer} holds {after}, the rgb of no covered texel of its layer"
         );
         let copied = distance(p, source);
-        assert!((-after.w - copied).abs() <= 1e-5 * copied, "texel {p} of layer {layer}: alpha {} for a copy from {copied} texels away", after.w);
+        assert!(
+            (-after.w - copied).abs() <= 1e-5 * copied,
+            "texel {p} of layer {layer}: alpha {} for a copy from {copied} texels away",
+            after.w
+        );
         let nearest = covered.iter().map(|&c| distance(p, c)).fold(f32::INFINITY, f32::min);
         assert!(copied <= nearest + 1.0, "texel {p} of layer {layer} copied from {copied} texels away; the nearest is {nearest}");
         exact += (copied == nearest) as usize;

@@ -3,9 +3,9 @@
 //! that a validation message is caught.
 
 use glam::Vec3;
+use gpu_allocator::MemoryLocation;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing::{self, Facing};
-use gpu_allocator::MemoryLocation;
 use relume_renderer::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Fence};
 use relume_renderer::{RenderSettings, Renderer};
 use relume_tests::*;
@@ -163,9 +163,8 @@ fn base_colour_textures_match_the_reference() {
     let mut plane = testing::square(Vec3::ZERO, Vec3::X * 2.0, -Vec3::Z * 2.0, 2, 0);
     // Two repeats of the texture across the plane, so repeat wrapping is exercised.
     plane.uv0 = Some(plane.positions.iter().map(|p| glam::Vec2::new(p.x + 2.0, p.z + 2.0) * 0.5).collect());
-    let checker: Vec<glam::Vec4> = (0..16)
-        .map(|i| if (i % 4 + i / 4) % 2 == 0 { glam::Vec4::new(1.0, 0.2, 0.1, 1.0) } else { glam::Vec4::ONE })
-        .collect();
+    let checker: Vec<glam::Vec4> =
+        (0..16).map(|i| if (i % 4 + i / 4) % 2 == 0 { glam::Vec4::new(1.0, 0.2, 0.1, 1.0) } else { glam::Vec4::ONE }).collect();
     let texture = relume_bake::scene::Texture { name: "checker".into(), width: 4, height: 4, texels: checker };
     let mut material = testing::material("checked", Vec3::splat(0.8), Vec3::ZERO);
     material.base_color_texture = Some(0);

@@ -144,7 +144,8 @@ impl BakeArgs {
             #[command(flatten)]
             args: BakeArgs,
         }
-        let argv = ["bake".to_string(), scene.display().to_string(), "--method".into(), method.into()].into_iter().chain(flags.iter().cloned());
+        let argv =
+            ["bake".to_string(), scene.display().to_string(), "--method".into(), method.into()].into_iter().chain(flags.iter().cloned());
         let bake = <Bake as clap::Parser>::try_parse_from(argv).map_err(|e| {
             let text = e.render().to_string();
             anyhow::anyhow!("bake flags {}: {}", flags.join(" "), text.lines().next().unwrap_or("").trim_start_matches("error: "))
@@ -218,14 +219,24 @@ pub(crate) fn bake_scene(scene: &Scene, args: &BakeArgs, out: &Path) -> Result<S
     output.write(out)?;
     let mut text = summary(&atlas, &map, &stages, out);
     if let Some((_, facts)) = &transfer {
-        text.insert_str(text.rfind("wrote").unwrap_or(text.len()), &format!("light path maps: {}\n", facts["summary"].as_str().unwrap_or("")));
+        text.insert_str(
+            text.rfind("wrote").unwrap_or(text.len()),
+            &format!("light path maps: {}\n", facts["summary"].as_str().unwrap_or("")),
+        );
     }
     Ok(text)
 }
 
 /// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
 /// compressed transfer and its parameters, statistics and a one-line summary.
-fn bake_light_path_maps(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, lighting: &LightingSettings, args: &BakeArgs, stages: &mut Vec<Stage>) -> Result<(Compressed, Value)> {
+fn bake_light_path_maps(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    atlas: &Atlas,
+    lighting: &LightingSettings,
+    args: &BakeArgs,
+    stages: &mut Vec<Stage>,
+) -> Result<(Compressed, Value)> {
     let settings = LightPathMapSettings {
         entry_points: args.entry_points,
         walks: args.walks,
@@ -257,8 +268,11 @@ fn bake_light_path_maps(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, lighting: 
         lpm::entry_points(scene, bvh, tests, settings.entry_points, args.seed)
     })
     .map_err(anyhow::Error::msg)?;
-    let transfers = timed("transfer", stages, || lpm::bake_transfers(scene, bvh, atlas, &entries.entries, &settings)).map_err(anyhow::Error::msg)?;
-    let compressed = timed("cpca", stages, || lpm::compress(&transfers, &entries.entries, atlas.texels.len(), lighting.light_area, compression)).map_err(anyhow::Error::msg)?;
+    let transfers =
+        timed("transfer", stages, || lpm::bake_transfers(scene, bvh, atlas, &entries.entries, &settings)).map_err(anyhow::Error::msg)?;
+    let compressed =
+        timed("cpca", stages, || lpm::compress(&transfers, &entries.entries, atlas.texels.len(), lighting.light_area, compression))
+            .map_err(anyhow::Error::msg)?;
     let uncompressed_bytes = transfers.values.len() * 12;
     let summary = format!(
         "{} entry points from {} test points, {} texels, {} virtual lights, {} connections; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB",
@@ -400,7 +414,8 @@ fn summary(atlas: &Atlas, map: &ObscuranceMap, stages: &[Stage], out: &Path) -> 
         100.0 * atlas.utilization()
     );
     if !atlas.too_small.is_empty() {
-        let _ = writeln!(text, "warning: {} triangle(s) too small to cover a texel measurably: {:?}", atlas.too_small.len(), atlas.too_small);
+        let _ =
+            writeln!(text, "warning: {} triangle(s) too small to cover a texel measurably: {:?}", atlas.too_small.len(), atlas.too_small);
     }
     for s in stages {
         let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64));

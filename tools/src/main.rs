@@ -3,18 +3,18 @@
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
+use glam::{Vec3, Vec4};
+use relume_bake::artifact::{Baked, PageLayout};
 use relume_bake::bvh::SceneBvh;
+use relume_bake::clustered_transfer::ClusteredTransfer;
 use relume_bake::gltf_load::{load_with_camera, CameraOverride};
 use relume_bake::image::{self, Image};
-use relume_bake::artifact::{Baked, PageLayout};
 use relume_bake::metrics;
-use relume_bake::settings::LightingSettings;
-use glam::{Vec3, Vec4};
-use relume_renderer::LightmapData;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
+use relume_bake::settings::LightingSettings;
 use relume_renderer::vk::{Context, ContextOptions};
-use relume_bake::clustered_transfer::ClusteredTransfer;
+use relume_renderer::LightmapData;
 use relume_renderer::{Composition, FrameTimings, RenderSettings, Renderer, PASS_NAMES};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -254,7 +254,10 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 
 /// `--ambient`: "r,g,b" or one value for all three channels.
 fn parse_ambient(text: &str) -> Result<Vec3> {
-    let values: Vec<f32> = text.split(',').map(|v| v.trim().parse::<f32>()).collect::<Result<_, _>>()
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
         .map_err(|_| anyhow::anyhow!("--ambient {text}: give \"r,g,b\" or one number (lux)"))?;
     match values[..] {
         [v] => Ok(Vec3::splat(v)),
@@ -454,11 +457,8 @@ pub(crate) fn median_timings(frames: &[FrameTimings]) -> Vec<(String, f64)> {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let mut rows: Vec<_> = PASS_NAMES
-        .iter()
-        .enumerate()
-        .map(|(i, name)| (name.to_string(), median(passes.iter().map(|p| p[i]).collect())))
-        .collect();
+    let mut rows: Vec<_> =
+        PASS_NAMES.iter().enumerate().map(|(i, name)| (name.to_string(), median(passes.iter().map(|p| p[i]).collect()))).collect();
     rows.push(("frame".into(), median(passes.iter().map(|p| p.iter().sum()).collect())));
     rows
 }
@@ -536,10 +536,7 @@ fn reference_command(args: &ReferenceArgs) -> Result<()> {
     positive("--exposure", args.exposure)?;
     let run = trace_reference(&scene, &settings);
     write_reference(&args.out, &run, args.exposure)?;
-    println!(
-        "{} samples per pixel in {:.2} s, {:.0} paths/s",
-        run.images.samples_per_pixel, run.seconds, run.images.paths_per_second
-    );
+    println!("{} samples per pixel in {:.2} s, {:.0} paths/s", run.images.samples_per_pixel, run.seconds, run.images.paths_per_second);
     if run.images.nonfinite_samples > 0 {
         bail!("{} samples were NaN or infinite; the scene holds degenerate data", run.images.nonfinite_samples);
     }
@@ -551,11 +548,10 @@ fn compare_command(args: &CompareArgs) -> Result<()> {
     let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
     let reference = match &args.reference_layer {
         Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,
-        None => image::read_exr_layer(&args.reference, Some("combined"))
-            .or_else(|_| image::read_exr_layer(&args.reference, None))?,
+        None => image::read_exr_layer(&args.reference, Some("combined")).or_else(|_| image::read_exr_layer(&args.reference, None))?,
     };
-    let stats = metrics::compare(&image, &reference)
-        .with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
+    let stats =
+        metrics::compare(&image, &reference).with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
     println!("RMSE  {:.6}\nNRMSE {:.6}", stats.rmse, stats.nrmse);
     if stats.dark_pixels > 0 {
         println!("light where the reference is black: {:.6} of its RMS over {} pixels", stats.dark_leak, stats.dark_pixels);

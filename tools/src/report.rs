@@ -30,7 +30,11 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let lpm = match scene.settings.light_region {
         Some(_) => {
             println!("baking light path maps of {}", args.scene.scene.display());
-            let (lpm, summary) = bake_and_read(&scene, &bake::BakeArgs::light_path_maps(&args.scene.scene, args.rays), &args.out.join("bake_light_path_maps"))?;
+            let (lpm, summary) = bake_and_read(
+                &scene,
+                &bake::BakeArgs::light_path_maps(&args.scene.scene, args.rays),
+                &args.out.join("bake_light_path_maps"),
+            )?;
             bake_summary.push_str(&summary);
             Some(lpm)
         }
@@ -55,7 +59,8 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let reference = trace_reference(&scene, &reference_settings);
     write_reference(&args.out.join("reference.exr"), &reference, settings.exposure)?;
 
-    let rows = models.iter().zip(&renders).map(|(model, render)| score(model, render, &renders[0], &reference)).collect::<Result<Vec<_>>>()?;
+    let rows =
+        models.iter().zip(&renders).map(|(model, render)| score(model, render, &renders[0], &reference)).collect::<Result<Vec<_>>>()?;
     for (model, render) in models.iter().zip(&renders).skip(1) {
         let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
         image::write_png_rgb8(&args.out.join(format!("error_{model}.png")), settings.width, settings.height, &rgb)?;
@@ -127,7 +132,11 @@ fn report_text(
         settings.beta
     );
     if rows.iter().any(|row| row.model == "light_path_maps") {
-        let _ = writeln!(r, "Light path maps (Umenhoffer et al. 2008): direct light plus their indirect irradiance composed as `{}`, no ambient term.\n", composition_name(settings.composition));
+        let _ = writeln!(
+            r,
+            "Light path maps (Umenhoffer et al. 2008): direct light plus their indirect irradiance composed as `{}`, no ambient term.\n",
+            composition_name(settings.composition)
+        );
     }
     let models: Vec<&str> = rows.iter().map(|row| row.model).collect();
     let _ = writeln!(r, "| {} | reference |\n|{}---|", models.join(" | "), "---|".repeat(models.len()));

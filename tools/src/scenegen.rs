@@ -36,31 +36,18 @@ use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 6] = [
-    "cornell",
-    "occluder-plane",
-    "occluder-stacked",
-    "table-chair",
-    "classroom",
-    "cornell-wall-light",
-];
+pub const SCENE_NAMES: [&str; 6] = ["cornell", "occluder-plane", "occluder-stacked", "table-chair", "classroom", "cornell-wall-light"];
 
 /// Writes every generated scene into `out_dir` (created if missing) and returns the files
 /// written, `.gltf` then `.bin` for each scene.
 pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
     let mut written = Vec::new();
     for name in SCENE_NAMES {
-        let (gltf, bin) =
-            generate(name).with_context(|| format!("no generator for scene {name}"))?;
-        for (file, bytes) in [
-            (format!("{name}.gltf"), gltf.into_bytes()),
-            (format!("{name}.bin"), bin),
-        ] {
+        let (gltf, bin) = generate(name).with_context(|| format!("no generator for scene {name}"))?;
+        for (file, bytes) in [(format!("{name}.gltf"), gltf.into_bytes()), (format!("{name}.bin"), bin)] {
             let path = out_dir.join(file);
-            std::fs::write(&path, bytes)
-                .with_context(|| format!("{}: cannot write", path.display()))?;
+            std::fs::write(&path, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
             written.push(path);
         }
     }
@@ -104,14 +91,7 @@ fn cornell() -> Builder {
     cornell_box(&mut b);
     // Under the centre of the published light (x 213..343, z 227..332), 1 cm below the ceiling.
     let light_position = cornell_point(278.0, 538.8, 279.5);
-    b.spot_light(
-        "CeilingSpot",
-        light_position,
-        DVec3::NEG_Y,
-        exposure_one_intensity(light_position.y),
-        60.0,
-        70.0,
-    );
+    b.spot_light("CeilingSpot", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 60.0, 70.0);
     cornell_camera(&mut b);
     b
 }
@@ -134,32 +114,16 @@ fn cornell_wall_light() -> Builder {
     cornell_box(&mut b);
     let wall = CORNELL_RED_WALL.map(|v| cornell_point(v[0], v[1], v[2]));
     let centre = cornell_room_centre();
-    let inward = quad_facing(wall, |c| centre - c)
-        .iter()
-        .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
-        .sum::<DVec3>()
-        .normalize();
+    let inward = quad_facing(wall, |c| centre - c).iter().map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize()).sum::<DVec3>().normalize();
     let aim = (wall[0] + wall[2]) * 0.5;
     let distance = 0.05;
-    b.spot_light(
-        "WallSpot",
-        aim + distance * inward,
-        -inward,
-        exposure_one_intensity(distance),
-        40.0,
-        50.0,
-    );
+    b.spot_light("WallSpot", aim + distance * inward, -inward, exposure_one_intensity(distance), 40.0, 50.0);
     cornell_camera(&mut b);
     b
 }
 
 /// The red wall's corners (Cornell millimetres), named because `cornell-wall-light` aims at it.
-const CORNELL_RED_WALL: [[f64; 3]; 4] = [
-    [552.8, 0.0, 0.0],
-    [549.6, 0.0, 559.2],
-    [556.0, 548.8, 559.2],
-    [556.0, 548.8, 0.0],
-];
+const CORNELL_RED_WALL: [[f64; 3]; 4] = [[552.8, 0.0, 0.0], [549.6, 0.0, 559.2], [556.0, 548.8, 559.2], [556.0, 548.8, 0.0]];
 
 /// The middle of the Cornell room's floor-to-ceiling, wall-to-wall box, in glTF metres.
 fn cornell_room_centre() -> DVec3 {
@@ -179,46 +143,10 @@ fn cornell_box(b: &mut Builder) {
 
     let room_centre = cornell_room_centre();
     let room: [(&str, usize, [[f64; 3]; 4]); 5] = [
-        (
-            "Floor",
-            white,
-            [
-                [552.8, 0.0, 0.0],
-                [0.0, 0.0, 0.0],
-                [0.0, 0.0, 559.2],
-                [549.6, 0.0, 559.2],
-            ],
-        ),
-        (
-            "Ceiling",
-            white,
-            [
-                [556.0, 548.8, 0.0],
-                [556.0, 548.8, 559.2],
-                [0.0, 548.8, 559.2],
-                [0.0, 548.8, 0.0],
-            ],
-        ),
-        (
-            "BackWall",
-            white,
-            [
-                [549.6, 0.0, 559.2],
-                [0.0, 0.0, 559.2],
-                [0.0, 548.8, 559.2],
-                [556.0, 548.8, 559.2],
-            ],
-        ),
-        (
-            "RightWall",
-            green,
-            [
-                [0.0, 0.0, 559.2],
-                [0.0, 0.0, 0.0],
-                [0.0, 548.8, 0.0],
-                [0.0, 548.8, 559.2],
-            ],
-        ),
+        ("Floor", white, [[552.8, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 559.2], [549.6, 0.0, 559.2]]),
+        ("Ceiling", white, [[556.0, 548.8, 0.0], [556.0, 548.8, 559.2], [0.0, 548.8, 559.2], [0.0, 548.8, 0.0]]),
+        ("BackWall", white, [[549.6, 0.0, 559.2], [0.0, 0.0, 559.2], [0.0, 548.8, 559.2], [556.0, 548.8, 559.2]]),
+        ("RightWall", green, [[0.0, 0.0, 559.2], [0.0, 0.0, 0.0], [0.0, 548.8, 0.0], [0.0, 548.8, 559.2]]),
         ("LeftWall", red, CORNELL_RED_WALL),
     ];
     for (name, material, quad) in room {
@@ -229,77 +157,24 @@ fn cornell_box(b: &mut Builder) {
     }
 
     let short_block: [[[f64; 3]; 4]; 5] = [
-        [
-            [130.0, 165.0, 65.0],
-            [82.0, 165.0, 225.0],
-            [240.0, 165.0, 272.0],
-            [290.0, 165.0, 114.0],
-        ],
-        [
-            [290.0, 0.0, 114.0],
-            [290.0, 165.0, 114.0],
-            [240.0, 165.0, 272.0],
-            [240.0, 0.0, 272.0],
-        ],
-        [
-            [130.0, 0.0, 65.0],
-            [130.0, 165.0, 65.0],
-            [290.0, 165.0, 114.0],
-            [290.0, 0.0, 114.0],
-        ],
-        [
-            [82.0, 0.0, 225.0],
-            [82.0, 165.0, 225.0],
-            [130.0, 165.0, 65.0],
-            [130.0, 0.0, 65.0],
-        ],
-        [
-            [240.0, 0.0, 272.0],
-            [240.0, 165.0, 272.0],
-            [82.0, 165.0, 225.0],
-            [82.0, 0.0, 225.0],
-        ],
+        [[130.0, 165.0, 65.0], [82.0, 165.0, 225.0], [240.0, 165.0, 272.0], [290.0, 165.0, 114.0]],
+        [[290.0, 0.0, 114.0], [290.0, 165.0, 114.0], [240.0, 165.0, 272.0], [240.0, 0.0, 272.0]],
+        [[130.0, 0.0, 65.0], [130.0, 165.0, 65.0], [290.0, 165.0, 114.0], [290.0, 0.0, 114.0]],
+        [[82.0, 0.0, 225.0], [82.0, 165.0, 225.0], [130.0, 165.0, 65.0], [130.0, 0.0, 65.0]],
+        [[240.0, 0.0, 272.0], [240.0, 165.0, 272.0], [82.0, 165.0, 225.0], [82.0, 0.0, 225.0]],
     ];
     let tall_block: [[[f64; 3]; 4]; 5] = [
-        [
-            [423.0, 330.0, 247.0],
-            [265.0, 330.0, 296.0],
-            [314.0, 330.0, 456.0],
-            [472.0, 330.0, 406.0],
-        ],
-        [
-            [423.0, 0.0, 247.0],
-            [423.0, 330.0, 247.0],
-            [472.0, 330.0, 406.0],
-            [472.0, 0.0, 406.0],
-        ],
-        [
-            [472.0, 0.0, 406.0],
-            [472.0, 330.0, 406.0],
-            [314.0, 330.0, 456.0],
-            [314.0, 0.0, 456.0],
-        ],
-        [
-            [314.0, 0.0, 456.0],
-            [314.0, 330.0, 456.0],
-            [265.0, 330.0, 296.0],
-            [265.0, 0.0, 296.0],
-        ],
-        [
-            [265.0, 0.0, 296.0],
-            [265.0, 330.0, 296.0],
-            [423.0, 330.0, 247.0],
-            [423.0, 0.0, 247.0],
-        ],
+        [[423.0, 330.0, 247.0], [265.0, 330.0, 296.0], [314.0, 330.0, 456.0], [472.0, 330.0, 406.0]],
+        [[423.0, 0.0, 247.0], [423.0, 330.0, 247.0], [472.0, 330.0, 406.0], [472.0, 0.0, 406.0]],
+        [[472.0, 0.0, 406.0], [472.0, 330.0, 406.0], [314.0, 330.0, 456.0], [314.0, 0.0, 456.0]],
+        [[314.0, 0.0, 456.0], [314.0, 330.0, 456.0], [265.0, 330.0, 296.0], [265.0, 0.0, 296.0]],
+        [[265.0, 0.0, 296.0], [265.0, 330.0, 296.0], [423.0, 330.0, 247.0], [423.0, 0.0, 247.0]],
     ];
     for (name, faces) in [("ShortBlock", short_block), ("TallBlock", tall_block)] {
         let corners: Vec<DVec3> = faces.iter().flatten().map(|&v| p(v)).collect();
         let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
         // Block faces face away from the block.
-        let tris: Vec<[DVec3; 3]> = faces
-            .iter()
-            .flat_map(|q| quad_facing(q.map(p), |c| c - centre))
-            .collect();
+        let tris: Vec<[DVec3; 3]> = faces.iter().flat_map(|q| quad_facing(q.map(p), |c| c - centre)).collect();
         let mesh = b.mesh(name, &tris, white);
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
@@ -310,15 +185,7 @@ fn cornell_box(b: &mut Builder) {
 fn cornell_camera(b: &mut Builder) {
     let yfov = 2.0 * (12.5f64 / 35.0).atan();
     let eye = cornell_point(278.0, 273.0, -800.0);
-    b.camera(
-        "CornellCamera",
-        eye,
-        eye + DVec3::NEG_Z,
-        yfov,
-        Some(1.0),
-        0.1,
-        3.0,
-    );
+    b.camera("CornellCamera", eye, eye + DVec3::NEG_Z, yfov, Some(1.0), 0.1, 3.0);
 }
 
 /// Intensity (cd) of a light `distance` metres from the surface straight in front of it
@@ -333,12 +200,7 @@ fn exposure_one_intensity(distance: f64) -> f64 {
 fn ground(b: &mut Builder) {
     let grey = b.material("ground", [0.8, 0.8, 0.8]);
     let h = 2.0;
-    let quad = [
-        DVec3::new(-h, 0.0, -h),
-        DVec3::new(h, 0.0, -h),
-        DVec3::new(h, 0.0, h),
-        DVec3::new(-h, 0.0, h),
-    ];
+    let quad = [DVec3::new(-h, 0.0, -h), DVec3::new(h, 0.0, -h), DVec3::new(h, 0.0, h), DVec3::new(-h, 0.0, h)];
     let mesh = b.mesh("Ground", &quad_facing(quad, |_| DVec3::Y), grey);
     b.mesh_node("Ground", mesh, DVec3::ZERO, DVec3::ONE);
 }
@@ -349,23 +211,8 @@ fn ground(b: &mut Builder) {
 /// occluders and high enough to see their shadow around them.
 fn occluder_light_and_camera(b: &mut Builder) {
     let light_position = DVec3::new(0.0, 3.0, 0.0);
-    b.spot_light(
-        "Spot",
-        light_position,
-        DVec3::NEG_Y,
-        exposure_one_intensity(light_position.y),
-        35.0,
-        45.0,
-    );
-    b.camera(
-        "Camera",
-        DVec3::new(2.0, 3.0, 4.5),
-        DVec3::new(0.0, 0.5, 0.0),
-        45f64.to_radians(),
-        None,
-        0.1,
-        20.0,
-    );
+    b.spot_light("Spot", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 35.0, 45.0);
+    b.camera("Camera", DVec3::new(2.0, 3.0, 4.5), DVec3::new(0.0, 0.5, 0.0), 45f64.to_radians(), None, 0.1, 20.0);
 }
 
 /// A 0.5 m cube whose bottom is 0.75 m above the ground, centred under the light.
@@ -388,18 +235,8 @@ fn occluder_stacked() -> Builder {
     ground(&mut b);
     let blue = b.material("occluder", [0.2, 0.35, 0.7]);
     let cube = b.mesh("Cube", &unit_cube(), blue);
-    b.mesh_node(
-        "UpperPlate",
-        cube,
-        DVec3::new(0.0, 1.6, 0.0),
-        DVec3::new(0.4, 0.05, 0.4),
-    );
-    b.mesh_node(
-        "LowerPlate",
-        cube,
-        DVec3::new(0.0, 0.8, 0.0),
-        DVec3::new(1.0, 0.05, 1.0),
-    );
+    b.mesh_node("UpperPlate", cube, DVec3::new(0.0, 1.6, 0.0), DVec3::new(0.4, 0.05, 0.4));
+    b.mesh_node("LowerPlate", cube, DVec3::new(0.0, 0.8, 0.0), DVec3::new(1.0, 0.05, 1.0));
     occluder_light_and_camera(&mut b);
     b
 }
@@ -421,48 +258,17 @@ fn table_chair() -> Builder {
     let ceiling = b.material("ceiling", [0.8, 0.8, 0.8]);
     let wood = b.material("wood", [0.55, 0.38, 0.22]);
     let blue = b.material("chair", [0.25, 0.38, 0.6]);
-    room(
-        &mut b,
-        DVec3::new(-2.0, 0.0, -2.0),
-        DVec3::new(2.0, 3.0, 2.0),
-        2,
-        [floor, wall, ceiling],
-    );
+    room(&mut b, DVec3::new(-2.0, 0.0, -2.0), DVec3::new(2.0, 3.0, 2.0), 2, [floor, wall, ceiling]);
     let wood_cube = b.mesh("WoodCube", &unit_cube(), wood);
     let chair_cube = b.mesh("ChairCube", &unit_cube(), blue);
     let table_at = DVec3::new(0.5, 0.0, -0.5);
-    add_boxes(
-        &mut b,
-        "Table",
-        wood_cube,
-        &legged_table(table_at, DVec3::new(1.2, 0.75, 0.8)),
-    );
+    add_boxes(&mut b, "Table", wood_cube, &legged_table(table_at, DVec3::new(1.2, 0.75, 0.8)));
     // The seat's front edge 10 cm under the table top's edge (z = -0.1).
-    add_boxes(
-        &mut b,
-        "Chair",
-        chair_cube,
-        &legged_chair(DVec3::new(0.5, 0.0, 0.01)),
-    );
+    add_boxes(&mut b, "Chair", chair_cube, &legged_chair(DVec3::new(0.5, 0.0, 0.01)));
 
     let light_position = DVec3::new(-0.4, 2.95, 0.4);
-    b.spot_light(
-        "CeilingSpot",
-        light_position,
-        DVec3::NEG_Y,
-        exposure_one_intensity(light_position.y),
-        45.0,
-        60.0,
-    );
-    b.camera(
-        "Camera",
-        DVec3::new(-1.7, 1.6, 1.7),
-        DVec3::new(0.5, 0.5, -0.4),
-        60f64.to_radians(),
-        None,
-        0.05,
-        20.0,
-    );
+    b.spot_light("CeilingSpot", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 45.0, 60.0);
+    b.camera("Camera", DVec3::new(-1.7, 1.6, 1.7), DVec3::new(0.5, 0.5, -0.4), 60f64.to_radians(), None, 0.05, 20.0);
     b
 }
 
@@ -498,60 +304,21 @@ fn classroom() -> Builder {
     for (row, z) in [-1.6, -0.4, 0.8, 2.0].into_iter().enumerate() {
         for (column, x) in [-2.4, -0.8, 0.8, 2.4].into_iter().enumerate() {
             let at = DVec3::new(x, 0.0, z);
-            add_boxes(
-                &mut b,
-                &format!("Desk{row}{column}"),
-                desk_cube,
-                &panel_desk(at),
-            );
+            add_boxes(&mut b, &format!("Desk{row}{column}"), desk_cube, &panel_desk(at));
             // The seat's front edge 10 cm under the desk top's back edge.
             let chair_at = at + DVec3::new(0.0, 0.0, 0.36);
-            add_boxes(
-                &mut b,
-                &format!("Chair{row}{column}"),
-                chair_cube,
-                &panel_chair(chair_at),
-            );
+            add_boxes(&mut b, &format!("Chair{row}{column}"), chair_cube, &panel_chair(chair_at));
         }
     }
-    add_boxes(
-        &mut b,
-        "TeacherDesk",
-        teacher_cube,
-        &teacher_desk(DVec3::new(2.2, 0.0, -2.7)),
-    );
+    add_boxes(&mut b, "TeacherDesk", teacher_cube, &teacher_desk(DVec3::new(2.2, 0.0, -2.7)));
     // 3.2 x 1.2 m, its lower edge 0.9 m up, flat on the back wall.
-    add_boxes(
-        &mut b,
-        "",
-        board_cube,
-        &[(
-            "Blackboard".to_string(),
-            DVec3::new(-1.6, 0.9, lo.z),
-            DVec3::new(1.6, 2.1, lo.z + 0.03),
-        )],
-    );
+    add_boxes(&mut b, "", board_cube, &[("Blackboard".to_string(), DVec3::new(-1.6, 0.9, lo.z), DVec3::new(1.6, 2.1, lo.z + 0.03))]);
 
     for (i, z) in [-2.3, 0.0, 2.3].into_iter().enumerate() {
         let light_position = DVec3::new(0.0, hi.y - 0.05, z);
-        b.spot_light(
-            &format!("CeilingSpot{i}"),
-            light_position,
-            DVec3::NEG_Y,
-            exposure_one_intensity(light_position.y),
-            45.0,
-            60.0,
-        );
+        b.spot_light(&format!("CeilingSpot{i}"), light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 45.0, 60.0);
     }
-    b.camera(
-        "Camera",
-        DVec3::new(0.0, 1.7, 3.3),
-        DVec3::new(0.0, 1.0, lo.z),
-        55f64.to_radians(),
-        None,
-        0.05,
-        20.0,
-    );
+    b.camera("Camera", DVec3::new(0.0, 1.7, 3.3), DVec3::new(0.0, 1.0, lo.z), 55f64.to_radians(), None, 0.05, 20.0);
     b
 }
 
@@ -563,12 +330,7 @@ type Part = (String, DVec3, DVec3);
 /// with faces outward (the cube's), and a node transform keeps that.
 fn add_boxes(b: &mut Builder, prefix: &str, cube: usize, parts: &[Part]) {
     for (name, lo, hi) in parts {
-        b.mesh_node(
-            &format!("{prefix}{name}"),
-            cube,
-            (*lo + *hi) * 0.5,
-            *hi - *lo,
-        );
+        b.mesh_node(&format!("{prefix}{name}"), cube, (*lo + *hi) * 0.5, *hi - *lo);
     }
 }
 
@@ -577,21 +339,9 @@ fn add_boxes(b: &mut Builder, prefix: &str, cube: usize, parts: &[Part]) {
 fn legs(lo: DVec3, hi: DVec3, side: f64, inset: f64) -> Vec<Part> {
     let mut legs = Vec::with_capacity(4);
     for (i, (x, z)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
-        let x0 = if x == 0 {
-            lo.x + inset
-        } else {
-            hi.x - inset - side
-        };
-        let z0 = if z == 0 {
-            lo.z + inset
-        } else {
-            hi.z - inset - side
-        };
-        legs.push((
-            format!("Leg{i}"),
-            DVec3::new(x0, lo.y, z0),
-            DVec3::new(x0 + side, hi.y, z0 + side),
-        ));
+        let x0 = if x == 0 { lo.x + inset } else { hi.x - inset - side };
+        let z0 = if z == 0 { lo.z + inset } else { hi.z - inset - side };
+        legs.push((format!("Leg{i}"), DVec3::new(x0, lo.y, z0), DVec3::new(x0 + side, hi.y, z0 + side)));
     }
     legs
 }
@@ -608,12 +358,7 @@ fn legged_table(at: DVec3, size: DVec3) -> Vec<Part> {
         DVec3::new(at.x - half.x, under_top, at.z - half.z),
         DVec3::new(at.x + half.x, at.y + size.y, at.z + half.z),
     )];
-    parts.extend(legs(
-        at - half,
-        DVec3::new(at.x + half.x, under_top, at.z + half.z),
-        0.06,
-        0.04,
-    ));
+    parts.extend(legs(at - half, DVec3::new(at.x + half.x, under_top, at.z + half.z), 0.06, 0.04));
     parts
 }
 
@@ -624,23 +369,14 @@ fn legged_chair(at: DVec3) -> Vec<Part> {
     let half = DVec3::new(0.21, 0.0, 0.21);
     let (under_seat, seat_top) = (at.y + 0.41, at.y + 0.45);
     let mut parts = vec![
-        (
-            "Seat".to_string(),
-            DVec3::new(at.x - half.x, under_seat, at.z - half.z),
-            DVec3::new(at.x + half.x, seat_top, at.z + half.z),
-        ),
+        ("Seat".to_string(), DVec3::new(at.x - half.x, under_seat, at.z - half.z), DVec3::new(at.x + half.x, seat_top, at.z + half.z)),
         (
             "Back".to_string(),
             DVec3::new(at.x - half.x, seat_top, at.z + half.z - 0.04),
             DVec3::new(at.x + half.x, at.y + 0.9, at.z + half.z),
         ),
     ];
-    parts.extend(legs(
-        at - half,
-        DVec3::new(at.x + half.x, under_seat, at.z + half.z),
-        0.04,
-        0.02,
-    ));
+    parts.extend(legs(at - half, DVec3::new(at.x + half.x, under_seat, at.z + half.z), 0.04, 0.02));
     parts
 }
 
@@ -650,17 +386,9 @@ fn legged_chair(at: DVec3) -> Vec<Part> {
 fn panel_desk(at: DVec3) -> Vec<Part> {
     let (hx, hz) = (0.35, 0.25);
     let under_top = at.y + 0.69;
-    let mut parts = vec![(
-        "Top".to_string(),
-        DVec3::new(at.x - hx, under_top, at.z - hz),
-        DVec3::new(at.x + hx, at.y + 0.72, at.z + hz),
-    )];
+    let mut parts = vec![("Top".to_string(), DVec3::new(at.x - hx, under_top, at.z - hz), DVec3::new(at.x + hx, at.y + 0.72, at.z + hz))];
     for (i, x0) in [at.x - hx + 0.03, at.x + hx - 0.06].into_iter().enumerate() {
-        parts.push((
-            format!("Side{i}"),
-            DVec3::new(x0, at.y, at.z - hz + 0.02),
-            DVec3::new(x0 + 0.03, under_top, at.z + hz - 0.02),
-        ));
+        parts.push((format!("Side{i}"), DVec3::new(x0, at.y, at.z - hz + 0.02), DVec3::new(x0 + 0.03, under_top, at.z + hz - 0.02)));
     }
     parts
 }
@@ -673,21 +401,9 @@ fn panel_chair(at: DVec3) -> Vec<Part> {
     let (front, back) = (at.z - hz, at.z + hz - 0.02);
     let under_seat = at.y + 0.42;
     vec![
-        (
-            "Seat".to_string(),
-            DVec3::new(at.x - hx, under_seat, front),
-            DVec3::new(at.x + hx, at.y + 0.45, back),
-        ),
-        (
-            "Front".to_string(),
-            DVec3::new(at.x - hx, at.y, front),
-            DVec3::new(at.x + hx, under_seat, front + 0.02),
-        ),
-        (
-            "Back".to_string(),
-            DVec3::new(at.x - hx, at.y, back),
-            DVec3::new(at.x + hx, at.y + 0.85, back + 0.02),
-        ),
+        ("Seat".to_string(), DVec3::new(at.x - hx, under_seat, front), DVec3::new(at.x + hx, at.y + 0.45, back)),
+        ("Front".to_string(), DVec3::new(at.x - hx, at.y, front), DVec3::new(at.x + hx, under_seat, front + 0.02)),
+        ("Back".to_string(), DVec3::new(at.x - hx, at.y, back), DVec3::new(at.x + hx, at.y + 0.85, back + 0.02)),
     ]
 }
 
@@ -697,17 +413,9 @@ fn panel_chair(at: DVec3) -> Vec<Part> {
 fn teacher_desk(at: DVec3) -> Vec<Part> {
     let (hx, hz) = (0.7, 0.35);
     let under_top = at.y + 0.72;
-    let mut parts = vec![(
-        "Top".to_string(),
-        DVec3::new(at.x - hx, under_top, at.z - hz),
-        DVec3::new(at.x + hx, at.y + 0.76, at.z + hz),
-    )];
+    let mut parts = vec![("Top".to_string(), DVec3::new(at.x - hx, under_top, at.z - hz), DVec3::new(at.x + hx, at.y + 0.76, at.z + hz))];
     for (i, x0) in [at.x - hx, at.x + hx - 0.04].into_iter().enumerate() {
-        parts.push((
-            format!("Side{i}"),
-            DVec3::new(x0, at.y, at.z - hz),
-            DVec3::new(x0 + 0.04, under_top, at.z + hz),
-        ));
+        parts.push((format!("Side{i}"), DVec3::new(x0, at.y, at.z - hz), DVec3::new(x0 + 0.04, under_top, at.z + hz)));
     }
     parts.push((
         "Front".to_string(),
@@ -788,25 +496,11 @@ const CORNELL_SETTINGS: Settings = Settings {
 /// The same fit on the Fig. 9 failure case: its light has 1/230 of `cornell`'s power.
 const CORNELL_WALL_LIGHT_SETTINGS: Settings = Settings { ambient: [0.0033; 3], ..CORNELL_SETTINGS };
 
-const OCCLUDER_SETTINGS: Settings = Settings {
-    ambient: [0.0; 3],
-    beta: 0.3,
-    texel_density: 32.0,
-    tau: 0.15,
-    l_max: 0.5,
-    light_region: None,
-    light_area: 0.0,
-};
+const OCCLUDER_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 32.0, tau: 0.15, l_max: 0.5, light_region: None, light_area: 0.0 };
 
-const TABLE_CHAIR_SETTINGS: Settings = Settings {
-    ambient: [0.0; 3],
-    beta: 0.3,
-    texel_density: 24.0,
-    tau: 0.2,
-    l_max: 0.6,
-    light_region: None,
-    light_area: 0.0,
-};
+const TABLE_CHAIR_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 24.0, tau: 0.2, l_max: 0.6, light_region: None, light_area: 0.0 };
 
 const CLASSROOM_SETTINGS: Settings = Settings {
     ambient: [0.0; 3],
@@ -867,12 +561,7 @@ fn room(b: &mut Builder, lo: DVec3, hi: DVec3, split: usize, materials: [usize; 
         let mut tris = Vec::with_capacity(2 * split * split);
         for i in 0..split {
             for j in 0..split {
-                let quad = [
-                    corner(i, j),
-                    corner(i + 1, j),
-                    corner(i + 1, j + 1),
-                    corner(i, j + 1),
-                ];
+                let quad = [corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)];
                 tris.extend(quad_facing(quad, |c| centre - c));
             }
         }
@@ -891,12 +580,7 @@ fn unit_cube() -> Vec<[DVec3; 3]> {
             n[axis] = sign;
             let (u, v) = (DVec3::AXES[(axis + 1) % 3], DVec3::AXES[(axis + 2) % 3]);
             let c = n * 0.5;
-            let quad = [
-                c - 0.5 * u - 0.5 * v,
-                c + 0.5 * u - 0.5 * v,
-                c + 0.5 * u + 0.5 * v,
-                c - 0.5 * u + 0.5 * v,
-            ];
+            let quad = [c - 0.5 * u - 0.5 * v, c + 0.5 * u - 0.5 * v, c + 0.5 * u + 0.5 * v, c - 0.5 * u + 0.5 * v];
             tris.extend(quad_facing(quad, |_| n));
         }
     }
@@ -985,11 +669,7 @@ impl Builder {
     }
 
     fn vec3_accessor(&mut self, values: &[[f32; 3]], with_bounds: bool) -> usize {
-        let bytes: Vec<u8> = values
-            .iter()
-            .flatten()
-            .flat_map(|c| c.to_le_bytes())
-            .collect();
+        let bytes: Vec<u8> = values.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
         let view = self.view(&bytes, ARRAY_BUFFER);
         let mut accessor = json!({ "bufferView": view, "componentType": FLOAT, "count": values.len(), "type": "VEC3" });
         if with_bounds {
@@ -1020,9 +700,7 @@ impl Builder {
                 normals.push(n.as_vec3().to_array());
             }
         }
-        let indices: Vec<u8> = (0..positions.len() as u32)
-            .flat_map(u32::to_le_bytes)
-            .collect();
+        let indices: Vec<u8> = (0..positions.len() as u32).flat_map(u32::to_le_bytes).collect();
         let position = self.vec3_accessor(&positions, true);
         let normal = self.vec3_accessor(&normals, false);
         let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
@@ -1053,15 +731,7 @@ impl Builder {
 
     /// A KHR_lights_punctual spot light, white, `intensity` candela, cone angles in degrees;
     /// the node's rotation turns its -Z onto `direction`.
-    fn spot_light(
-        &mut self,
-        name: &str,
-        position: DVec3,
-        direction: DVec3,
-        intensity: f64,
-        inner_degrees: f64,
-        outer_degrees: f64,
-    ) {
+    fn spot_light(&mut self, name: &str, position: DVec3, direction: DVec3, intensity: f64, inner_degrees: f64, outer_degrees: f64) {
         self.lights.push(json!({
             "name": name,
             "type": "spot",
@@ -1081,28 +751,17 @@ impl Builder {
     /// A perspective camera at `eye` looking at `target` with +Y up (glTF cameras look down
     /// their -Z); no rotation is written when it looks straight down -Z.
     #[allow(clippy::too_many_arguments)]
-    fn camera(
-        &mut self,
-        name: &str,
-        eye: DVec3,
-        target: DVec3,
-        yfov: f64,
-        aspect: Option<f64>,
-        znear: f64,
-        zfar: f64,
-    ) {
+    fn camera(&mut self, name: &str, eye: DVec3, target: DVec3, yfov: f64, aspect: Option<f64>, znear: f64, zfar: f64) {
         let mut perspective = json!({ "yfov": num(yfov), "znear": num(znear), "zfar": num(zfar) });
         if let Some(a) = aspect {
             perspective["aspectRatio"] = num(a);
         }
-        self.cameras
-            .push(json!({ "name": name, "type": "perspective", "perspective": perspective }));
+        self.cameras.push(json!({ "name": name, "type": "perspective", "perspective": perspective }));
         let forward = (target - eye).normalize();
         let right = forward.cross(DVec3::Y).normalize();
         let up = right.cross(forward);
         let rotation = DQuat::from_mat3(&DMat3::from_cols(right, up, -forward)).normalize();
-        let mut node =
-            json!({ "name": name, "camera": self.cameras.len() - 1, "translation": vec_json(eye) });
+        let mut node = json!({ "name": name, "camera": self.cameras.len() - 1, "translation": vec_json(eye) });
         if rotation.angle_between(DQuat::IDENTITY) > 1e-9 {
             node["rotation"] = quat_json(rotation);
         }
@@ -1144,19 +803,12 @@ mod tests {
     use relume_bake::settings::LightRegion;
 
     fn temp_dir(tag: &str) -> PathBuf {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_nanos())
-            .unwrap_or(0);
-        std::env::temp_dir().join(format!(
-            "relume-scenegen-{tag}-{}-{nanos}",
-            std::process::id()
-        ))
+        let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos()).unwrap_or(0);
+        std::env::temp_dir().join(format!("relume-scenegen-{tag}-{}-{nanos}", std::process::id()))
     }
 
     fn load(dir: &Path, name: &str) -> Scene {
-        let loaded =
-            gltf_load::load(&dir.join(format!("{name}.gltf"))).unwrap_or_else(|e| panic!("{e}"));
+        let loaded = gltf_load::load(&dir.join(format!("{name}.gltf"))).unwrap_or_else(|e| panic!("{e}"));
         assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
         loaded.scene
     }
@@ -1176,19 +828,10 @@ mod tests {
         let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
         for (fa, fb) in files_a.iter().zip(&files_b) {
             let bytes = std::fs::read(fa).unwrap();
-            assert_eq!(
-                bytes,
-                std::fs::read(fb).unwrap(),
-                "{} differs between runs",
-                fa.display()
-            );
+            assert_eq!(bytes, std::fs::read(fb).unwrap(), "{} differs between runs", fa.display());
             let name = fa.file_name().unwrap();
             if let Ok(old) = std::fs::read(committed.join(name)) {
-                assert!(
-                    old == bytes,
-                    "scenes/{} is out of date: run `relume scenes --out scenes/`",
-                    name.to_string_lossy()
-                );
+                assert!(old == bytes, "scenes/{} is out of date: run `relume scenes --out scenes/`", name.to_string_lossy());
             }
         }
         let _ = std::fs::remove_dir_all(&a);
@@ -1210,11 +853,7 @@ mod tests {
                     let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| m.positions[i as usize]);
                     let n = (b - a).cross(c - a).normalize();
                     for i in tri {
-                        assert!(
-                            (n - m.normals[*i as usize]).length() < 1e-5,
-                            "{name}: {}: winding and normal disagree",
-                            m.name
-                        );
+                        assert!((n - m.normals[*i as usize]).length() < 1e-5, "{name}: {}: winding and normal disagree", m.name);
                     }
                 }
             }
@@ -1241,16 +880,7 @@ mod tests {
         };
         assert!(ndc(&cornell, centre_of("LeftWall")).x < -0.5);
         assert!(ndc(&cornell, centre_of("RightWall")).x > 0.5);
-        assert_eq!(
-            cornell.materials[cornell
-                .meshes
-                .iter()
-                .find(|m| m.name == "LeftWall")
-                .unwrap()
-                .material]
-                .name,
-            "red"
-        );
+        assert_eq!(cornell.materials[cornell.meshes.iter().find(|m| m.name == "LeftWall").unwrap().material].name, "red");
         // Every room surface faces into the room, every block face away from its block.
         let room_centre = Vec3::new(0.0, 0.2744, -0.2796);
         for m in &cornell.meshes {
@@ -1258,11 +888,7 @@ mod tests {
             for tri in m.indices.chunks_exact(3) {
                 let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| m.positions[i as usize]);
                 let n = (b - a).cross(c - a).normalize();
-                assert!(
-                    (n - m.normals[tri[0] as usize]).length() < 1e-5,
-                    "{}: winding and normal disagree",
-                    m.name
-                );
+                assert!((n - m.normals[tri[0] as usize]).length() < 1e-5, "{}: winding and normal disagree", m.name);
                 let to_centre = room_centre - (a + b + c) / 3.0;
                 if inward {
                     assert!(n.dot(to_centre) > 0.0, "{} faces out of the room", m.name);
@@ -1278,39 +904,16 @@ mod tests {
             assert_eq!(scene.triangle_count(), 2 + occluder_triangles, "{name}");
             assert_eq!(scene.lights.len(), 1);
             let light = &scene.lights[0];
-            assert_eq!(
-                light.kind,
-                LightKind::Spot {
-                    inner_cone: 35f32.to_radians(),
-                    outer_cone: 45f32.to_radians()
-                }
-            );
+            assert_eq!(light.kind, LightKind::Spot { inner_cone: 35f32.to_radians(), outer_cone: 45f32.to_radians() });
             // Every occluder lies straight under the light, between it and the ground.
             for m in scene.meshes.iter().filter(|m| m.name != "Ground") {
-                let (lo, hi) = m
-                    .positions
-                    .iter()
-                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                        (lo.min(*p), hi.max(*p))
-                    });
-                assert!(
-                    lo.x < 0.0 && hi.x > 0.0 && lo.z < 0.0 && hi.z > 0.0,
-                    "{name}: {} is not under the light",
-                    m.name
-                );
+                let (lo, hi) = m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+                assert!(lo.x < 0.0 && hi.x > 0.0 && lo.z < 0.0 && hi.z > 0.0, "{name}: {} is not under the light", m.name);
                 assert!(lo.y > 0.5 && hi.y < light.position.y, "{name}: {}", m.name);
                 // The occluder and the shadow below it are in view.
-                for p in [
-                    (lo + hi) * 0.5,
-                    Vec3::ZERO,
-                    Vec3::new(0.6, 0.0, 0.6),
-                    Vec3::new(-0.6, 0.0, -0.6),
-                ] {
+                for p in [(lo + hi) * 0.5, Vec3::ZERO, Vec3::new(0.6, 0.0, 0.6), Vec3::new(-0.6, 0.0, -0.6)] {
                     let q = ndc(&scene, p);
-                    assert!(
-                        q.x.abs() < 1.0 && q.y.abs() < 1.0 && q.z > 0.0 && q.z < 1.0,
-                        "{name}: {p} is out of view"
-                    );
+                    assert!(q.x.abs() < 1.0 && q.y.abs() < 1.0 && q.z > 0.0 && q.z < 1.0, "{name}: {p} is out of view");
                 }
             }
         }
@@ -1349,30 +952,15 @@ mod tests {
         }
         // The values the brief set, spelled out once rather than only through the constants.
         let table_chair = load(&dir, "table-chair").settings;
-        assert_eq!(
-            (
-                table_chair.texel_density,
-                table_chair.tau,
-                table_chair.l_max
-            ),
-            (24.0, 0.2, 0.6)
-        );
+        assert_eq!((table_chair.texel_density, table_chair.tau, table_chair.l_max), (24.0, 0.2, 0.6));
         let cornell = load(&dir, "cornell").settings;
-        assert_eq!(
-            (cornell.ambient, cornell.beta, cornell.texel_density),
-            (Vec3::ONE, 0.0, 128.0)
-        );
+        assert_eq!((cornell.ambient, cornell.beta, cornell.texel_density), (Vec3::ONE, 0.0, 128.0));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// Nearest hit of a ray (Möller-Trumbore) on the meshes `keep` accepts: distance, mesh
     /// name and the triangle.
-    fn cast_on(
-        scene: &Scene,
-        origin: Vec3,
-        dir: Vec3,
-        keep: impl Fn(&str) -> bool,
-    ) -> Option<(f32, String, [Vec3; 3])> {
+    fn cast_on(scene: &Scene, origin: Vec3, dir: Vec3, keep: impl Fn(&str) -> bool) -> Option<(f32, String, [Vec3; 3])> {
         let mut best: Option<(f32, String, [Vec3; 3])> = None;
         for m in scene.meshes.iter().filter(|m| keep(&m.name)) {
             for tri in m.indices.chunks_exact(3) {
@@ -1413,67 +1001,36 @@ mod tests {
             let scene = load(&dir, name);
             for light in &scene.lights {
                 let receiver = |mesh: &str| ROOM_SURFACES.contains(&mesh) || mesh == "Ground";
-                let (t, hit, [a, b, c]) =
-                    cast_on(&scene, light.position, light.direction, receiver)
-                        .unwrap_or_else(|| panic!("{name}: {} points at nothing", light.name));
+                let (t, hit, [a, b, c]) = cast_on(&scene, light.position, light.direction, receiver)
+                    .unwrap_or_else(|| panic!("{name}: {} points at nothing", light.name));
                 let point = light.position + t * light.direction;
                 let incident = light.incident(point);
                 let n = (b - a).cross(c - a).normalize();
                 let cosine = n.dot(incident.to_light);
-                assert!(
-                    cosine > 0.99,
-                    "{name}: {} lights the back of {hit}",
-                    light.name
-                );
+                assert!(cosine > 0.99, "{name}: {} lights the back of {hit}", light.name);
                 let e = incident.irradiance * cosine;
-                assert!(
-                    (e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-3,
-                    "{name}: {} gives {hit} {e} lux",
-                    light.name
-                );
+                assert!((e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-3, "{name}: {} gives {hit} {e} lux", light.name);
             }
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    const ROOM_SURFACES: [&str; 6] = [
-        "Floor",
-        "Ceiling",
-        "BackWall",
-        "FrontWall",
-        "LeftWall",
-        "RightWall",
-    ];
+    const ROOM_SURFACES: [&str; 6] = ["Floor", "Ceiling", "BackWall", "FrontWall", "LeftWall", "RightWall"];
 
     fn mesh_bounds(m: &relume_bake::scene::Mesh) -> (Vec3, Vec3) {
-        m.positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            })
+        m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
     }
 
     /// Room surfaces face the room's inside, every piece of furniture is a closed box facing
     /// outward, no two boxes overlap, and everything (lights and camera too) is in the room.
     fn check_furnished_room(scene: &Scene, name: &str, lo: Vec3, hi: Vec3) {
-        let inside = [
-            (lo + hi) * 0.5,
-            lo + (hi - lo) * 0.1,
-            lo + (hi - lo) * Vec3::new(0.9, 0.5, 0.2),
-        ];
+        let inside = [(lo + hi) * 0.5, lo + (hi - lo) * 0.1, lo + (hi - lo) * Vec3::new(0.9, 0.5, 0.2)];
         let mut boxes = Vec::new();
         for m in &scene.meshes {
-            let triangles: Vec<[Vec3; 3]> = m
-                .indices
-                .chunks_exact(3)
-                .map(|t| [t[0], t[1], t[2]].map(|i| m.positions[i as usize]))
-                .collect();
+            let triangles: Vec<[Vec3; 3]> =
+                m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]].map(|i| m.positions[i as usize])).collect();
             let (mlo, mhi) = mesh_bounds(m);
-            assert!(
-                mlo.cmpge(lo - 1e-5).all() && mhi.cmple(hi + 1e-5).all(),
-                "{name}: {} leaves the room",
-                m.name
-            );
+            assert!(mlo.cmpge(lo - 1e-5).all() && mhi.cmple(hi + 1e-5).all(), "{name}: {} leaves the room", m.name);
             if ROOM_SURFACES.contains(&m.name.as_str()) {
                 for [a, b, c] in &triangles {
                     let n = (*b - *a).cross(*c - *a);
@@ -1487,11 +1044,7 @@ mod tests {
             let centre = (mlo + mhi) * 0.5;
             for [a, b, c] in &triangles {
                 let n = (*b - *a).cross(*c - *a);
-                assert!(
-                    n.dot((*a + *b + *c) / 3.0 - centre) > 0.0,
-                    "{name}: {} faces in",
-                    m.name
-                );
+                assert!(n.dot((*a + *b + *c) / 3.0 - centre) > 0.0, "{name}: {} faces in", m.name);
             }
             // Closed and consistently wound: each directed edge once, and its reverse once.
             let key = |p: Vec3| p.to_array().map(f32::to_bits);
@@ -1511,20 +1064,13 @@ mod tests {
         for (i, (na, alo, ahi)) in boxes.iter().enumerate() {
             for (nb, blo, bhi) in &boxes[i + 1..] {
                 let overlap = ahi.min(*bhi) - alo.max(*blo);
-                assert!(
-                    overlap.min_element() < 1e-3,
-                    "{name}: {na} and {nb} overlap"
-                );
+                assert!(overlap.min_element() < 1e-3, "{name}: {na} and {nb} overlap");
             }
         }
         // Some furniture stands on the floor.
         assert!(boxes.iter().any(|(_, blo, _)| blo.y.abs() < 1e-6));
         for light in &scene.lights {
-            assert!(
-                light.position.cmpgt(lo).all() && light.position.cmplt(hi).all(),
-                "{name}: {} is outside the room",
-                light.name
-            );
+            assert!(light.position.cmpgt(lo).all() && light.position.cmplt(hi).all(), "{name}: {} is outside the room", light.name);
         }
         let eye = scene.camera.position();
         assert!(eye.cmpgt(lo).all() && eye.cmplt(hi).all(), "{name}: camera");
@@ -1536,11 +1082,7 @@ mod tests {
     }
 
     fn centre(scene: &Scene, mesh: &str) -> Vec3 {
-        let m = scene
-            .meshes
-            .iter()
-            .find(|m| m.name == mesh)
-            .unwrap_or_else(|| panic!("no mesh {mesh}"));
+        let m = scene.meshes.iter().find(|m| m.name == mesh).unwrap_or_else(|| panic!("no mesh {mesh}"));
         let (lo, hi) = mesh_bounds(m);
         (lo + hi) * 0.5
     }
@@ -1551,35 +1093,16 @@ mod tests {
         write_all(&dir).unwrap();
         for (name, paper_triangles) in [("table-chair", 180.0), ("classroom", 1244.0)] {
             let count = load(&dir, name).triangle_count() as f64;
-            assert!(
-                (count / paper_triangles - 1.0).abs() <= 0.1,
-                "{name}: {count} triangles, the paper's scene has {paper_triangles}"
-            );
+            assert!((count / paper_triangles - 1.0).abs() <= 0.1, "{name}: {count} triangles, the paper's scene has {paper_triangles}");
         }
 
         let scene = load(&dir, "table-chair");
         assert_eq!(scene.triangle_count(), 180);
-        check_furnished_room(
-            &scene,
-            "table-chair",
-            Vec3::new(-2.0, 0.0, -2.0),
-            Vec3::new(2.0, 3.0, 2.0),
-        );
+        check_furnished_room(&scene, "table-chair", Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 3.0, 2.0));
         assert_eq!(scene.meshes.len(), 6 + 5 + 6);
         // The camera sees the table, the chair, the floor and two walls.
-        for mesh in [
-            "TableTop",
-            "TableLeg0",
-            "ChairSeat",
-            "ChairBack",
-            "Floor",
-            "BackWall",
-            "RightWall",
-        ] {
-            assert!(
-                in_view(&scene, centre(&scene, mesh)),
-                "table-chair: {mesh} is out of view"
-            );
+        for mesh in ["TableTop", "TableLeg0", "ChairSeat", "ChairBack", "Floor", "BackWall", "RightWall"] {
+            assert!(in_view(&scene, centre(&scene, mesh)), "table-chair: {mesh} is out of view");
         }
         // The chair is pushed under the table: seat below the top, overlapping it in z.
         let seat = mesh_bounds(scene.meshes.iter().find(|m| m.name == "ChairSeat").unwrap());
@@ -1587,32 +1110,13 @@ mod tests {
         assert!(seat.1.y < top.0.y && seat.0.z < top.1.z && seat.1.z > top.1.z);
 
         let scene = load(&dir, "classroom");
-        check_furnished_room(
-            &scene,
-            "classroom",
-            Vec3::new(-4.0, 0.0, -3.5),
-            Vec3::new(4.0, 3.0, 3.5),
-        );
+        check_furnished_room(&scene, "classroom", Vec3::new(-4.0, 0.0, -3.5), Vec3::new(4.0, 3.0, 3.5));
         assert_eq!(scene.lights.len(), 3);
-        let pairs = scene
-            .meshes
-            .iter()
-            .filter(|m| m.name.ends_with("Seat"))
-            .count();
+        let pairs = scene.meshes.iter().filter(|m| m.name.ends_with("Seat")).count();
         assert_eq!(pairs, 16);
         // From the back of the room: the blackboard, the teacher's desk and the front row.
-        for mesh in [
-            "Blackboard",
-            "TeacherDeskTop",
-            "Desk00Top",
-            "Desk03Top",
-            "Desk21Top",
-            "BackWall",
-        ] {
-            assert!(
-                in_view(&scene, centre(&scene, mesh)),
-                "classroom: {mesh} is out of view"
-            );
+        for mesh in ["Blackboard", "TeacherDeskTop", "Desk00Top", "Desk03Top", "Desk21Top", "BackWall"] {
+            assert!(in_view(&scene, centre(&scene, mesh)), "classroom: {mesh} is out of view");
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
@@ -1626,35 +1130,22 @@ mod tests {
         for (a, b) in cornell.meshes.iter().zip(&scene.meshes) {
             assert_eq!((&a.name, &a.positions), (&b.name, &b.positions));
         }
-        assert_eq!(
-            cornell.camera.world_from_camera,
-            scene.camera.world_from_camera
-        );
+        assert_eq!(cornell.camera.world_from_camera, scene.camera.world_from_camera);
         assert_eq!(scene.lights.len(), 1);
         let light = &scene.lights[0];
-        assert_eq!(
-            light.kind,
-            LightKind::Spot {
-                inner_cone: 40f32.to_radians(),
-                outer_cone: 50f32.to_radians()
-            }
-        );
+        assert_eq!(light.kind, LightKind::Spot { inner_cone: 40f32.to_radians(), outer_cone: 50f32.to_radians() });
         let (t, hit, _) = cast(&scene, light.position, light.direction).unwrap();
         assert_eq!(hit, "LeftWall");
         assert!((t - 0.05).abs() < 1e-5, "{t}");
         // At mid height and mid depth.
         let aim = light.position + t * light.direction;
-        assert!(
-            (aim.y - 0.2744).abs() < 1e-4 && (aim.z + 0.2796).abs() < 1e-4,
-            "{aim}"
-        );
+        assert!((aim.y - 0.2744).abs() < 1e-4 && (aim.z + 0.2796).abs() < 1e-4, "{aim}");
         // Its whole cone lands on the red wall: no direct light anywhere else.
         let (u, v) = light.direction.any_orthonormal_pair();
         for k in 0..16 {
             let phi = k as f32 * std::f32::consts::TAU / 16.0;
             let edge = 50f32.to_radians();
-            let dir = (light.direction * edge.cos() + (u * phi.cos() + v * phi.sin()) * edge.sin())
-                .normalize();
+            let dir = (light.direction * edge.cos() + (u * phi.cos() + v * phi.sin()) * edge.sin()).normalize();
             let (_, hit, _) = cast(&scene, light.position, dir).unwrap();
             assert_eq!(hit, "LeftWall", "cone edge at {k}/16 of a turn");
         }

@@ -69,7 +69,8 @@ fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
 
     let rows = read_csv(&out.join("results.csv"));
     assert_eq!(rows.len(), 2 * 2 * 3, "one row per point");
-    let mut points: Vec<(String, String, String)> = rows.iter().map(|r| (r["method"].clone(), r["params"].clone(), r["light"].clone())).collect();
+    let mut points: Vec<(String, String, String)> =
+        rows.iter().map(|r| (r["method"].clone(), r["params"].clone(), r["light"].clone())).collect();
     points.sort();
     points.dedup();
     assert_eq!(points.len(), 12, "every method x parameter set x light once");
@@ -79,7 +80,9 @@ fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
             if cell.is_empty() {
                 // Empty by definition: the first configuration's flicker, the occluder columns of a
                 // light path, and per-pass times on a device without timestamps.
-                let allowed = (column == "flicker" && row["light"] == "0") || column.starts_with("occluder_") || (column.starts_with("gpu_") && column != "gpu_frame_ms");
+                let allowed = (column == "flicker" && row["light"] == "0")
+                    || column.starts_with("occluder_")
+                    || (column.starts_with("gpu_") && column != "gpu_frame_ms");
                 assert!(allowed, "{column} is empty in {row:?}");
                 continue;
             }

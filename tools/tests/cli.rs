@@ -163,12 +163,7 @@ fn comparing_images_of_different_sizes_is_refused() {
             .unwrap();
         assert!(status.success());
     }
-    let result = Command::new(env!("CARGO_BIN_EXE_relume"))
-        .arg("compare")
-        .arg(dir.join("a.exr"))
-        .arg(dir.join("b.exr"))
-        .output()
-        .unwrap();
+    let result = Command::new(env!("CARGO_BIN_EXE_relume")).arg("compare").arg(dir.join("a.exr")).arg(dir.join("b.exr")).output().unwrap();
     assert_eq!(result.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&result.stderr).contains("8x8"));
 }
@@ -184,10 +179,33 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
     let dir = temp_dir("lpm");
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
     let cornell = cornell.to_str().unwrap();
-    let bake = relume(&["bake", cornell, "--method", "light-path-maps", "--entry-points", "256", "--clusters", "4", "--basis", "1", "--patches", "500", "--rays", "16", "--out", "lpm"], &dir);
+    let bake = relume(
+        &[
+            "bake",
+            cornell,
+            "--method",
+            "light-path-maps",
+            "--entry-points",
+            "256",
+            "--clusters",
+            "4",
+            "--basis",
+            "1",
+            "--patches",
+            "500",
+            "--rays",
+            "16",
+            "--out",
+            "lpm",
+        ],
+        &dir,
+    );
     assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
     let small = ["--width", "32", "--height", "32", "--shadow-map-size", "64"];
-    let render = relume(&[&["render", cornell, "--bake", "lpm", "--validation", "--composition", "plain", "--out", "lpm.exr"][..], &small].concat(), &dir);
+    let render = relume(
+        &[&["render", cornell, "--bake", "lpm", "--validation", "--composition", "plain", "--out", "lpm.exr"][..], &small].concat(),
+        &dir,
+    );
     let stdout = String::from_utf8_lossy(&render.stdout);
     assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
     assert!(dir.join("lpm.exr").exists() && dir.join("lpm.png").exists());

@@ -56,7 +56,14 @@ impl<'a> EntryIrradiancePass<'a> {
 
     /// Reads `moments` (the image given to `new`) and the buffers named above; writes
     /// `maps.entry_irradiance`. Allocates nothing.
-    pub(crate) fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, moments: &Image, maps: &GpuLightPathMaps, params: &EntryIrradianceParams) {
+    pub(crate) fn record(
+        &self,
+        rec: &CommandRecorder,
+        tracker: &mut Tracker,
+        moments: &Image,
+        maps: &GpuLightPathMaps,
+        params: &EntryIrradianceParams,
+    ) {
         tracker.use_image(rec, moments, Access::ComputeSampled);
         tracker.use_buffer(rec, &maps.entry_irradiance, Access::ComputeStorageWrite);
         rec.bind_compute(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);

@@ -15,7 +15,9 @@
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, Pipeline, Sampler, Tracker, VkResult};
+use crate::vk::{
+    vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, Pipeline, Sampler, Tracker, VkResult,
+};
 use glam::{Mat4, Vec4};
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -55,7 +57,13 @@ pub struct ForwardPass<'a> {
 impl<'a> ForwardPass<'a> {
     /// `lightmap`: the RGBA32F 2D-array image of a [`crate::lightmap::GpuLightmap`];
     /// `indirect`: the light path maps' indirect image, or a stand-in of that format.
-    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, moments: &Image, lightmap: &Image, indirect: &Image) -> VkResult<ForwardPass<'a>> {
+    pub(crate) fn new(
+        ctx: &'a Context,
+        scene: &GpuScene,
+        moments: &Image,
+        lightmap: &Image,
+        indirect: &Image,
+    ) -> VkResult<ForwardPass<'a>> {
         let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         // Textures and the lightmap are filtered by hand in the shader (texelFetch, with their
         // own wrap modes); the sampler only binds them.
@@ -73,18 +81,21 @@ impl<'a> ForwardPass<'a> {
                 Binding::SampledImage { view: indirect.view, sampler: texture_sampler.raw },
             ],
         )?;
-        let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
-            vertex: shaders::FORWARD_VERT,
-            fragment: shaders::FORWARD_FRAG,
-            vertex_stride: VERTEX_STRIDE,
-            attributes: &vertex_attributes(),
-            color_formats: &[RADIANCE_FORMAT],
-            depth_format: DEPTH_FORMAT,
-            // Surfaces are two-sided, as in the reference path tracer.
-            cull_mode: vk::CullModeFlags::NONE,
-            set_layout: descriptors.layout,
-            push_bytes: std::mem::size_of::<ForwardParams>() as u32,
-        })?;
+        let pipeline = Pipeline::graphics(
+            ctx,
+            &GraphicsPipelineDesc {
+                vertex: shaders::FORWARD_VERT,
+                fragment: shaders::FORWARD_FRAG,
+                vertex_stride: VERTEX_STRIDE,
+                attributes: &vertex_attributes(),
+                color_formats: &[RADIANCE_FORMAT],
+                depth_format: DEPTH_FORMAT,
+                // Surfaces are two-sided, as in the reference path tracer.
+                cull_mode: vk::CullModeFlags::NONE,
+                set_layout: descriptors.layout,
+                push_bytes: std::mem::size_of::<ForwardParams>() as u32,
+            },
+        )?;
         Ok(ForwardPass { pipeline, descriptors, _shadow_sampler: shadow_sampler, _texture_sampler: texture_sampler })
     }
 

@@ -39,7 +39,8 @@ impl<'a> PaddingPass<'a> {
     /// images (8 bytes a texel each) and the descriptor sets; nothing is made per recording.
     pub fn new(ctx: &'a Context, lightmap: &Image) -> VkResult<PaddingPass<'a>> {
         let d = lightmap.desc;
-        if d.format != LIGHTMAP_FORMAT || d.view_type != vk::ImageViewType::TYPE_2D_ARRAY || !d.usage.contains(vk::ImageUsageFlags::STORAGE) {
+        if d.format != LIGHTMAP_FORMAT || d.view_type != vk::ImageViewType::TYPE_2D_ARRAY || !d.usage.contains(vk::ImageUsageFlags::STORAGE)
+        {
             return Err(VkError::Invalid(format!(
                 "padding needs an RGBA32F 2D-array storage image; the lightmap is {:?} {:?} with usage {:?}",
                 d.format, d.view_type, d.usage

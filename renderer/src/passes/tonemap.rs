@@ -2,7 +2,7 @@
 //! transform as relume_bake::image::tonemap_to_srgb8.
 
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Pipeline, Context, DescriptorSet, Image, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, Pipeline, Tracker, VkResult};
 
 pub const DISPLAY_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 

@@ -4,7 +4,10 @@
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, ImageView, Pipeline, Tracker, VkResult};
+use crate::vk::{
+    vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, ImageView, Pipeline, Tracker,
+    VkResult,
+};
 
 pub const MOMENTS_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 
@@ -27,40 +30,51 @@ pub struct VsmPass<'a> {
 impl<'a> VsmPass<'a> {
     pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, size: u32) -> VkResult<VsmPass<'a>> {
         let layers = scene.shadow_views.len().max(1) as u32;
-        let moments = Image::new(ctx, "vsm moments", ImageDesc {
-            width: size,
-            height: size,
-            layers,
-            format: MOMENTS_FORMAT,
-            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
-            view_type: vk::ImageViewType::TYPE_2D_ARRAY,
-        })?;
-        let depth = Image::new(ctx, "vsm depth", ImageDesc {
-            width: size,
-            height: size,
-            layers: 1,
-            format: vk::Format::D32_SFLOAT,
-            usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            view_type: vk::ImageViewType::TYPE_2D,
-        })?;
+        let moments = Image::new(
+            ctx,
+            "vsm moments",
+            ImageDesc {
+                width: size,
+                height: size,
+                layers,
+                format: MOMENTS_FORMAT,
+                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+                view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+            },
+        )?;
+        let depth = Image::new(
+            ctx,
+            "vsm depth",
+            ImageDesc {
+                width: size,
+                height: size,
+                layers: 1,
+                format: vk::Format::D32_SFLOAT,
+                usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                view_type: vk::ImageViewType::TYPE_2D,
+            },
+        )?;
         let layer_views = (0..layers).map(|l| moments.layer_view(l)).collect::<VkResult<Vec<_>>>()?;
         let descriptors = DescriptorSet::new(
             ctx,
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             &[Binding::StorageBuffer(scene.lights.raw), Binding::StorageBuffer(scene.layers.raw)],
         )?;
-        let pipeline = Pipeline::graphics(ctx, &GraphicsPipelineDesc {
-            vertex: shaders::VSM_MOMENTS_VERT,
-            fragment: shaders::VSM_MOMENTS_FRAG,
-            vertex_stride: VERTEX_STRIDE,
-            attributes: &vertex_attributes()[..1],
-            color_formats: &[MOMENTS_FORMAT],
-            depth_format: vk::Format::D32_SFLOAT,
-            // Both faces: an occluder's back faces are what a closed mesh shows the light.
-            cull_mode: vk::CullModeFlags::NONE,
-            set_layout: descriptors.layout,
-            push_bytes: std::mem::size_of::<VsmPush>() as u32,
-        })?;
+        let pipeline = Pipeline::graphics(
+            ctx,
+            &GraphicsPipelineDesc {
+                vertex: shaders::VSM_MOMENTS_VERT,
+                fragment: shaders::VSM_MOMENTS_FRAG,
+                vertex_stride: VERTEX_STRIDE,
+                attributes: &vertex_attributes()[..1],
+                color_formats: &[MOMENTS_FORMAT],
+                depth_format: vk::Format::D32_SFLOAT,
+                // Both faces: an occluder's back faces are what a closed mesh shows the light.
+                cull_mode: vk::CullModeFlags::NONE,
+                set_layout: descriptors.layout,
+                push_bytes: std::mem::size_of::<VsmPush>() as u32,
+            },
+        )?;
         Ok(VsmPass { pipeline, descriptors, moments, depth, layer_views })
     }
 

@@ -3,7 +3,7 @@
 //! shadow maps soften edges without aliasing (000 §3.4).
 
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Pipeline, Context, DescriptorSet, Image, ImageDesc, Tracker, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, ImageDesc, Pipeline, Tracker, VkResult};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -30,9 +30,7 @@ impl Access {
         use vk::{AccessFlags2 as A, ImageLayout as L, PipelineStageFlags2 as S};
         match self {
             Access::Undefined => (S::NONE, A::NONE, L::UNDEFINED),
-            Access::ColorAttachmentWrite => {
-                (S::COLOR_ATTACHMENT_OUTPUT, A::COLOR_ATTACHMENT_WRITE, L::COLOR_ATTACHMENT_OPTIMAL)
-            }
+            Access::ColorAttachmentWrite => (S::COLOR_ATTACHMENT_OUTPUT, A::COLOR_ATTACHMENT_WRITE, L::COLOR_ATTACHMENT_OPTIMAL),
             Access::DepthAttachmentWrite => (
                 S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
                 A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
@@ -42,9 +40,7 @@ impl Access {
             Access::ComputeSampled => (S::COMPUTE_SHADER, A::SHADER_SAMPLED_READ, L::SHADER_READ_ONLY_OPTIMAL),
             Access::ComputeStorageRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
             Access::ComputeStorageWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
-            Access::ComputeStorageReadWrite => {
-                (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL)
-            }
+            Access::ComputeStorageReadWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE, L::GENERAL),
             Access::TransferSource => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
             Access::TransferDestination => (S::COPY, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         }

@@ -15,13 +15,7 @@ pub struct Buffer<'a> {
 }
 
 impl<'a> Buffer<'a> {
-    pub fn new(
-        ctx: &'a Context,
-        name: &str,
-        size: u64,
-        usage: vk::BufferUsageFlags,
-        location: MemoryLocation,
-    ) -> VkResult<Buffer<'a>> {
+    pub fn new(ctx: &'a Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Buffer<'a>> {
         let size = size.max(16);
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         // SAFETY: a valid create info on a live device.
@@ -54,9 +48,7 @@ impl<'a> Buffer<'a> {
 
     fn mapping(&self) -> VkResult<(*mut u8, usize)> {
         let allocation = self.allocation.as_ref().ok_or_else(|| VkError::Invalid("buffer has no memory".into()))?;
-        let ptr = allocation
-            .mapped_ptr()
-            .ok_or_else(|| VkError::Invalid("buffer is not host visible".into()))?;
+        let ptr = allocation.mapped_ptr().ok_or_else(|| VkError::Invalid("buffer is not host visible".into()))?;
         Ok((ptr.as_ptr() as *mut u8, allocation.size() as usize))
     }
 

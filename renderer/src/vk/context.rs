@@ -2,8 +2,8 @@
 //! own headless context, or wraps a device the caller already has.
 
 use super::device::{self, DeviceInfo};
-use super::sync::Fence;
 use super::instance::{self, MessageLog};
+use super::sync::Fence;
 use super::{VkError, VkResult};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -50,7 +50,18 @@ impl Context {
                 return Err(e);
             }
         };
-        Self::assemble(parts.entry, parts.instance, parts.debug, dev.physical, dev.device, dev.queue_family, dev.queue, dev.info, messages, true)
+        Self::assemble(
+            parts.entry,
+            parts.instance,
+            parts.debug,
+            dev.physical,
+            dev.device,
+            dev.queue_family,
+            dev.queue,
+            dev.info,
+            messages,
+            true,
+        )
     }
 
     /// Wraps a device the caller created and keeps owning. The physical device must offer
@@ -92,13 +103,12 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         });
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let pool_info =
+            vk::CommandPoolCreateInfo::default().queue_family_index(queue_family).flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         // SAFETY: the device is live and the family exists.
-        let command_pool = allocator.map_err(VkError::from).and_then(|a| {
-            unsafe { device.create_command_pool(&pool_info, None) }.map(|p| (a, p)).map_err(VkError::from)
-        });
+        let command_pool = allocator
+            .map_err(VkError::from)
+            .and_then(|a| unsafe { device.create_command_pool(&pool_info, None) }.map(|p| (a, p)).map_err(VkError::from));
         let (allocator, command_pool) = match command_pool {
             Ok(pair) => pair,
             Err(e) => {
@@ -181,13 +191,9 @@ impl Context {
         }
         Ok(())
     }
-
 }
 
-fn destroy_instance(
-    instance: &ash::Instance,
-    debug: Option<&(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
-) {
+fn destroy_instance(instance: &ash::Instance, debug: Option<&(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>) {
     // SAFETY: nothing created from the instance is alive any more.
     unsafe {
         if let Some((loader, messenger)) = debug {
@@ -285,14 +291,8 @@ impl<'a> CommandRecorder<'a> {
             .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
         let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&colors).depth_attachment(&depth);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
+        let viewport =
+            vk::Viewport { x: 0.0, y: 0.0, width: extent.width as f32, height: extent.height as f32, min_depth: 0.0, max_depth: 1.0 };
         // SAFETY: recording state; the views are live and in the stated layouts (the tracker saw to it).
         unsafe {
             self.device.cmd_begin_rendering(self.cmd, &info);
@@ -323,9 +323,11 @@ impl<'a> CommandRecorder<'a> {
     /// Copies an image into a buffer, tightly packed, layer after layer.
     pub fn copy_image_to_buffer(&self, image: &super::Image, buffer: vk::Buffer) {
         let layers = vk::ImageSubresourceLayers::default().aspect_mask(image.desc.aspect()).layer_count(image.desc.layers);
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(layers)
-            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+        let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(vk::Extent3D {
+            width: image.desc.width,
+            height: image.desc.height,
+            depth: 1,
+        });
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (tracker) and the buffer is large enough.
         unsafe { self.device.cmd_copy_image_to_buffer(self.cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]) };
     }
@@ -355,9 +357,8 @@ impl<'a> CommandRecorder<'a> {
     /// buffer finish first, and the vertex, fragment and compute stages that follow see the
     /// new data.
     pub fn update_buffer(&self, buffer: vk::Buffer, data: &[u8]) {
-        let shader_stages = vk::PipelineStageFlags2::VERTEX_SHADER
-            | vk::PipelineStageFlags2::FRAGMENT_SHADER
-            | vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let shader_stages =
+            vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER;
         let barrier = |src_stage, src_access, dst_stage, dst_access| {
             vk::BufferMemoryBarrier2::default()
                 .src_stage_mask(src_stage)
@@ -391,4 +392,3 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().memory_barriers(&barrier)) };
     }
 }
-

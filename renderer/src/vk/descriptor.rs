@@ -53,24 +53,21 @@ impl<'a> DescriptorSet<'a> {
                     .stage_flags(stages)
             })
             .collect();
-        let pool_sizes: Vec<_> = bindings
-            .iter()
-            .map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: 1 })
-            .collect();
+        let pool_sizes: Vec<_> = bindings.iter().map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: 1 }).collect();
         let device = &ctx.device;
-        let mut descriptors =
-            DescriptorSet { ctx, layout: vk::DescriptorSetLayout::null(), set: vk::DescriptorSet::null(), pool: vk::DescriptorPool::null() };
+        let mut descriptors = DescriptorSet {
+            ctx,
+            layout: vk::DescriptorSetLayout::null(),
+            set: vk::DescriptorSet::null(),
+            pool: vk::DescriptorPool::null(),
+        };
         // SAFETY: create infos refer to locals alive for each call; whatever was made before
         // a failure is destroyed by drop.
         unsafe {
-            descriptors.layout = device.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                None,
-            )?;
-            descriptors.pool = device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes),
-                None,
-            )?;
+            descriptors.layout =
+                device.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings), None)?;
+            descriptors.pool =
+                device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes), None)?;
             let layouts = [descriptors.layout];
             descriptors.set = device.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default().descriptor_pool(descriptors.pool).set_layouts(&layouts),
@@ -93,10 +90,7 @@ impl<'a> DescriptorSet<'a> {
             .iter()
             .enumerate()
             .map(|(i, b)| {
-                let write = vk::WriteDescriptorSet::default()
-                    .dst_set(self.set)
-                    .dst_binding(i as u32)
-                    .descriptor_type(b.kind());
+                let write = vk::WriteDescriptorSet::default().dst_set(self.set).dst_binding(i as u32).descriptor_type(b.kind());
                 match b {
                     Binding::StorageBuffer(_) => write.buffer_info(&buffer_infos[i]),
                     _ => write.image_info(&image_infos[i]),

@@ -37,9 +37,8 @@ pub(super) fn create(instance: &ash::Instance, selector: Option<&str>) -> VkResu
         // SAFETY: plain query of an enumerated device.
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-        let wanted = selector.is_none_or(|sel| {
-            sel.parse::<usize>().ok() == Some(index) || name.to_lowercase().contains(&sel.to_lowercase())
-        });
+        let wanted =
+            selector.is_none_or(|sel| sel.parse::<usize>().ok() == Some(index) || name.to_lowercase().contains(&sel.to_lowercase()));
         let verdict = graphics_compute_family(instance, pd)
             .ok_or_else(|| VkError::MissingFeature { device: name.clone(), missing: "a graphics+compute queue".into() })
             .and_then(|family| check_and_describe(instance, pd, family).map(|info| (family, info)));
@@ -85,10 +84,7 @@ fn type_rank(kind: vk::PhysicalDeviceType) -> u32 {
 fn graphics_compute_family(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option<u32> {
     // SAFETY: plain query.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    families
-        .iter()
-        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-        .map(|i| i as u32)
+    families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)).map(|i| i as u32)
 }
 
 fn check_features(instance: &ash::Instance, pd: vk::PhysicalDevice, name: &str) -> VkResult<()> {
@@ -103,9 +99,7 @@ fn check_features(instance: &ash::Instance, pd: vk::PhysicalDevice, name: &str) 
         (base.shader_storage_image_extended_formats, "shaderStorageImageExtendedFormats"),
     ];
     match missing.iter().find(|(have, _)| *have == vk::FALSE) {
-        Some((_, feature)) => {
-            Err(VkError::MissingFeature { device: name.into(), missing: (*feature).into() })
-        }
+        Some((_, feature)) => Err(VkError::MissingFeature { device: name.into(), missing: (*feature).into() }),
         None => Ok(()),
     }
 }
@@ -115,21 +109,12 @@ fn create_logical(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
     let base = vk::PhysicalDeviceFeatures::default().shader_storage_image_extended_formats(true);
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
-    let info = vk::DeviceCreateInfo::default()
-        .queue_create_infos(&queues)
-        .enabled_features(&base)
-        .push_next(&mut v13);
+    let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_features(&base).push_next(&mut v13);
     // SAFETY: the create info refers to locals alive for the call; features were checked.
     Ok(unsafe { instance.create_device(pd, &info, None) }?)
 }
 
-fn describe(
-    instance: &ash::Instance,
-    pd: vk::PhysicalDevice,
-    props: &vk::PhysicalDeviceProperties,
-    name: &str,
-    family: u32,
-) -> DeviceInfo {
+fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, props: &vk::PhysicalDeviceProperties, name: &str, family: u32) -> DeviceInfo {
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
     // SAFETY: plain queries of a live physical device into structures alive for the calls.
@@ -145,16 +130,13 @@ fn describe(
         driver_props.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
         driver_props.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default()
     );
-    let timestamps = families.get(family as usize).is_some_and(|f| f.timestamp_valid_bits > 0)
-        && props.limits.timestamp_period > 0.0;
+    let timestamps = families.get(family as usize).is_some_and(|f| f.timestamp_valid_bits > 0) && props.limits.timestamp_period > 0.0;
     DeviceInfo {
         name: name.to_string(),
         driver: driver.trim().to_string(),
         device_type: format!("{:?}", props.device_type),
         timestamp_period_ns: timestamps.then_some(props.limits.timestamp_period as f64),
-        linear_moments: format
-            .optimal_tiling_features
-            .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR),
+        linear_moments: format.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
     }
 }

@@ -34,11 +34,7 @@ impl ImageDesc {
     }
 
     fn layers(&self, first: u32, count: u32) -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange::default()
-            .aspect_mask(self.aspect())
-            .level_count(1)
-            .base_array_layer(first)
-            .layer_count(count)
+        vk::ImageSubresourceRange::default().aspect_mask(self.aspect()).level_count(1).base_array_layer(first).layer_count(count)
     }
 }
 

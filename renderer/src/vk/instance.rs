@@ -27,17 +27,13 @@ pub(super) fn create(validation: bool, log: &MessageLog) -> VkResult<InstancePar
                 .into(),
         ));
     }
-    let app = vk::ApplicationInfo::default()
-        .application_name(c"relume")
-        .api_version(vk::API_VERSION_1_3);
+    let app = vk::ApplicationInfo::default().application_name(c"relume").api_version(vk::API_VERSION_1_3);
     let layers = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
     let extensions = if validation { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
     let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
-    let mut info = vk::InstanceCreateInfo::default()
-        .application_info(&app)
-        .enabled_layer_names(&layers)
-        .enabled_extension_names(&extensions);
+    let mut info =
+        vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers).enabled_extension_names(&extensions);
     if validation {
         info = info.push_next(&mut features);
     }
@@ -71,9 +67,7 @@ fn create_messenger(
 ) -> VkResult<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
     let loader = ash::ext::debug_utils::Instance::new(entry, instance);
     let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION

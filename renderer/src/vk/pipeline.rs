@@ -52,9 +52,11 @@ impl<'a> Pipeline<'a> {
     fn with_layout(ctx: &'a Context, set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
         let set_layouts = [set_layout];
         let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
-        let info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(if push_bytes > 0 { &ranges } else { &[] });
+        let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(if push_bytes > 0 {
+            &ranges
+        } else {
+            &[]
+        });
         // SAFETY: a valid create info on a live device.
         let layout = unsafe { ctx.device.create_pipeline_layout(&info, None) }?;
         Ok(Pipeline { ctx, raw: vk::Pipeline::null(), layout })
@@ -63,10 +65,7 @@ impl<'a> Pipeline<'a> {
     pub fn compute(ctx: &'a Context, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
         let mut pipeline = Pipeline::with_layout(ctx, set_layout, push_bytes)?;
         let module = ShaderModule::new(ctx, spirv)?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module.raw)
-            .name(c"main");
+        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module.raw).name(c"main");
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout)];
         // SAFETY: module and layout are live for the call.
         let created = unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
@@ -82,10 +81,8 @@ impl<'a> Pipeline<'a> {
             vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex.raw).name(c"main"),
             vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fragment.raw).name(c"main"),
         ];
-        let bindings = [vk::VertexInputBindingDescription::default()
-            .binding(0)
-            .stride(desc.vertex_stride)
-            .input_rate(vk::VertexInputRate::VERTEX)];
+        let bindings =
+            [vk::VertexInputBindingDescription::default().binding(0).stride(desc.vertex_stride).input_rate(vk::VertexInputRate::VERTEX)];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&bindings)
             .vertex_attribute_descriptions(desc.attributes);

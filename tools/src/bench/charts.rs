@@ -33,8 +33,11 @@ pub(crate) struct Chart<'a> {
 fn register_font() -> Result<()> {
     static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
     let result = REGISTERED.get_or_init(|| {
-        let bytes = std::fs::read(FONT_FILE).map_err(|e| format!("{FONT_FILE}: cannot read the charts' font ({e}); install Debian's fonts-dejavu-core (tools/setup.sh does)"))?;
-        plotters::style::register_font(FONT, FontStyle::Normal, Box::leak(bytes.into_boxed_slice())).map_err(|_| format!("{FONT_FILE}: not a usable TrueType font"))
+        let bytes = std::fs::read(FONT_FILE).map_err(|e| {
+            format!("{FONT_FILE}: cannot read the charts' font ({e}); install Debian's fonts-dejavu-core (tools/setup.sh does)")
+        })?;
+        plotters::style::register_font(FONT, FontStyle::Normal, Box::leak(bytes.into_boxed_slice()))
+            .map_err(|_| format!("{FONT_FILE}: not a usable TrueType font"))
     });
     result.clone().map_err(anyhow::Error::msg)
 }
@@ -103,13 +106,20 @@ where
             .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
     }
     if chart.front.len() > 1 {
-        let staircase: Vec<(f64, f64)> = chart.front.windows(2).flat_map(|w| [w[0], (w[1].0, w[0].1)]).chain(chart.front.last().copied()).collect();
+        let staircase: Vec<(f64, f64)> =
+            chart.front.windows(2).flat_map(|w| [w[0], (w[1].0, w[0].1)]).chain(chart.front.last().copied()).collect();
         plot.draw_series(LineSeries::new(staircase, BLACK.stroke_width(2)))
             .map_err(fail)?
             .label("Pareto front")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.stroke_width(2)));
     }
-    plot.configure_series_labels().label_font((FONT, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(legend_at).draw().map_err(fail)?;
+    plot.configure_series_labels()
+        .label_font((FONT, 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(legend_at)
+        .draw()
+        .map_err(fail)?;
     root.present().map_err(fail)?;
     Ok(())
 }

@@ -141,7 +141,8 @@ pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
 }
 
 /// The parameter keys every method takes at run time.
-pub(crate) const RENDER_KEYS: [&str; 7] = ["ambient", "beta", "composition", "shadow_map_size", "blur_radius", "min_variance", "bleeding_reduction"];
+pub(crate) const RENDER_KEYS: [&str; 7] =
+    ["ambient", "beta", "composition", "shadow_map_size", "blur_radius", "min_variance", "bleeding_reduction"];
 
 /// Splits a sweep's parameter table into the run-time keys and the bake's flags
 /// (`key = value` becomes `--key value`, `key = true` becomes `--key`).
@@ -149,7 +150,13 @@ pub(crate) fn split_params(method: &dyn Method, table: &toml::Table) -> Result<(
     let mut render = RenderParams::default();
     let mut flags = Vec::new();
     for (key, value) in table {
-        let number = || value.as_float().or_else(|| value.as_integer().map(|i| i as f64)).map(|v| v as f32).with_context(|| format!("{key}: give a number"));
+        let number = || {
+            value
+                .as_float()
+                .or_else(|| value.as_integer().map(|i| i as f64))
+                .map(|v| v as f32)
+                .with_context(|| format!("{key}: give a number"))
+        };
         let count = || value.as_integer().and_then(|i| u32::try_from(i).ok()).with_context(|| format!("{key}: give a whole number >= 0"));
         match key.as_str() {
             "ambient" => render.ambient = Some(Vec3::splat(number()?)),
@@ -159,7 +166,9 @@ pub(crate) fn split_params(method: &dyn Method, table: &toml::Table) -> Result<(
             "blur_radius" => render.blur_radius = Some(count()?),
             "min_variance" => render.min_variance = Some(number()?),
             "bleeding_reduction" => render.bleeding_reduction = Some(number()?),
-            _ if method.bake_method().is_none() => bail!("{key}: method {} has no bake; its keys are {}", method.name(), RENDER_KEYS.join(", ")),
+            _ if method.bake_method().is_none() => {
+                bail!("{key}: method {} has no bake; its keys are {}", method.name(), RENDER_KEYS.join(", "))
+            }
             _ => match value {
                 toml::Value::Boolean(true) => flags.push(format!("--{key}")),
                 toml::Value::Boolean(false) => {}
@@ -187,7 +196,8 @@ mod tests {
 
     #[test]
     fn parameters_split_into_render_keys_and_bake_flags() {
-        let table: toml::Table = toml::from_str("rays = 64\nuncompressed = true\nvariant = 'ao'\nbeta = 0.5\ncomposition = 'plain'").unwrap();
+        let table: toml::Table =
+            toml::from_str("rays = 64\nuncompressed = true\nvariant = 'ao'\nbeta = 0.5\ncomposition = 'plain'").unwrap();
         let (render, flags) = split_params(find("light-path-maps").unwrap(), &table).unwrap();
         assert_eq!(render.beta, Some(0.5));
         assert_eq!(render.composition, Some(Composition::Plain));

@@ -125,9 +125,11 @@ fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
         let tables = if entry.params.is_empty() { vec![toml::Table::new()] } else { entry.params.clone() };
         for table in tables {
             let label = methods::label(&table);
-            let (render, bake_flags) = methods::split_params(method, &table).with_context(|| format!("method {} [{label}]", method.name()))?;
+            let (render, bake_flags) =
+                methods::split_params(method, &table).with_context(|| format!("method {} [{label}]", method.name()))?;
             if let Some(bake) = method.bake_method() {
-                crate::bake::BakeArgs::from_flags(Path::new("scene.gltf"), bake, &bake_flags).with_context(|| format!("method {} [{label}]", method.name()))?;
+                crate::bake::BakeArgs::from_flags(Path::new("scene.gltf"), bake, &bake_flags)
+                    .with_context(|| format!("method {} [{label}]", method.name()))?;
             }
             configs.push(Config { method, table, label, render, bake_flags });
         }
@@ -185,7 +187,16 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
     }
     results::mark_front(&mut rows);
     let (references_traced, references_found) = (cache.traced, cache.found);
-    Ok(Outcome { sweep, device, rows, skipped, references_traced, references_found, seconds: start.elapsed().as_secs_f64(), validation_messages })
+    Ok(Outcome {
+        sweep,
+        device,
+        rows,
+        skipped,
+        references_traced,
+        references_found,
+        seconds: start.elapsed().as_secs_f64(),
+        validation_messages,
+    })
 }
 
 /// One scene of the sweep: its light configurations, their references and direct-only frames.
@@ -205,7 +216,13 @@ struct SceneBench<'s> {
 }
 
 impl<'s> SceneBench<'s> {
-    fn new(sweep: &'s Sweep, entry: &'s SweepScene, ctx: &'s Context, cache: &mut ReferenceCache, args: &'s BenchArgs) -> Result<SceneBench<'s>> {
+    fn new(
+        sweep: &'s Sweep,
+        entry: &'s SweepScene,
+        ctx: &'s Context,
+        cache: &mut ReferenceCache,
+        args: &'s BenchArgs,
+    ) -> Result<SceneBench<'s>> {
         let scene = load_scene(&scene_args(sweep, entry))?;
         let name = entry.name();
         let configurations = configurations(&scene, entry)?;
@@ -228,10 +245,25 @@ impl<'s> SceneBench<'s> {
                 None => cache.get(&moved, &bvh, &settings)?,
             };
             let exposure = perceptual::exposure_for(&reference.combined);
-            image::write_png_tonemapped(&args.out.join("images").join(format!("{name}_light{k}_reference.png")), &reference.combined, exposure)?;
+            image::write_png_tonemapped(
+                &args.out.join("images").join(format!("{name}_light{k}_reference.png")),
+                &reference.combined,
+                exposure,
+            )?;
             references.push(reference);
         }
-        Ok(SceneBench { sweep, entry, ctx, out: &args.out, threads: args.threads, name, scene, configurations, references, bakes: Vec::new() })
+        Ok(SceneBench {
+            sweep,
+            entry,
+            ctx,
+            out: &args.out,
+            threads: args.threads,
+            name,
+            scene,
+            configurations,
+            references,
+            bakes: Vec::new(),
+        })
     }
 
     /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
@@ -246,12 +278,20 @@ impl<'s> SceneBench<'s> {
             }
             None => (BakeCost::default(), None),
         };
-        let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ambient: self.scene.settings.ambient, beta: self.scene.settings.beta, ..RenderSettings::default() };
+        let base = RenderSettings {
+            width: self.sweep.width,
+            height: self.sweep.height,
+            ambient: self.scene.settings.ambient,
+            beta: self.scene.settings.beta,
+            ..RenderSettings::default()
+        };
         let settings = config.render.apply_shadows(method.settings(&base, &config.render));
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
         let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings)?;
         // Direct light alone with the same shadow maps: what the indirect part is measured against.
-        let mut direct_renderer = Renderer::new(self.ctx, &self.scene, &RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() }).context("Vulkan renderer")?;
+        let mut direct_renderer =
+            Renderer::new(self.ctx, &self.scene, &RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() })
+                .context("Vulkan renderer")?;
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
@@ -429,7 +469,10 @@ fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration
             let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
             bail!("{}: occluder_path.mesh \"{}\": no such mesh; the scene has {}", entry.path.display(), path.mesh, names.join(", "));
         };
-        return Ok(sweep::spread(&path.points, path.frames).into_iter().map(|t| Configuration { occluder: Some((mesh, t)), ..at_rest() }).collect());
+        return Ok(sweep::spread(&path.points, path.frames)
+            .into_iter()
+            .map(|t| Configuration { occluder: Some((mesh, t)), ..at_rest() })
+            .collect());
     }
     Ok(vec![at_rest()])
 }
@@ -476,7 +519,8 @@ const FLICKER_BLOCK: u32 = 4;
 /// relative to the RMS of the reference's blocks.
 fn flicker(before: &Image, after: &Image, reference_before: &Image, reference_after: &Image) -> f64 {
     let change = |i: usize| (after.pixels[i] - before.pixels[i]) - (reference_after.pixels[i] - reference_before.pixels[i]);
-    let (changes, reference) = (block_means(after.width, after.height, change), block_means(after.width, after.height, |i| reference_after.pixels[i]));
+    let (changes, reference) =
+        (block_means(after.width, after.height, change), block_means(after.width, after.height, |i| reference_after.pixels[i]));
     let squares = |blocks: &[Vec3]| blocks.iter().map(|b| b.length_squared() as f64).sum::<f64>();
     let reference = squares(&reference);
     if reference > 0.0 {
@@ -491,7 +535,9 @@ fn block_means(width: u32, height: u32, value: impl Fn(usize) -> Vec3) -> Vec<Ve
     let mut blocks = Vec::new();
     for by in (0..height).step_by(FLICKER_BLOCK as usize) {
         for bx in (0..width).step_by(FLICKER_BLOCK as usize) {
-            let pixels: Vec<usize> = (by..(by + FLICKER_BLOCK).min(height)).flat_map(|y| (bx..(bx + FLICKER_BLOCK).min(width)).map(move |x| (y * width + x) as usize)).collect();
+            let pixels: Vec<usize> = (by..(by + FLICKER_BLOCK).min(height))
+                .flat_map(|y| (bx..(bx + FLICKER_BLOCK).min(width)).map(move |x| (y * width + x) as usize))
+                .collect();
             blocks.push(pixels.iter().map(|&i| value(i)).sum::<Vec3>() / pixels.len() as f32);
         }
     }

@@ -24,7 +24,8 @@ pub(crate) struct ReferenceCache {
 
 impl ReferenceCache {
     pub fn new(folder: &Path) -> Result<ReferenceCache> {
-        std::fs::create_dir_all(folder).map_err(|e| anyhow::anyhow!("{}: cannot create the reference cache ({e}); give another --cache", folder.display()))?;
+        std::fs::create_dir_all(folder)
+            .map_err(|e| anyhow::anyhow!("{}: cannot create the reference cache ({e}); give another --cache", folder.display()))?;
         Ok(ReferenceCache { folder: folder.to_path_buf(), traced: 0, found: 0 })
     }
 
@@ -41,7 +42,10 @@ impl ReferenceCache {
         }
         let images = render_reference(scene, bvh, settings);
         if images.nonfinite_samples > 0 {
-            anyhow::bail!("the reference path tracer met {} NaN or infinite samples; the scene holds degenerate data", images.nonfinite_samples);
+            anyhow::bail!(
+                "the reference path tracer met {} NaN or infinite samples; the scene holds degenerate data",
+                images.nonfinite_samples
+            );
         }
         image::write_exr_layers(&path, &[("direct", &images.direct), ("indirect", &images.indirect), ("combined", &images.combined)])?;
         self.traced += 1;

@@ -45,7 +45,13 @@ fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
         .map(|key| {
             let rows: Vec<&Row> = rows.iter().filter(|r| (r.scene.as_str(), r.method.as_str(), r.params.as_str()) == key).collect();
             let scored: Vec<_> = rows.iter().filter_map(|r| r.accuracy).collect();
-            let mean = |f: &dyn Fn(&results::Accuracy) -> f64| if scored.is_empty() { f64::NAN } else { scored.iter().map(f).sum::<f64>() / scored.len() as f64 };
+            let mean = |f: &dyn Fn(&results::Accuracy) -> f64| {
+                if scored.is_empty() {
+                    f64::NAN
+                } else {
+                    scored.iter().map(f).sum::<f64>() / scored.len() as f64
+                }
+            };
             let flickers: Vec<f64> = rows.iter().filter_map(|r| r.flicker).collect();
             Summary {
                 mean_nrmse: mean(&|a| a.nrmse),
@@ -66,7 +72,9 @@ fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
 fn fronts(summaries: &[Summary]) -> Vec<bool> {
     summaries
         .chunk_by(|a, b| a.first().scene == b.first().scene)
-        .flat_map(|of_scene| pareto::front(&of_scene.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect::<Vec<_>>()))
+        .flat_map(|of_scene| {
+            pareto::front(&of_scene.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect::<Vec<_>>())
+        })
         .collect()
 }
 
@@ -74,7 +82,21 @@ fn fronts(summaries: &[Summary]) -> Vec<bool> {
 fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
     use results::number;
     let header = [
-        "scene", "method", "params", "points", "failed", "mean_nrmse", "mean_flip", "mean_indirect_nrmse", "max_flicker", "gpu_frame_ms", "cpu_frame_ms", "bake_seconds", "bake_peak_memory_bytes", "artifact_bytes", "on_front",
+        "scene",
+        "method",
+        "params",
+        "points",
+        "failed",
+        "mean_nrmse",
+        "mean_flip",
+        "mean_indirect_nrmse",
+        "max_flicker",
+        "gpu_frame_ms",
+        "cpu_frame_ms",
+        "bake_seconds",
+        "bake_peak_memory_bytes",
+        "artifact_bytes",
+        "on_front",
     ];
     let lines = summaries.iter().zip(fronts).map(|(s, on)| {
         let row = s.first();
@@ -139,7 +161,9 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
 
 fn remove_stale(path: &Path) -> Result<()> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(anyhow::anyhow!("{}: cannot remove the earlier run's file ({e})", path.display())),
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(anyhow::anyhow!("{}: cannot remove the earlier run's file ({e})", path.display()))
+        }
         _ => Ok(()),
     }
 }
@@ -177,7 +201,10 @@ fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<
         let (series, front) = by_method(of_scene, x);
         let stem = format!("{scene}_error_vs_{name}");
         let title = format!("{scene}: error against {}", x_label.split(',').next().unwrap_or(name));
-        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label, y_label: "NRMSE vs reference (mean over lights)", series, lines: false, front })?;
+        charts::write(
+            &out.join(&stem),
+            &Chart { title: title.clone(), x_label, y_label: "NRMSE vs reference (mean over lights)", series, lines: false, front },
+        )?;
         written.push((stem, title));
     }
     if of_scene[0].rows.len() > 1 {
@@ -190,7 +217,17 @@ fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<
             .collect();
         let stem = format!("{scene}_error_along_path");
         let title = format!("{scene}: error along the path");
-        charts::write(&out.join(&stem), &Chart { title: title.clone(), x_label: "position along the light or occluder path", y_label: "NRMSE vs reference", series, lines: true, front: Vec::new() })?;
+        charts::write(
+            &out.join(&stem),
+            &Chart {
+                title: title.clone(),
+                x_label: "position along the light or occluder path",
+                y_label: "NRMSE vs reference",
+                series,
+                lines: true,
+                front: Vec::new(),
+            },
+        )?;
         written.push((stem, title));
     }
     Ok(written)
@@ -246,7 +283,10 @@ fn recommended_toml(recommendations: &[Recommendation]) -> String {
             scene.insert(r.method.to_string(), toml::Value::Table(entry));
         }
     }
-    format!("# relume bench --budget: per scene and method, the cheapest parameter set within the budget.\n{}", toml::to_string(&root).unwrap_or_default())
+    format!(
+        "# relume bench --budget: per scene and method, the cheapest parameter set within the budget.\n{}",
+        toml::to_string(&root).unwrap_or_default()
+    )
 }
 
 fn machine() -> String {
@@ -258,7 +298,14 @@ fn machine() -> String {
     format!("{cpu}, {cores} core(s)")
 }
 
-fn report_text(outcome: &Outcome, summaries: &[Summary], fronts: &[bool], charts_md: &str, recommendations: Option<&[Recommendation]>, budget: Option<f64>) -> String {
+fn report_text(
+    outcome: &Outcome,
+    summaries: &[Summary],
+    fronts: &[bool],
+    charts_md: &str,
+    recommendations: Option<&[Recommendation]>,
+    budget: Option<f64>,
+) -> String {
     let sweep = &outcome.sweep;
     let mut r = String::new();
     let _ = writeln!(r, "# relume bench: {}\n", sweep.name);
@@ -312,16 +359,32 @@ fn report_text(outcome: &Outcome, summaries: &[Summary], fronts: &[bool], charts
         for rec in recommendations {
             let describe = |i: usize| {
                 let s = rec.ladder[i];
-                format!("[{}] NRMSE {:.4}, {:.2} MiB, bake {:.2} s, {:.2} ms", s.first().params, s.mean_nrmse, s.artifact_mib(), s.first().bake.seconds, s.gpu_ms)
+                format!(
+                    "[{}] NRMSE {:.4}, {:.2} MiB, bake {:.2} s, {:.2} ms",
+                    s.first().params,
+                    s.mean_nrmse,
+                    s.artifact_mib(),
+                    s.first().bake.seconds,
+                    s.gpu_ms
+                )
             };
             match rec.chosen {
                 Some(i) => {
                     let smaller = if i > 0 { describe(i - 1) } else { "none".into() };
                     let larger = if i + 1 < rec.ladder.len() { describe(i + 1) } else { "none".into() };
-                    let _ = writeln!(r, "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}", rec.scene, rec.method, describe(i));
+                    let _ = writeln!(
+                        r,
+                        "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}",
+                        rec.scene,
+                        rec.method,
+                        describe(i)
+                    );
                 }
                 None => {
-                    let best = (0..rec.ladder.len()).min_by(|&a, &b| rec.ladder[a].mean_nrmse.total_cmp(&rec.ladder[b].mean_nrmse)).map(describe).unwrap_or_default();
+                    let best = (0..rec.ladder.len())
+                        .min_by(|&a, &b| rec.ladder[a].mean_nrmse.total_cmp(&rec.ladder[b].mean_nrmse))
+                        .map(describe)
+                        .unwrap_or_default();
                     let _ = writeln!(r, "- {} {}: no configuration within the budget (the best: {best})", rec.scene, rec.method);
                 }
             }
@@ -353,7 +416,14 @@ mod tests {
 
     /// A point of method "m" with parameter set `params` at light `light`; `nrmse` None: failed.
     fn point(params: &str, light: usize, nrmse: Option<f64>) -> Row {
-        let accuracy = nrmse.map(|nrmse| Accuracy { rmse: nrmse, nrmse, flip: nrmse, indirect_rmse: nrmse, indirect_nrmse: nrmse, indirect_flip: nrmse });
+        let accuracy = nrmse.map(|nrmse| Accuracy {
+            rmse: nrmse,
+            nrmse,
+            flip: nrmse,
+            indirect_rmse: nrmse,
+            indirect_nrmse: nrmse,
+            indirect_flip: nrmse,
+        });
         Row {
             scene: "s".into(),
             light,
@@ -387,7 +457,8 @@ mod tests {
 
         let csv = results::csv(&rows);
         let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-        let failed: Vec<&str> = csv.lines().find(|l| l.contains("failed: 3 NaN")).expect("the failed point has its row").split(',').collect();
+        let failed: Vec<&str> =
+            csv.lines().find(|l| l.contains("failed: 3 NaN")).expect("the failed point has its row").split(',').collect();
         let cell = |name: &str| failed[header.iter().position(|h| *h == name).unwrap()];
         assert_eq!((cell("nrmse"), cell("flip"), cell("non_finite_pixels")), ("", "", "3"), "error cells empty, the NaN count kept");
         assert!(summary_csv(&summaries, &fronts(&summaries)).contains("\ns,m,a,2,1,0.100000,"));

@@ -29,7 +29,13 @@ impl BakeCost {
             .map(|stages| {
                 stages
                     .iter()
-                    .map(|s| (s["name"].as_str().unwrap_or("?").to_string(), s["seconds"].as_f64().unwrap_or(0.0), s["peak_memory_bytes"].as_u64().unwrap_or(0)))
+                    .map(|s| {
+                        (
+                            s["name"].as_str().unwrap_or("?").to_string(),
+                            s["seconds"].as_f64().unwrap_or(0.0),
+                            s["peak_memory_bytes"].as_u64().unwrap_or(0),
+                        )
+                    })
                     .collect()
             })
             .unwrap_or_default();
@@ -120,8 +126,10 @@ pub(crate) fn percentile(values: &[f64], q: f64) -> f64 {
 pub(crate) fn mark_front(rows: &mut [Row]) {
     let groups: Vec<(String, usize)> = rows.iter().map(|r| (r.scene.clone(), r.light)).collect();
     for group in &groups {
-        let members: Vec<usize> = (0..rows.len()).filter(|&i| (&rows[i].scene, rows[i].light) == (&group.0, group.1) && rows[i].accuracy.is_some()).collect();
-        let points: Vec<(f64, f64)> = members.iter().map(|&i| (rows[i].frame.gpu_ms, rows[i].accuracy.map_or(f64::NAN, |a| a.nrmse))).collect();
+        let members: Vec<usize> =
+            (0..rows.len()).filter(|&i| (&rows[i].scene, rows[i].light) == (&group.0, group.1) && rows[i].accuracy.is_some()).collect();
+        let points: Vec<(f64, f64)> =
+            members.iter().map(|&i| (rows[i].frame.gpu_ms, rows[i].accuracy.map_or(f64::NAN, |a| a.nrmse))).collect();
         for (&i, on) in members.iter().zip(pareto::front(&points)) {
             rows[i].on_front = on;
         }
@@ -131,13 +139,33 @@ pub(crate) fn mark_front(rows: &mut [Row]) {
 /// The CSV's columns, in order (docs/BENCH.md describes each).
 pub(crate) fn csv_header() -> Vec<String> {
     let mut columns: Vec<String> = [
-        "scene", "light", "light_x", "light_y", "light_z", "occluder_dx", "occluder_dy", "occluder_dz", "method", "params", "status", "bake_seconds", "bake_stages", "bake_peak_memory_bytes", "artifact_bytes",
-        "gpu_frame_ms", "gpu_frame_p10_ms", "gpu_frame_p90_ms", "cpu_frame_ms",
+        "scene",
+        "light",
+        "light_x",
+        "light_y",
+        "light_z",
+        "occluder_dx",
+        "occluder_dy",
+        "occluder_dz",
+        "method",
+        "params",
+        "status",
+        "bake_seconds",
+        "bake_stages",
+        "bake_peak_memory_bytes",
+        "artifact_bytes",
+        "gpu_frame_ms",
+        "gpu_frame_p10_ms",
+        "gpu_frame_p90_ms",
+        "cpu_frame_ms",
     ]
     .map(String::from)
     .to_vec();
     columns.extend(PASS_NAMES.iter().map(|p| format!("gpu_{p}_ms")));
-    columns.extend(["rmse", "nrmse", "flip", "indirect_rmse", "indirect_nrmse", "indirect_flip", "flicker", "non_finite_pixels", "on_front", "device"].map(String::from));
+    columns.extend(
+        ["rmse", "nrmse", "flip", "indirect_rmse", "indirect_nrmse", "indirect_flip", "flicker", "non_finite_pixels", "on_front", "device"]
+            .map(String::from),
+    );
     columns
 }
 
@@ -169,7 +197,18 @@ fn csv_cells(row: &Row) -> Vec<String> {
     ];
     cells.extend(PASS_NAMES.iter().map(|p| optional(row.frame.passes_ms.iter().find(|(name, _)| name == p).map(|(_, ms)| *ms))));
     let a = row.accuracy;
-    cells.extend([a.map(|a| a.rmse), a.map(|a| a.nrmse), a.map(|a| a.flip), a.map(|a| a.indirect_rmse), a.map(|a| a.indirect_nrmse), a.map(|a| a.indirect_flip), row.flicker].map(optional));
+    cells.extend(
+        [
+            a.map(|a| a.rmse),
+            a.map(|a| a.nrmse),
+            a.map(|a| a.flip),
+            a.map(|a| a.indirect_rmse),
+            a.map(|a| a.indirect_nrmse),
+            a.map(|a| a.indirect_flip),
+            row.flicker,
+        ]
+        .map(optional),
+    );
     cells.extend([row.non_finite_pixels.to_string(), row.on_front.to_string(), row.device.clone()]);
     cells
 }

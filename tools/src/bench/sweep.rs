@@ -135,7 +135,10 @@ impl Sweep {
             if let Some(j) = self.scenes[..i].iter().position(|other| other.name() == name) {
                 bail!("scenes[{j}] and scenes[{i}] are both named \"{name}\": give each its own `name`");
             }
-            let paths = [("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))), ("occluder_path", scene.occluder_path.as_ref().map(|p| (&p.points, p.frames)))];
+            let paths = [
+                ("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))),
+                ("occluder_path", scene.occluder_path.as_ref().map(|p| (&p.points, p.frames))),
+            ];
             if paths.iter().all(|(_, p)| p.is_some()) {
                 bail!("scenes[{i}]: give a light_path or an occluder_path, not both");
             }
@@ -181,7 +184,8 @@ mod tests {
     fn a_path_is_spread_evenly_by_length_with_both_ends() {
         let p = spread(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 3.0, 0.0]], 5);
         assert_eq!(p.len(), 5);
-        for (got, want) in p.iter().zip([Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(1.0, 3.0, 0.0)]) {
+        for (got, want) in p.iter().zip([Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 0.0), Vec3::new(1.0, 3.0, 0.0)])
+        {
             assert!(got.distance(want) < 1e-5, "{got} != {want}");
         }
     }
