@@ -1,10 +1,10 @@
 #version 450
-// Lightmap padding by jump flooding (Rong & Tan 2006) with the extra k = 1 step of JFA+1:
+// Atlas padding by jump flooding (Rong & Tan 2006) with the extra k = 1 step of JFA+1:
 // every empty texel (alpha <= 0) takes the rgb of its nearest covered texel (alpha > 0) in
 // the same layer, and alpha = -distance in texels. One module, three modes (push constant);
 // passes/padding.rs runs SEED, then JUMP for each k, then RESOLVE, all layers at once.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
-layout(set = 0, binding = 0, rgba32f) uniform image2DArray lightmap;
+layout(set = 0, binding = 0, rgba32f) uniform image2DArray atlas_image;
 // The nearest covered texel found so far, or NONE; read from one image, written to the other.
 layout(set = 0, binding = 1, rg32i) uniform readonly iimage2DArray seeds_in;
 layout(set = 0, binding = 2, rg32i) uniform writeonly iimage2DArray seeds_out;
@@ -18,14 +18,14 @@ const int JUMP = 1;
 const int RESOLVE = 2;
 const ivec2 NONE = ivec2(-1);
 
-// Squared distances stay in int range for sides up to 16384 texels (GpuLightmap's limit).
+// Squared distances stay in int range for sides up to 16384 texels (GpuAtlasImage's limit).
 int distance2(ivec2 a, ivec2 b) {
     ivec2 d = a - b;
     return d.x * d.x + d.y * d.y;
 }
 
 void seed(ivec3 texel) {
-    bool covered = imageLoad(lightmap, texel).a > 0.0;
+    bool covered = imageLoad(atlas_image, texel).a > 0.0;
     imageStore(seeds_out, texel, ivec4(covered ? texel.xy : NONE, 0, 0));
 }
 
@@ -55,13 +55,13 @@ void jump(ivec3 texel, ivec2 size) {
 void resolve(ivec3 texel) {
     ivec2 nearest = imageLoad(seeds_in, texel).xy;
     if (nearest.x < 0 || nearest == texel.xy) return;
-    vec3 rgb = imageLoad(lightmap, ivec3(nearest, texel.z)).rgb;
-    imageStore(lightmap, texel, vec4(rgb, -length(vec2(nearest - texel.xy))));
+    vec3 rgb = imageLoad(atlas_image, ivec3(nearest, texel.z)).rgb;
+    imageStore(atlas_image, texel, vec4(rgb, -length(vec2(nearest - texel.xy))));
 }
 
 void main() {
     ivec3 texel = ivec3(gl_GlobalInvocationID);
-    ivec2 size = imageSize(lightmap).xy;
+    ivec2 size = imageSize(atlas_image).xy;
     if (any(greaterThanEqual(texel.xy, size))) return;
     if (pc.mode == SEED) {
         seed(texel);

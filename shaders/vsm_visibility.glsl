@@ -1,6 +1,6 @@
 // Visibility of a point from a light through the variance shadow maps (000 §3.4), shared by
-// every pass that lights a point (forward.frag at a pixel, entry_irradiance.comp at an entry
-// point), so both see the same shadows. Include after lights.glsl, in a shader that declares
+// every pass that lights a point (lighting.frag at a pixel, light_path_maps/entry_irradiance.comp
+// at an entry point), so all see the same shadows. Include after lights.glsl, in a shader that declares
 //   layers          the ShadowLayer storage buffer (every light's shadow layers);
 //   shadow_moments  the moments of every layer (sampler2DArray, RG32F, blurred).
 

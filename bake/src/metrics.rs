@@ -76,6 +76,13 @@ pub fn best_scale(base: &Image, unit: &Image, reference: &Image) -> Result<f64, 
     Ok(if denominator > 0.0 { numerator / denominator } else { 0.0 })
 }
 
+/// `a - b`, pixel by pixel: a method's indirect part is its image minus its direct light.
+pub fn difference(a: &Image, b: &Image) -> Result<Image, ImageError> {
+    check_sizes(a, b)?;
+    let pixels = a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect();
+    Ok(Image { width: a.width, height: a.height, pixels })
+}
+
 /// `base + scale * unit`, pixel by pixel.
 pub fn add_scaled(base: &Image, unit: &Image, scale: f32) -> Result<Image, ImageError> {
     check_sizes(base, unit)?;

@@ -1,10 +1,12 @@
 //! The scene as the GPU reads it: one vertex and index buffer for every mesh, the materials,
 //! the lights and the shadow-map layers each light renders. Layouts match `shaders/*.glsl`.
 
-use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, Tracker, VkError, VkResult};
+use crate::upload::upload_array_layers_blocking;
+use crate::vk::{vk, Access, Buffer, CommandRecorder, Context, Image, ImageDesc, Tracker, VkError, VkResult};
 use glam::{Mat4, Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use relume_bake::scene::{Light, LightKind, Scene, Texture};
+use std::sync::Arc;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -41,7 +43,7 @@ struct GpuMaterial {
 
 /// One mesh's index range and material: a draw of the forward pass.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Draw {
+pub struct Draw {
     pub first_index: u32,
     pub index_count: u32,
     pub material: u32,
@@ -55,6 +57,29 @@ struct GpuLight {
     intensity_layer: Vec4,
     cone_depth: Vec4,
 }
+
+/// The frame's uniform buffer (shaders/frame.glsl, std140): what every pass of a frame may
+/// read besides the lights, rewritten in the command stream at the start of each frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameUniforms {
+    pub clip_from_world: Mat4,
+    pub camera_position: Vec4,
+    /// rgb: I_A, the ambient irradiance (lux); w: beta (001 eq. (5), (7)).
+    pub ambient_beta: Vec4,
+    pub light_count: u32,
+    /// 0: every light fully visible (shading only).
+    pub shadows: u32,
+    pub min_variance: f32,
+    pub bleeding_reduction: f32,
+    /// 1: the irradiance term is scaled by the occlusion term (`Term::Irradiance`).
+    pub irradiance_times_occlusion: u32,
+    /// 1: the occlusion term also scales the direct irradiance, added again.
+    pub occluded_direct: u32,
+    pub _pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 128);
 
 /// vkCmdUpdateBuffer writes at most 64 KiB: 1024 lights or shadow layers of 64 bytes.
 const MAX_LIGHTS: usize = 1024;
@@ -70,25 +95,27 @@ pub fn shadow_layer_count(kind: LightKind) -> u32 {
 /// One shadow-map layer to render: which light, which layer, and the depth that means
 /// "nothing here" (the layer's far distance), which the moments are cleared to.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct ShadowView {
+pub struct ShadowView {
     pub light: u32,
     pub layer: u32,
     pub far: f32,
 }
 
-pub(crate) struct GpuScene<'a> {
-    pub vertices: Buffer<'a>,
-    pub indices: Buffer<'a>,
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub indices: Buffer,
     pub index_count: u32,
-    pub materials: Buffer<'a>,
+    pub materials: Buffer,
     /// Device-local; every frame records its update from `light_data` (see `record_light_update`).
-    pub lights: Buffer<'a>,
-    pub layers: Buffer<'a>,
+    pub lights: Buffer,
+    pub layers: Buffer,
+    /// Device-local, [`FrameUniforms`]; every frame records its update.
+    pub frame: Buffer,
     pub draws: Vec<Draw>,
     /// Every base-colour texture, one layer each of an RGBA32F array as large as the largest
     /// (top-left aligned; a white texel when the scene has none). One binding serves every
     /// material without needing descriptor indexing, which lavapipe lacks.
-    pub textures: Image<'a>,
+    pub textures: Image,
     pub shadow_views: Vec<ShadowView>,
     light_kinds: Vec<LightKind>,
     light_data: Vec<GpuLight>,
@@ -102,8 +129,9 @@ pub(crate) struct GpuScene<'a> {
     translations: Vec<Vec3>,
 }
 
-impl<'a> GpuScene<'a> {
-    pub fn upload(ctx: &'a Context, scene: &Scene) -> VkResult<GpuScene<'a>> {
+impl GpuScene {
+    /// Uploads the scene (textures through one submission that is waited for: blocking).
+    pub fn upload_blocking(ctx: &Arc<Context>, scene: &Scene) -> VkResult<GpuScene> {
         let light_kinds: Vec<_> = scene.lights.iter().map(|l| l.kind).collect();
         let layer_count: u32 = light_kinds.iter().map(|k| shadow_layer_count(*k)).sum();
         if scene.lights.len() > MAX_LIGHTS || layer_count as usize > MAX_LIGHTS {
@@ -142,6 +170,13 @@ impl<'a> GpuScene<'a> {
             materials: Buffer::with_data(ctx, "materials", storage, &materials)?,
             lights: device_buffer("lights", scene.lights.len())?,
             layers: device_buffer("shadow layers", layer_count as usize)?,
+            frame: Buffer::new(
+                ctx,
+                "frame uniforms",
+                std::mem::size_of::<FrameUniforms>() as u64,
+                vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?,
             draws,
             textures: upload_textures(ctx, &scene.textures)?,
             shadow_views: Vec::with_capacity(layer_count as usize),
@@ -213,13 +248,27 @@ impl<'a> GpuScene<'a> {
         Ok(())
     }
 
-    /// Records this frame's light and shadow-layer data into the device-local buffers, with
-    /// the barriers that order it against the previous frame's reads and this frame's passes.
-    pub fn record_light_update(&self, rec: &CommandRecorder) {
+    /// Records this frame's uniforms and its light and shadow-layer data into the device-local
+    /// buffers, with the barriers that order them against the previous frame's reads and
+    /// this frame's passes.
+    pub fn record_updates(&self, rec: &CommandRecorder, frame: &FrameUniforms) {
+        rec.update_buffer(self.frame.raw, bytemuck::bytes_of(frame));
         if !self.light_data.is_empty() {
             rec.update_buffer(self.lights.raw, bytemuck::cast_slice(&self.light_data));
             rec.update_buffer(self.layers.raw, bytemuck::cast_slice(&self.layer_data));
         }
+    }
+
+    /// Tells a frame's tracker that the texture array is ready for FragmentSampled reads, as
+    /// its upload left it.
+    pub fn register_states(&self, tracker: &mut Tracker) {
+        tracker.assume(&self.textures, Access::FragmentSampled);
+    }
+
+    /// Vertices of the vertex buffer (every mesh's, in order): what a vertex term holds one
+    /// value for.
+    pub fn vertex_count(&self) -> usize {
+        self.uploaded.len()
     }
 
     pub fn light_count(&self) -> u32 {
@@ -246,7 +295,7 @@ fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
 
 /// Uploads every texture into its layer of one array image, through one staging buffer and
 /// one submission, at creation.
-fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image<'a>> {
+fn upload_textures(ctx: &Arc<Context>, textures: &[Texture]) -> VkResult<Image> {
     let white = Texture { name: "white".into(), width: 1, height: 1, texels: vec![Vec4::ONE] };
     let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
     let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
@@ -263,47 +312,8 @@ fn upload_textures<'a>(ctx: &'a Context, textures: &[Texture]) -> VkResult<Image
             view_type: vk::ImageViewType::TYPE_2D_ARRAY,
         },
     )?;
-    upload_array_layers(ctx, &array, &all_texels, &extents, |_, _| {})?;
+    upload_array_layers_blocking(ctx, &array, &all_texels, &extents, |_, _| {})?;
     Ok(array)
-}
-
-/// Fills the top-left `extents[i]` of layer i of an RGBA32F array image from `texels` (the
-/// layers one after another, each tightly packed) through one staging buffer, records
-/// `then` (with the image in TransferDestination), and leaves the image ready for
-/// FragmentSampled reads; one submission, waited for.
-pub(crate) fn upload_array_layers(
-    ctx: &Context,
-    image: &Image,
-    texels: &[Vec4],
-    extents: &[vk::Extent2D],
-    then: impl FnOnce(&CommandRecorder, &mut Tracker),
-) -> VkResult<()> {
-    let area = |e: &vk::Extent2D| e.width as u64 * e.height as u64;
-    let expected: u64 = extents.iter().map(area).sum();
-    if expected != texels.len() as u64 {
-        return Err(VkError::Invalid(format!("{} texels given for layers that hold {expected}", texels.len())));
-    }
-    let staging = Buffer::with_data(ctx, "upload staging", vk::BufferUsageFlags::TRANSFER_SRC, texels)?;
-    submit_once(ctx, |rec, tracker| {
-        tracker.use_image(rec, image, Access::TransferDestination);
-        let mut offset = 0;
-        for (layer, extent) in extents.iter().enumerate() {
-            rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
-            offset += area(extent) * 16;
-        }
-        then(rec, tracker);
-        tracker.use_image(rec, image, Access::FragmentSampled);
-    })
-}
-
-/// Records `work` into a fresh command buffer with a fresh tracker, submits it and waits for
-/// its fence: the one-time submissions made at creation (uploads) and by test read-backs.
-pub(crate) fn submit_once(ctx: &Context, work: impl FnOnce(&CommandRecorder, &mut Tracker)) -> VkResult<()> {
-    let cmd = CommandBuffer::new(ctx)?;
-    let fence = Fence::new(ctx)?;
-    let rec = ctx.begin(cmd.raw)?;
-    work(&rec, &mut Tracker::default());
-    ctx.submit_and_wait(rec, &fence)
 }
 
 fn gpu_light(light: &Light, first_layer: f32, depth_origin: f32) -> GpuLight {

@@ -1,16 +1,20 @@
-//! Shared helpers of relume's cross-crate tests: shipped scenes, a validated headless Vulkan
-//! render, the reference's direct layer at pixel centres, failure images, and synthetic light
-//! path maps (`synthetic_lpm`).
+//! Shared helpers of relume's cross-crate tests: shipped scenes, validated headless renderers
+//! and their refusals, techniques from test data, the reference's direct layer at pixel
+//! centres, failure images, and synthetic light path maps (`synthetic_lpm`).
 
+use glam::{Vec3, Vec4};
+use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::gltf_load;
 use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::metrics;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
-use relume_renderer::vk::{Context, ContextOptions};
-use relume_renderer::{RenderSettings, Renderer};
+use relume_renderer::techniques::light_path_maps::{Composition, LightPathMaps};
+use relume_renderer::vk::{Context, ContextOptions, Readback, VkResult};
+use relume_renderer::{AtlasImage, Headless, MakeTechnique, RenderSettings, Renderer};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 pub mod synthetic_lpm;
 
@@ -25,24 +29,89 @@ pub fn load_scene(name: &str) -> Scene {
 
 /// A headless context on lavapipe (or RELUME_DEVICE) with validation and synchronization
 /// validation on.
-pub fn validated_context() -> Context {
+pub fn validated_context() -> Arc<Context> {
     Context::headless(&ContextOptions { validation: true, device: None }).expect("Vulkan context")
+}
+
+/// Drops the last reference to `ctx` (every renderer made from it is gone) and fails on any
+/// validation message, teardown's included.
+pub fn assert_clean(ctx: Arc<Context>) {
+    let log = ctx.message_log();
+    assert_eq!(Arc::strong_count(&ctx), 1, "something made from the context is still alive");
+    drop(ctx);
+    assert_no_validation_messages(&log.lock().unwrap());
+}
+
+pub fn assert_no_validation_messages(messages: &[String]) {
+    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+}
+
+/// A headless renderer of `scene` with `techniques`, or why it was refused.
+pub fn try_new_renderer(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    techniques: &[&dyn MakeTechnique],
+) -> VkResult<Headless> {
+    Renderer::new_blocking(ctx, scene, settings, techniques).and_then(Headless::new)
+}
+
+pub fn new_renderer(ctx: &Arc<Context>, scene: &Scene, settings: &RenderSettings, techniques: &[&dyn MakeTechnique]) -> Headless {
+    try_new_renderer(ctx, scene, settings, techniques).expect("renderer")
+}
+
+/// The message of a refusal.
+pub fn refusal<T>(result: VkResult<T>) -> String {
+    match result {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Fails unless `message` says every one of `parts`.
+pub fn says(message: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(message.contains(part), "\"{message}\" does not say \"{part}\"");
+    }
+}
+
+/// `a - b`, pixel by pixel.
+pub fn difference(a: &Image, b: &Image) -> Image {
+    metrics::difference(a, b).expect("images of one size")
+}
+
+/// One frame's linear radiance.
+pub fn render(renderer: &mut Headless) -> Image {
+    renderer.render_and_read().expect("frame").0
 }
 
 /// Renders one frame with validation on; panics on any validation message.
 pub fn render_validated(scene: &Scene, settings: &RenderSettings) -> Image {
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, scene, settings).expect("renderer");
-    let (image, _) = renderer.render_and_read().expect("frame");
-    drop(renderer);
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    let image = render(&mut new_renderer(&ctx, scene, settings, &[]));
+    assert_clean(ctx);
     image
 }
 
-pub fn assert_no_validation_messages(messages: &[String]) {
-    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+/// `texels` (rgb a value, alpha the coverage) laid out as `atlas`.
+pub fn atlas_image<'d>(atlas: &Atlas, texels: &'d [Vec4]) -> AtlasImage<'d> {
+    AtlasImage { width: atlas.width, height: atlas.height, pages: atlas.pages, texels }
+}
+
+/// A resource of vec4s (see `Renderer::resource`) as the last frame left it.
+pub fn read_vec4s(renderer: &mut Headless, name: &str) -> VkResult<Vec<Vec4>> {
+    Ok(renderer.read_floats_blocking(name)?.chunks_exact(4).map(Vec4::from_slice).collect())
+}
+
+/// The linear radiance a `Readback` of `radiance` holds (RGBA32F, alpha dropped).
+pub fn radiance_of(readback: &Readback, width: u32, height: u32) -> Image {
+    let rgba = readback.floats().expect("read back");
+    Image { width, height, pixels: rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect() }
+}
+
+/// Switches the composition of the renderer's light path maps.
+pub fn set_composition(renderer: &mut Headless, composition: Composition) {
+    renderer.technique_mut::<LightPathMaps>().expect("a renderer with light path maps").set_composition(composition);
 }
 
 /// The reference's `direct` layer with every sample through the pixel centre: exact for

@@ -6,7 +6,9 @@
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::scene::Scene;
-use relume_renderer::{Composition, LightmapData, RenderSettings, Renderer};
+use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::{Headless, RenderSettings};
 use relume_tests::synthetic_lpm::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -45,7 +47,7 @@ fn allocations() -> usize {
 
 /// Heap allocations made by 10 frames that move the first light (and, with `ambient`,
 /// change the ambient term) every frame, after one warm-up frame.
-fn frame_allocations(renderer: &mut Renderer, scene: &Scene, ambient: bool) -> usize {
+fn frame_allocations(renderer: &mut Headless, scene: &Scene, ambient: bool) -> usize {
     frame_allocations_with(renderer, scene, |renderer, frame| {
         if ambient {
             renderer.set_ambient(Vec3::splat(0.1 * frame as f32), 0.05 * frame as f32).expect("valid ambient");
@@ -55,7 +57,7 @@ fn frame_allocations(renderer: &mut Renderer, scene: &Scene, ambient: bool) -> u
 
 /// Heap allocations made by 10 frames that move the first light and call `change` (with the
 /// frame number) every frame, after one warm-up frame.
-fn frame_allocations_with(renderer: &mut Renderer, scene: &Scene, change: impl Fn(&mut Renderer, usize)) -> usize {
+fn frame_allocations_with(renderer: &mut Headless, scene: &Scene, change: impl Fn(&mut Headless, usize)) -> usize {
     renderer.render().expect("warm-up frame");
     let mut lights = scene.lights.clone();
     let before = allocations();
@@ -64,7 +66,7 @@ fn frame_allocations_with(renderer: &mut Renderer, scene: &Scene, change: impl F
         renderer.set_lights(&lights).expect("same kinds");
         change(renderer, frame);
         let timings = renderer.render().expect("frame");
-        assert!(timings.passes_ms.is_none_or(|p| p.iter().all(|ms| ms.is_finite())));
+        assert!(timings.passes().iter().all(|(_, ms)| ms.is_finite()));
     }
     allocations() - before
 }
@@ -77,12 +79,10 @@ fn settings() -> RenderSettings {
 fn frames_allocate_nothing() {
     let scene = load_scene("cornell");
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[]);
     let during = frame_allocations(&mut renderer, &scene, false);
     drop(renderer);
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_eq!(during, 0, "10 frames made {during} heap allocations");
 }
 
@@ -90,15 +90,13 @@ fn frames_allocate_nothing() {
 fn frames_with_a_moving_occluder_allocate_nothing() {
     let scene = load_scene("occluder-stacked");
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[]);
     let last = scene.meshes.len() - 1;
     let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
         renderer.set_mesh_translation(last, Vec3::new(0.01 * frame as f32, 0.0, 0.0)).expect("a mesh of the scene");
     });
     drop(renderer);
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_eq!(during, 0, "10 frames with a moving occluder made {during} heap allocations");
 }
 
@@ -110,14 +108,12 @@ fn frames_with_a_lightmap_and_changing_ambient_allocate_nothing() {
         *mesh = atlas_mesh.apply(mesh);
     }
     let texels: Vec<Vec4> = atlas.texels.iter().map(|t| Vec4::new(0.7, 0.6, 0.5, t.coverage)).collect();
-    let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
+    let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::with_lightmap(&ctx, &scene, &settings(), Some(&lightmap)).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&obscurance]);
     let during = frame_allocations(&mut renderer, &scene, true);
     drop(renderer);
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_eq!(during, 0, "10 frames made {during} heap allocations");
 }
 
@@ -125,17 +121,16 @@ fn frames_with_a_lightmap_and_changing_ambient_allocate_nothing() {
 fn frames_with_light_path_maps_allocate_nothing() {
     let (atlas, scene) = atlas_scene(&load_scene("cornell"), 16.0);
     let texels = constant_obscurance(&atlas, Vec3::new(0.7, 0.6, 0.5));
-    let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
     let transfer = synthetic_transfer(&atlas, vec![0, 20, 40, 64], 2, 1);
+    let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
+    let maps = LightPathMapsData { transfer: &transfer, atlas: atlas_image(&atlas, &texels), composition: Composition::default() };
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::with_transfer(&ctx, &scene, &settings(), &lightmap, &transfer).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&obscurance, &maps]);
     let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
-        renderer.set_composition(Composition::ALL[frame % 3]);
+        set_composition(renderer, Composition::ALL[frame % 3]);
         renderer.set_ambient(Vec3::splat(0.1 * frame as f32), 0.0).expect("valid ambient");
     });
     drop(renderer);
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_eq!(during, 0, "10 frames made {during} heap allocations");
 }

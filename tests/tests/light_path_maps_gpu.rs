@@ -3,7 +3,7 @@
 //! `entry_irradiance_unshadowed` summed over the lights; shadows on: never more, and close to
 //! the baker's ray-traced `entry_irradiance` for most entry points), cluster
 //! sums and reconstruction (`cluster_sums` + `reconstruct` of the GPU's own I_e), the padding
-//! of the indirect image, the three `Composition` modes of the forward pass, and the
+//! of the indirect image, the three `Composition` modes of the lighting pass, and the
 //! refusal of transfers that do not fit. Data is synthetic (tests/src/synthetic_lpm.rs):
 //! cornell's atlas, entry points at covered texel centres, hashed textures and weights.
 
@@ -15,10 +15,13 @@ use relume_bake::image::Image;
 use relume_bake::light_path_maps::entry_irradiance;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing;
-use relume_renderer::vk::Context;
-use relume_renderer::{Composition, LightmapData, RenderSettings, Renderer, PASS_NAMES};
+use relume_renderer::techniques::light_path_maps::{Composition, LightPathMaps, LightPathMapsData};
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::vk::{Context, Readback, VkResult};
+use relume_renderer::{AtlasImage, Headless, RenderSettings};
 use relume_tests::synthetic_lpm::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
+use std::sync::Arc;
 
 const SIZE: u32 = 96;
 const TEXEL_DENSITY: f32 = 64.0;
@@ -37,26 +40,24 @@ fn cornell(extra_lights: Vec<Light>) -> (Atlas, Scene, ClusteredTransfer) {
     (atlas, applied, transfer)
 }
 
-fn lightmap_of<'d>(atlas: &Atlas, texels: &'d [Vec4]) -> LightmapData<'d> {
-    LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels }
+/// A renderer with the obscurance `w` and the light path maps of `transfer` on it.
+fn with_maps(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    w: AtlasImage,
+    transfer: &ClusteredTransfer,
+) -> VkResult<Headless> {
+    let maps = LightPathMapsData { transfer, atlas: w, composition: Composition::default() };
+    try_new_renderer(ctx, scene, settings, &[&ObscuranceData { obscurance: w }, &maps])
 }
 
-fn assert_clean(ctx: Context) {
-    let log = ctx.message_log();
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+fn gpu_entry_irradiance(renderer: &mut Headless) -> Vec<Vec3> {
+    read_vec4s(renderer, "light_path_maps.entry_irradiance").expect("entry irradiance").iter().map(|v| v.truncate()).collect()
 }
 
-fn render(renderer: &mut Renderer) -> Image {
-    renderer.render_and_read().expect("frame").0
-}
-
-fn difference(a: &Image, b: &Image) -> Image {
-    let mut out = Image::new(a.width, a.height);
-    for ((o, x), y) in out.pixels.iter_mut().zip(&a.pixels).zip(&b.pixels) {
-        *o = *x - *y;
-    }
-    out
+fn indirect(renderer: &mut Headless) -> Vec<Vec4> {
+    read_vec4s(renderer, "light_path_maps.indirect").expect("indirect")
 }
 
 fn scaled(a: &Image, s: f32) -> Image {
@@ -106,9 +107,9 @@ fn entry_irradiance_is_the_cpu_formula_without_shadows_and_never_more_with_them(
     assert!(lit * 3 > cpu.len(), "only {lit} of {} entry points are lit; the test would prove little", cpu.len());
 
     let ctx = validated_context();
-    let mut unshadowed = Renderer::with_transfer(&ctx, &scene, &settings(false), &lightmap_of(&atlas, &w), &transfer).expect("renderer");
+    let mut unshadowed = with_maps(&ctx, &scene, &settings(false), atlas_image(&atlas, &w), &transfer).expect("renderer");
     unshadowed.render().expect("frame");
-    let gpu = unshadowed.read_entry_irradiance().expect("entry irradiance");
+    let gpu = gpu_entry_irradiance(&mut unshadowed);
     assert_eq!(gpu.len(), cpu.len());
     let mut worst = 0.0f32;
     for (e, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
@@ -119,9 +120,9 @@ fn entry_irradiance_is_the_cpu_formula_without_shadows_and_never_more_with_them(
     }
     println!("{} entry points, {lit} lit: worst relative error {worst:.2e}", gpu.len());
 
-    let mut shadowed = Renderer::with_transfer(&ctx, &scene, &settings(true), &lightmap_of(&atlas, &w), &transfer).expect("renderer");
+    let mut shadowed = with_maps(&ctx, &scene, &settings(true), atlas_image(&atlas, &w), &transfer).expect("renderer");
     shadowed.render().expect("frame");
-    let with_shadows = shadowed.read_entry_irradiance().expect("entry irradiance");
+    let with_shadows = gpu_entry_irradiance(&mut shadowed);
     for (e, (s, c)) in with_shadows.iter().zip(&cpu).enumerate() {
         assert!(s.cmpge(Vec3::ZERO).all() && s.cmple(*c * 1.001 + 1e-6 * scale).all(), "entry point {e}: shadowed {s} > unshadowed {c}");
     }
@@ -159,22 +160,25 @@ fn one_frame() -> (Atlas, ClusteredTransfer, Vec<Vec3>, Vec<Vec4>) {
     let (atlas, scene, transfer) = cornell(Vec::new());
     let w = constant_obscurance(&atlas, Vec3::ONE);
     let ctx = validated_context();
-    let mut renderer = Renderer::with_transfer(&ctx, &scene, &settings(true), &lightmap_of(&atlas, &w), &transfer).expect("renderer");
+    let mut renderer = with_maps(&ctx, &scene, &settings(true), atlas_image(&atlas, &w), &transfer).expect("renderer");
     let timings = renderer.render().expect("frame");
-    assert_eq!(PASS_NAMES.len(), 8);
-    if let Some(ms) = timings.passes_ms {
-        assert!(ms.iter().all(|t| t.is_finite() && *t >= 0.0), "pass times {ms:?}");
-        println!("pass times (ms): {:?}", PASS_NAMES.iter().zip(ms).collect::<Vec<_>>());
+    let names: Vec<&str> = timings.passes().iter().map(|(name, _)| *name).collect();
+    if !names.is_empty() {
+        let expected = ["vsm_moments", "vsm_blur", "light_path_maps.entry_irradiance", "light_path_maps.cluster_sums"];
+        let expected = [&expected[..], &["light_path_maps.reconstruct", "light_path_maps.padding", "lighting", "tonemap"]].concat();
+        assert_eq!(names, expected, "the frame's passes, in order");
+        assert!(timings.passes().iter().all(|(_, t)| t.is_finite() && *t >= 0.0), "pass times {:?}", timings.passes());
+        println!("pass times (ms): {:?}", timings.passes());
     }
-    let entry = renderer.read_entry_irradiance().expect("entry irradiance");
-    let indirect = renderer.read_indirect().expect("indirect");
+    let entry = gpu_entry_irradiance(&mut renderer);
+    let indirect_image = indirect(&mut renderer);
     // The passes are deterministic: a second frame (after the read-backs) gives the same bits.
     renderer.render().expect("frame");
-    assert_eq!(renderer.read_entry_irradiance().expect("entry irradiance"), entry, "entry irradiance changed between frames");
-    assert_eq!(renderer.read_indirect().expect("indirect"), indirect, "the indirect image changed between frames");
+    assert_eq!(gpu_entry_irradiance(&mut renderer), entry, "entry irradiance changed between frames");
+    assert_eq!(indirect(&mut renderer), indirect_image, "the indirect image changed between frames");
     drop(renderer);
     assert_clean(ctx);
-    (atlas, transfer, entry, indirect)
+    (atlas, transfer, entry, indirect_image)
 }
 
 #[test]
@@ -247,19 +251,17 @@ fn composition_modes_add_what_their_formulas_say() {
     // ambient), and the light-path-map term of each mode (its frame minus that one).
     let frames = |w: f32| {
         let texels = constant_obscurance(&atlas, Vec3::splat(w));
-        let lightmap = lightmap_of(&atlas, &texels);
-        let mut without = Renderer::with_lightmap(&ctx, &scene, &settings(true), Some(&lightmap)).expect("renderer");
+        let obscurance = atlas_image(&atlas, &texels);
+        let mut without = new_renderer(&ctx, &scene, &settings(true), &[&ObscuranceData { obscurance }]);
         let base = render(&mut without);
-        // Without light path maps every mode gives the same frame, bit for bit.
-        for mode in Composition::ALL {
-            without.set_composition(mode);
-            assert_eq!(render(&mut without), base, "{mode:?} changed a frame without light path maps (W = {w})");
-        }
-        let mut with = Renderer::with_transfer(&ctx, &scene, &settings(true), &lightmap, &transfer).expect("renderer");
+        // Without light path maps there is no composition to switch, and frames repeat bit for bit.
+        assert!(without.technique_mut::<LightPathMaps>().is_none(), "a renderer without light path maps has them (W = {w})");
+        assert_eq!(render(&mut without), base, "a frame without light path maps changed (W = {w})");
+        let mut with = with_maps(&ctx, &scene, &settings(true), obscurance, &transfer).expect("renderer");
         let terms: Vec<Image> = Composition::ALL
             .iter()
             .map(|&mode| {
-                with.set_composition(mode);
+                set_composition(&mut with, mode);
                 difference(&render(&mut with), &base)
             })
             .collect();
@@ -308,40 +310,30 @@ fn frames_recorded_back_to_back_are_ordered() {
     let (atlas, scene, transfer) = cornell(Vec::new());
     let w = constant_obscurance(&atlas, Vec3::ONE);
     let ctx = validated_context();
-    let mut renderer = Renderer::with_transfer(&ctx, &scene, &settings(true), &lightmap_of(&atlas, &w), &transfer).expect("renderer");
+    let mut renderer = with_maps(&ctx, &scene, &settings(true), atlas_image(&atlas, &w), &transfer).expect("renderer");
     let alone = render(&mut renderer);
+    let readback = Readback::for_image(&ctx, "radiance", renderer.radiance()).expect("readback");
     let cmd = relume_renderer::vk::CommandBuffer::new(&ctx).expect("command buffer");
     let fence = relume_renderer::vk::Fence::new(&ctx).expect("fence");
     let rec = ctx.begin(cmd.raw).expect("begin");
     for _ in 0..3 {
         renderer.record(&rec);
     }
-    renderer.record_readback(&rec);
+    renderer.record_readback(&rec, "radiance", &readback).expect("radiance");
     ctx.submit_and_wait(rec, &fence).expect("submit");
-    assert_eq!(renderer.read_back().expect("pixels").0, alone, "frames recorded back to back differ from one alone");
-    drop((renderer, cmd, fence));
+    let (width, height) = (alone.width, alone.height);
+    assert_eq!(radiance_of(&readback, width, height), alone, "frames recorded back to back differ from one alone");
+    drop((renderer, readback, cmd, fence));
     assert_clean(ctx);
-}
-
-fn refusal(result: Result<Renderer, relume_renderer::vk::VkError>) -> String {
-    match result {
-        Ok(_) => panic!("accepted"),
-        Err(e) => e.to_string(),
-    }
 }
 
 #[test]
 fn transfers_that_do_not_fit_are_refused_by_name() {
     let (atlas, scene, transfer) = cornell(Vec::new());
     let w = constant_obscurance(&atlas, Vec3::ONE);
-    let lightmap = lightmap_of(&atlas, &w);
+    let obscurance = atlas_image(&atlas, &w);
     let ctx = validated_context();
-    let says = |message: &str, parts: &[&str]| {
-        for part in parts {
-            assert!(message.contains(part), "\"{message}\" does not say \"{part}\"");
-        }
-    };
-    let refused = |t: &ClusteredTransfer| refusal(Renderer::with_transfer(&ctx, &scene, &settings(true), &lightmap, t));
+    let refused = |t: &ClusteredTransfer| refusal(with_maps(&ctx, &scene, &settings(true), obscurance, t));
 
     let mut short = transfer.clone();
     short.weights.pop();
@@ -356,10 +348,11 @@ fn transfers_that_do_not_fit_are_refused_by_name() {
     says(&refused(&empty), &["light path maps", "empty", "0 entry points"]);
 
     // Without light path maps there is nothing to read back.
-    let mut plain = Renderer::with_lightmap(&ctx, &scene, &settings(true), Some(&lightmap)).expect("renderer");
+    let mut plain = new_renderer(&ctx, &scene, &settings(true), &[&ObscuranceData { obscurance }]);
     plain.render().expect("frame");
-    says(&plain.read_entry_irradiance().expect_err("no light path maps").to_string(), &["no light path maps", "with_transfer"]);
-    says(&plain.read_indirect().expect_err("no light path maps").to_string(), &["no light path maps"]);
+    let no_maps = read_vec4s(&mut plain, "light_path_maps.entry_irradiance").expect_err("no light path maps").to_string();
+    says(&no_maps, &["no resource", "light_path_maps.entry_irradiance", "obscurance.obscurance"]);
+    says(&read_vec4s(&mut plain, "light_path_maps.indirect").expect_err("no light path maps").to_string(), &["no resource"]);
     drop(plain);
     assert_clean(ctx);
 }

@@ -14,7 +14,8 @@ use relume_bake::image::Image;
 use relume_bake::light_path_maps::{bake_transfers, entry_irradiance, entry_points, test_points, LightPathMapSettings};
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
-use relume_renderer::{LightmapData, RenderSettings, Renderer};
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::RenderSettings;
 use relume_tests::*;
 
 const SIZE: u32 = 128;
@@ -46,7 +47,7 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
         entries.entries.iter().map(|e| scene.lights.iter().map(|l| entry_irradiance(&bvh, l, &e.point, 0.0)).sum()).collect();
     let indirect = transfers.irradiance(&irradiance, atlas.texels.len());
     let texels: Vec<_> = indirect.iter().zip(&atlas.texels).map(|(i, t)| i.extend(t.coverage)).collect();
-    let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
+    let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let mut unlit = scene.clone();
     unlit.lights.clear();
     for (mesh, atlas_mesh) in unlit.meshes.iter_mut().zip(&atlas.meshes) {
@@ -54,10 +55,8 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
     }
     let settings = RenderSettings { width: SIZE, height: SIZE, ambient: Vec3::ONE, beta: 0.0, ..RenderSettings::default() };
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let image = Renderer::with_lightmap(&ctx, &unlit, &settings, Some(&lightmap)).expect("renderer").render_and_read().expect("frame").0;
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    let image = render(&mut new_renderer(&ctx, &unlit, &settings, &[&obscurance]));
+    assert_clean(ctx);
     image
 }
 

@@ -52,10 +52,12 @@ use relume_bake::image::Image;
 use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
 use relume_bake::scene::{Mesh, Scene};
 use relume_bake::testing::{self, Facing};
+use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::vk::Context;
-use relume_renderer::{LightmapData, RenderSettings, Renderer};
+use relume_renderer::{AtlasImage, RenderSettings};
 use relume_tests::*;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 const SIZE: u32 = 256;
 const TEXEL_DENSITY: f32 = 32.0;
@@ -121,11 +123,10 @@ fn layout(atlas: &Atlas) -> PageLayout {
 }
 
 /// The frame's linear radiance with I_A = pi, beta = 0, no shadows: albedo * W.
-fn render(ctx: &Context, scene: &Scene, lightmap: &LightmapData) -> Image {
+fn render_w(ctx: &Arc<Context>, scene: &Scene, obscurance: AtlasImage) -> Image {
     let settings =
         RenderSettings { width: SIZE, height: SIZE, shadows: false, ambient: Vec3::splat(PI), beta: 0.0, ..RenderSettings::default() };
-    let mut renderer = Renderer::with_lightmap(ctx, scene, &settings, Some(lightmap)).expect("renderer");
-    renderer.render_and_read().expect("frame").0
+    render(&mut new_renderer(ctx, scene, &settings, &[&ObscuranceData { obscurance }]))
 }
 
 /// The mesh every pixel's centre sees (CPU primary rays), None for the background.
@@ -203,15 +204,13 @@ fn a_flat_quad_split_across_two_charts_shows_no_visible_seam_after_padding() {
     assert_eq!(charts_of(&b, 0), 1, "B's floor is one chart");
 
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let image_a = render(&ctx, &a.applied, &LightmapData::new(layout(&a.atlas), &a.texels));
-    let image_b = render(&ctx, &b.applied, &LightmapData::new(layout(&b.atlas), &b.texels));
+    let image_a = render_w(&ctx, &a.applied, AtlasImage::new(layout(&a.atlas), &a.texels));
+    let image_b = render_w(&ctx, &b.applied, AtlasImage::new(layout(&b.atlas), &b.texels));
     // A's gutters left black: empty texels handed over as covered (alpha 1) with W = 0, so
     // the padding pass, which fills only texels of alpha <= 0, leaves them as they are.
     let unpadded: Vec<Vec4> = a.texels.iter().map(|t| if t.w > 0.0 { *t } else { Vec4::new(0.0, 0.0, 0.0, 1.0) }).collect();
-    let image_unpadded = render(&ctx, &a.applied, &LightmapData::new(layout(&a.atlas), &unpadded));
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    let image_unpadded = render_w(&ctx, &a.applied, AtlasImage::new(layout(&a.atlas), &unpadded));
+    assert_clean(ctx);
 
     let meshes_a = pixel_meshes(&split);
     let meshes_b = pixel_meshes(&whole);

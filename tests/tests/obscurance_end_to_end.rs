@@ -12,7 +12,8 @@ use relume_bake::metrics;
 use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
 use relume_bake::reference::{render_reference, ReferenceImages, ReferenceSettings};
 use relume_bake::scene::Scene;
-use relume_renderer::{LightmapData, RenderSettings, Renderer};
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::{MakeTechnique, RenderSettings};
 use relume_tests::*;
 
 const SIZE: u32 = 128;
@@ -42,7 +43,7 @@ fn renders(scene: &Scene) -> [Image; 3] {
         *mesh = atlas_mesh.apply(mesh);
     }
     let texels: Vec<_> = map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect();
-    let lightmap = LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels: &texels };
+    let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
 
     let with_ambient = RenderSettings {
         width: SIZE,
@@ -53,19 +54,12 @@ fn renders(scene: &Scene) -> [Image; 3] {
     };
     let direct_only = RenderSettings { ambient: glam::Vec3::ZERO, beta: 0.0, ..with_ambient.clone() };
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let render = |scene: &Scene, settings: &RenderSettings, lightmap: Option<&LightmapData>| {
-        let mut renderer = Renderer::with_lightmap(&ctx, scene, settings, lightmap).expect("renderer");
-        renderer.render_and_read().expect("frame").0
+    let frame = |scene: &Scene, settings: &RenderSettings, techniques: &[&dyn MakeTechnique]| {
+        render(&mut new_renderer(&ctx, scene, settings, techniques))
     };
-    let images = [render(scene, &direct_only, None), render(scene, &with_ambient, None), render(&lit, &with_ambient, Some(&lightmap))];
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    let images = [frame(scene, &direct_only, &[]), frame(scene, &with_ambient, &[]), frame(&lit, &with_ambient, &[&obscurance])];
+    assert_clean(ctx);
     images
-}
-
-fn subtract(a: &Image, b: &Image) -> Image {
-    Image { width: a.width, height: a.height, pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect() }
 }
 
 #[test]
@@ -84,14 +78,14 @@ fn obscurance_ambient_beats_constant_ambient_on_cornell() {
 
     let black = Image::new(SIZE, SIZE);
     let best_indirect = |image: &Image| {
-        let ambient = subtract(image, &direct);
+        let ambient = difference(image, &direct);
         let scale = metrics::best_scale(&black, &ambient, &reference.indirect).unwrap();
         let fitted = metrics::add_scaled(&black, &ambient, scale as f32).unwrap();
         (scale, metrics::compare(&fitted, &reference.indirect).unwrap().nrmse)
     };
     let ((s_constant, b_constant), (s_obscurance, b_obscurance)) = (best_indirect(&constant), best_indirect(&obscurance));
     println!("indirect part at each model's best ambient: constant x{s_constant:.3} NRMSE {b_constant:.4}, obscurance x{s_obscurance:.3} NRMSE {b_obscurance:.4}");
-    let image_at = |image: &Image, scale: f64| nrmse(&metrics::add_scaled(&direct, &subtract(image, &direct), scale as f32).unwrap());
+    let image_at = |image: &Image, scale: f64| nrmse(&metrics::add_scaled(&direct, &difference(image, &direct), scale as f32).unwrap());
     let (i_constant, i_obscurance) = (image_at(&constant, s_constant), image_at(&obscurance, s_obscurance));
     println!("whole image at each model's best ambient: constant {i_constant:.4}, obscurance {i_obscurance:.4}");
     assert!(b_obscurance < b_constant, "at their best ambient, obscurance {b_obscurance} does not beat constant {b_constant}");

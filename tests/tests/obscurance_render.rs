@@ -15,9 +15,9 @@ use relume_bake::bvh::{Hit, SceneBvh};
 use relume_bake::image::Image;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing::{self, Facing};
-use relume_renderer::lightmap::GpuLightmap;
-use relume_renderer::vk::Context;
-use relume_renderer::{LightmapData, RenderSettings, Renderer};
+use relume_renderer::atlas_image::GpuAtlasImage;
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::{AtlasImage, MakeTechnique, RenderSettings};
 use relume_tests::*;
 
 const WIDTH: u32 = 192;
@@ -60,28 +60,6 @@ fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     let texels =
         atlas.texels.iter().map(|t| if t.coverage > 0.0 { synthetic_w(t.centre).extend(t.coverage) } else { Vec4::ZERO }).collect();
     (atlas, applied, texels)
-}
-
-fn lightmap_of<'d>(atlas: &Atlas, texels: &'d [Vec4]) -> LightmapData<'d> {
-    LightmapData { width: atlas.width, height: atlas.height, pages: atlas.pages, texels }
-}
-
-fn assert_clean(ctx: Context) {
-    let log = ctx.message_log();
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
-}
-
-fn render(renderer: &mut Renderer) -> Image {
-    renderer.render_and_read().expect("frame").0
-}
-
-fn difference(a: &Image, b: &Image) -> Image {
-    let mut out = Image::new(a.width, a.height);
-    for ((o, x), y) in out.pixels.iter_mut().zip(&a.pixels).zip(&b.pixels) {
-        *o = *x - *y;
-    }
-    out
 }
 
 /// Every pixel's primary ray through its centre, traced on the CPU.
@@ -157,9 +135,9 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
     let scene = floor_and_box(vec![point_light()]);
     let (atlas, applied, texels) = atlas_scene(&scene);
     let ctx = validated_context();
-    let mut plain = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut plain = new_renderer(&ctx, &scene, &settings(), &[]);
     let direct_only = render(&mut plain);
-    let mut lit = Renderer::with_lightmap(&ctx, &applied, &settings(), Some(&lightmap_of(&atlas, &texels))).expect("renderer");
+    let mut lit = new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: atlas_image(&atlas, &texels) }]);
     let with_lightmap = render(&mut lit);
     assert_eq!(with_lightmap, direct_only, "a lightmap with I_A = beta = 0 changed the frame");
 
@@ -168,12 +146,12 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
     assert_ne!(ambient, direct_only, "the ambient term added nothing");
     lit.set_ambient(Vec3::ZERO, 0.0).expect("valid ambient");
     assert_eq!(render(&mut lit), direct_only, "back to I_A = beta = 0 is the direct-only frame again");
-    lit.forget_image_states();
+    lit.forget_states();
     lit.set_ambient(Vec3::splat(2.0), 0.3).expect("valid ambient");
-    assert_eq!(render(&mut lit), ambient, "the lightmap survives forget_image_states");
+    assert_eq!(render(&mut lit), ambient, "the obscurance survives forget_states");
 
-    assert!(plain.padding_ms().is_none(), "no lightmap, no padding time");
-    if let Some(ms) = lit.padding_ms() {
+    assert!(plain.creation_timings().is_empty(), "no obscurance, no padding time");
+    if let Some((_, ms)) = lit.creation_timings().first().copied() {
         assert!(ms.is_finite() && ms >= 0.0, "padding took {ms} ms");
         println!("padding of a {}x{}x{} lightmap: {ms:.3} ms", atlas.width, atlas.height, atlas.pages);
     }
@@ -185,7 +163,7 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
 /// the NRMSE of its ambient term against the CPU's albedo / pi * I_A * W over the pixels away
 /// from silhouettes, W filtered from `padded` (the lightmap as the GPU padded it). Also
 /// returns how many pixels count, and the range of W's red channel over mesh 0.
-fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &LightmapData, padded: &[Vec4]) -> (f64, usize, (f32, f32)) {
+fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &AtlasImage, padded: &[Vec4]) -> (f64, usize, (f32, f32)) {
     let ambient = Vec3::ONE;
     let gpu = gpu_ambient_term(scene, Some(lightmap), ambient, 0.0);
 
@@ -227,12 +205,14 @@ fn the_ambient_term_through_the_lightmap_matches_the_cpu() {
     // the same (deterministic) GPU pass, read back.
     let padded = {
         let ctx = validated_context();
-        let padded =
-            GpuLightmap::upload(&ctx, atlas.width, atlas.height, atlas.pages, &texels).expect("upload").read_back().expect("read back");
+        let padded = GpuAtlasImage::upload_blocking(&ctx, "obscurance", &atlas_image(&atlas, &texels))
+            .expect("upload")
+            .read_back_blocking()
+            .expect("read back");
         assert_clean(ctx);
         padded
     };
-    let lightmap = lightmap_of(&atlas, &texels);
+    let lightmap = atlas_image(&atlas, &texels);
     let (nrmse, _, floor_w) = ambient_term_nrmse("obscurance_ambient_term", &applied, &lightmap, &padded);
     assert!(floor_w.1 - floor_w.0 > 0.5, "W hardly varies over the floor ({floor_w:?}); the test would prove little");
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
@@ -259,7 +239,7 @@ fn lightmap_pages_are_clamped_at_their_edges() {
             }
         })
         .collect();
-    let lightmap = LightmapData { width: 4, height: 4, pages: 2, texels: &texels };
+    let lightmap = AtlasImage { width: 4, height: 4, pages: 2, texels: &texels };
     let (nrmse, _, w) = ambient_term_nrmse("obscurance_page_edges", &scene, &lightmap, &texels);
     assert!(w.1 <= 1.0, "page 0 bled into page 1 (W up to {})", w.1);
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
@@ -350,42 +330,30 @@ fn the_beta_term_is_beta_times_every_lights_unshadowed_irradiance() {
     assert!(centre <= 1e-3 && worst <= 1e-3, "relative error {centre} at the centre, up to {worst}");
 }
 
-fn refusal(result: Result<Renderer, relume_renderer::vk::VkError>) -> String {
-    match result {
-        Ok(_) => panic!("accepted"),
-        Err(e) => e.to_string(),
-    }
-}
-
 #[test]
 fn bad_lightmaps_scenes_and_settings_are_refused() {
     let scene = floor_and_box(vec![point_light()]);
     let (atlas, applied, texels) = atlas_scene(&scene);
     let ctx = validated_context();
-    let says = |message: &str, parts: &[&str]| {
-        for part in parts {
-            assert!(message.contains(part), "\"{message}\" does not say \"{part}\"");
-        }
-    };
 
     let short = &texels[..texels.len() - 1];
-    let message = refusal(Renderer::with_lightmap(&ctx, &applied, &settings(), Some(&lightmap_of(&atlas, short))));
+    let message = refusal(try_new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: atlas_image(&atlas, short) }]));
     says(&message, &[&format!("{} texels", texels.len()), &format!("{} were given", short.len())]);
 
-    let lightmap = lightmap_of(&atlas, &texels);
-    let message = refusal(Renderer::with_lightmap(&ctx, &scene, &settings(), Some(&lightmap)));
+    let lightmap = atlas_image(&atlas, &texels);
+    let message = refusal(try_new_renderer(&ctx, &scene, &settings(), &[&ObscuranceData { obscurance: lightmap }]));
     says(&message, &["mesh 0 \"square\"", "no uv1", "0 of 2"]);
     let mut half = scene.clone();
     half.meshes[0] = atlas.meshes[0].apply(&scene.meshes[0]);
-    let message = refusal(Renderer::with_lightmap(&ctx, &half, &settings(), Some(&lightmap)));
+    let message = refusal(try_new_renderer(&ctx, &half, &settings(), &[&ObscuranceData { obscurance: lightmap }]));
     says(&message, &["mesh 1 \"box\"", "no uv1", "1 of 2"]);
     // uv1 on a page the lightmap does not have.
     let first_page = (atlas.width * atlas.height) as usize;
-    let one_page = LightmapData { pages: 1, texels: &texels[..first_page], ..lightmap };
-    let message = refusal(Renderer::with_lightmap(&ctx, &applied, &settings(), Some(&one_page)));
+    let one_page = AtlasImage { pages: 1, texels: &texels[..first_page], ..lightmap };
+    let message = refusal(try_new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: one_page }]));
     says(&message, &["1 pages", "uv1"]);
     // Without a lightmap, meshes with uv1 on some meshes only are fine (W = 1 everywhere).
-    drop(Renderer::new(&ctx, &half, &settings()).expect("no lightmap: uv1 is not needed"));
+    drop(try_new_renderer(&ctx, &half, &settings(), &[]).expect("no obscurance: uv1 is not needed"));
 
     let bad = [
         (RenderSettings { beta: 1.0, ..settings() }, "beta"),
@@ -395,10 +363,10 @@ fn bad_lightmaps_scenes_and_settings_are_refused() {
         (RenderSettings { ambient: Vec3::new(1.0, -1.0, 1.0), ..settings() }, "ambient"),
         (RenderSettings { ambient: Vec3::splat(f32::INFINITY), ..settings() }, "ambient"),
     ];
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[]);
     for (settings, part) in bad {
         says(&settings.validate().expect_err("invalid settings accepted"), &[part]);
-        says(&refusal(Renderer::new(&ctx, &scene, &settings)), &[part]);
+        says(&refusal(try_new_renderer(&ctx, &scene, &settings, &[])), &[part]);
         let refused = renderer.set_ambient(settings.ambient, settings.beta).expect_err("set_ambient accepted invalid values");
         says(&refused.to_string(), &[part]);
     }
@@ -410,9 +378,11 @@ fn bad_lightmaps_scenes_and_settings_are_refused() {
 
 /// The GPU's ambient term alone: a frame with `ambient` and `beta` minus the same frame
 /// without them, on one renderer (validated).
-fn gpu_ambient_term(scene: &Scene, lightmap: Option<&LightmapData>, ambient: Vec3, beta: f32) -> Image {
+fn gpu_ambient_term(scene: &Scene, obscurance: Option<&AtlasImage>, ambient: Vec3, beta: f32) -> Image {
     let ctx = validated_context();
-    let mut renderer = Renderer::with_lightmap(&ctx, scene, &settings(), lightmap).expect("renderer");
+    let obscurance = obscurance.map(|&obscurance| ObscuranceData { obscurance });
+    let techniques: Vec<&dyn MakeTechnique> = obscurance.iter().map(|o| o as &dyn MakeTechnique).collect();
+    let mut renderer = new_renderer(&ctx, scene, &settings(), &techniques);
     let direct = render(&mut renderer);
     renderer.set_ambient(ambient, beta).expect("valid ambient and beta");
     let term = difference(&render(&mut renderer), &direct);

@@ -5,9 +5,11 @@
 //! can be read off its colour.
 
 use glam::{IVec2, Vec4};
-use relume_renderer::lightmap::GpuLightmap;
-use relume_renderer::vk::{Access, Context, Tracker};
+use relume_renderer::atlas_image::GpuAtlasImage;
+use relume_renderer::vk::{Access, Context, Tracker, VkResult};
+use relume_renderer::AtlasImage;
 use relume_tests::*;
+use std::sync::Arc;
 
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 48;
@@ -89,23 +91,21 @@ fn check_layer(layer: u32, input: &[Vec4], padded: &[Vec4]) -> (usize, usize) {
     (exact, empty)
 }
 
-fn assert_clean(ctx: Context) {
-    let log = ctx.message_log();
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+fn upload(ctx: &Arc<Context>, width: u32, height: u32, pages: u32, texels: &[Vec4]) -> VkResult<GpuAtlasImage> {
+    GpuAtlasImage::upload_blocking(ctx, "atlas image", &AtlasImage { width, height, pages, texels })
 }
 
 #[test]
 fn padding_copies_a_nearest_covered_texel_into_every_empty_one() {
     let ctx = validated_context();
     let input = synthetic_texels(2, coverage);
-    let lightmap = GpuLightmap::upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
-    let padded = lightmap.read_back().expect("read back");
+    let lightmap = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
+    let padded = lightmap.read_back_blocking().expect("read back");
     for layer in 0..2 {
         let (exact, empty) = check_layer(layer, &input, &padded);
         println!("layer {layer}: {exact} of {empty} empty texels copied an exactly nearest covered texel");
     }
-    assert_eq!(lightmap.read_back().expect("read back"), padded, "a read-back leaves the lightmap as it was");
+    assert_eq!(lightmap.read_back_blocking().expect("read back"), padded, "a read-back leaves the image as it was");
     let mut tracker = Tracker::default();
     lightmap.register_state(&mut tracker);
     assert_eq!(tracker.state(&lightmap.image), Access::FragmentSampled);
@@ -118,8 +118,8 @@ fn a_layer_without_coverage_stays_empty_and_layers_do_not_mix() {
     let ctx = validated_context();
     let lone_texel = |layer, x, y| if layer == 1 && (x, y) == (40, 7) { 1.0 } else { 0.0 };
     let input = synthetic_texels(2, lone_texel);
-    let lightmap = GpuLightmap::upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
-    let padded = lightmap.read_back().expect("read back");
+    let lightmap = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
+    let padded = lightmap.read_back_blocking().expect("read back");
     let layer_size = (WIDTH * HEIGHT) as usize;
     assert!(padded[..layer_size].iter().all(|t| *t == Vec4::ZERO), "the layer without coverage changed");
     check_layer(1, &input, &padded);
@@ -139,7 +139,7 @@ fn impossible_sizes_are_refused_with_their_numbers() {
     ];
     for (width, height, layers, count, expected) in cases {
         let texels = vec![Vec4::ONE; count];
-        let message = match GpuLightmap::upload(&ctx, width, height, layers, &texels) {
+        let message = match upload(&ctx, width, height, layers, &texels) {
             Ok(_) => panic!("{width}x{height}x{layers} with {count} texels was accepted"),
             Err(e) => e.to_string(),
         };

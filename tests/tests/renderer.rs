@@ -6,8 +6,8 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing::{self, Facing};
-use relume_renderer::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Fence};
-use relume_renderer::{RenderSettings, Renderer};
+use relume_renderer::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Fence, Readback};
+use relume_renderer::RenderSettings;
 use relume_tests::*;
 
 /// A 4 m ground plane with a 0.6 m box floating 0.8 m above it, seen from above at an angle.
@@ -58,30 +58,30 @@ fn directional_light_shadows_match_the_reference() {
 fn a_frame_records_into_the_callers_command_buffer() {
     let scene = load_scene("occluder-plane");
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
-    let (own_frame, _) = renderer.render_and_read().expect("frame");
+    let mut headless = new_renderer(&ctx, &scene, &settings(), &[]);
+    let (own_frame, _) = headless.render_and_read().expect("frame");
 
     // The caller owns the command buffer, the fence and the submission.
+    let mut library = headless.into_renderer();
+    let readback = Readback::for_image(&ctx, "caller's readback", library.radiance()).expect("readback");
     let cmd = CommandBuffer::new(&ctx).expect("command buffer");
     let fence = Fence::new(&ctx).expect("fence");
     let rec = ctx.begin(cmd.raw).expect("begin");
     let callers = CommandRecorder::wrap(&ctx, rec.cmd);
-    renderer.record(&callers);
-    let states = renderer.image_states();
-    assert_eq!(states.state(&renderer.radiance), Access::ComputeStorageRead);
-    assert_eq!(states.state(&renderer.display), Access::ComputeStorageWrite);
-    renderer.record_readback(&callers);
+    library.record(&callers);
+    assert_eq!(library.radiance_state(), Access::ComputeStorageRead.state());
+    assert_eq!(library.display_state(), Access::ComputeStorageWrite.state());
+    library.record_readback(&callers, "radiance", &readback).expect("radiance is a resource");
     ctx.submit_and_wait(rec, &fence).expect("submit");
-    let (callers_frame, _) = renderer.read_back().expect("read back");
+    let callers_frame = radiance_of(&readback, own_frame.width, own_frame.height);
     assert_eq!(own_frame, callers_frame, "the caller's frame has the renderer's own pixels");
     assert!(callers_frame.pixels.iter().any(|p| p.max_element() > 0.0), "the frame is not black");
 
-    let (again, _) = renderer.render_and_read().expect("frame");
+    let mut headless = relume_renderer::Headless::new(library).expect("headless driver");
+    let (again, _) = headless.render_and_read().expect("frame");
     assert_eq!(own_frame, again, "the same frame twice gives the same pixels");
-    drop((renderer, fence, cmd));
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    drop((headless, readback, fence, cmd));
+    assert_clean(ctx);
 }
 
 #[test]
@@ -90,19 +90,17 @@ fn moving_a_light_needs_no_new_renderer() {
     let mut moved = scene.clone();
     moved.lights[0].position += Vec3::new(0.4, 0.0, -0.3);
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[]);
     let (before, _) = renderer.render_and_read().expect("frame");
     renderer.set_lights(&moved.lights).expect("same kinds");
     let (after, _) = renderer.render_and_read().expect("frame");
-    let mut fresh = Renderer::new(&ctx, &moved, &settings()).expect("renderer");
+    let mut fresh = new_renderer(&ctx, &moved, &settings(), &[]);
     let (expected, _) = fresh.render_and_read().expect("frame");
     let mut wrong_kind = moved.lights.clone();
     wrong_kind[0].kind = LightKind::Point;
     assert!(renderer.set_lights(&wrong_kind).is_err(), "a light changing kind is refused");
     drop((renderer, fresh));
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_ne!(before, after, "the light moved");
     assert_eq!(after, expected, "a moved light renders as a fresh renderer does");
 }
@@ -116,19 +114,17 @@ fn moving_an_occluder_needs_no_new_renderer() {
         *p += shift;
     }
     let ctx = validated_context();
-    let log = ctx.message_log();
-    let mut renderer = Renderer::new(&ctx, &scene, &settings()).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[]);
     let (before, _) = renderer.render_and_read().expect("frame");
     renderer.set_mesh_translation(cube, shift).expect("a mesh of the scene");
     renderer.set_lights(&scene.lights).expect("same lights: refits the shadow maps to the moved scene");
     let (after, _) = renderer.render_and_read().expect("frame");
-    let mut fresh = Renderer::new(&ctx, &moved, &settings()).expect("renderer");
+    let mut fresh = new_renderer(&ctx, &moved, &settings(), &[]);
     let (expected, _) = fresh.render_and_read().expect("frame");
     assert!(renderer.set_mesh_translation(scene.meshes.len(), shift).is_err(), "a mesh the scene lacks is refused");
     assert!(renderer.set_mesh_translation(cube, Vec3::NAN).is_err(), "a NaN translation is refused");
     drop((renderer, fresh));
-    drop(ctx);
-    assert_no_validation_messages(&log.lock().unwrap());
+    assert_clean(ctx);
     assert_ne!(before, after, "the occluder moved");
     assert_eq!(after, expected, "a moved occluder renders as a fresh renderer of the moved scene does");
 }
@@ -181,7 +177,7 @@ fn the_gpu_tonemap_matches_the_cpu_display_transform() {
     let scene = load_scene("cornell");
     let ctx = validated_context();
     let settings = RenderSettings { exposure: 1.7, ..settings() };
-    let mut renderer = Renderer::new(&ctx, &scene, &settings).expect("renderer");
+    let mut renderer = new_renderer(&ctx, &scene, &settings, &[]);
     let (radiance, display) = renderer.render_and_read().expect("frame");
     let mut worst = 0;
     for (pixel, rgba) in radiance.pixels.iter().zip(display.chunks_exact(4)) {

@@ -13,11 +13,13 @@ use relume_bake::metrics;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use relume_bake::settings::LightingSettings;
+use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
+use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::vk::{Context, ContextOptions};
-use relume_renderer::LightmapData;
-use relume_renderer::{Composition, FrameTimings, RenderSettings, Renderer, PASS_NAMES};
+use relume_renderer::{AtlasImage, FrameTimings, Headless, MakeTechnique, RenderSettings, Renderer};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 mod bake;
@@ -268,18 +270,8 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
 
 /// `--composition`: the kebab-case name of a [`Composition`].
 pub(crate) fn parse_composition(text: &str) -> Result<Composition> {
-    Composition::ALL
-        .into_iter()
-        .find(|c| composition_name(*c) == text)
-        .ok_or_else(|| anyhow::anyhow!("--composition {text}: give one of {}", Composition::ALL.map(composition_name).join(", ")))
-}
-
-pub(crate) fn composition_name(composition: Composition) -> &'static str {
-    match composition {
-        Composition::Plain => "plain",
-        Composition::TimesObscurance => "times-obscurance",
-        Composition::TimesObscuranceWithDirect => "times-obscurance-with-direct",
-    }
+    Composition::parse(text)
+        .ok_or_else(|| anyhow::anyhow!("--composition {text}: give one of {}", Composition::ALL.map(Composition::name).join(", ")))
 }
 
 /// The frame's settings from the flags. `lighting` gives the ambient term's defaults: the
@@ -296,7 +288,6 @@ fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,
-        composition: gpu.composition.unwrap_or_default(),
         shadow_map_size: gpu.shadow_map_size,
         blur_radius: gpu.blur_radius,
         min_variance: gpu.min_variance,
@@ -310,23 +301,22 @@ fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, lighting: &LightingSettings
     Ok(settings)
 }
 
-/// One Vulkan render to make: a scene (re-indexed by its bake when it has a lightmap), the
-/// settings, the lightmap if any, and how many frames to time.
+/// One Vulkan render to make: a scene (re-indexed by its bake's atlas when it has one), the
+/// settings, the techniques, and how many frames to time.
 struct GpuJob<'s> {
     scene: &'s Scene,
     settings: RenderSettings,
-    lightmap: Option<LightmapData<'s>>,
-    transfer: Option<&'s ClusteredTransfer>,
+    techniques: Vec<Box<dyn MakeTechnique + 's>>,
     frames: u32,
 }
 
 /// What a Vulkan render produced: the HDR image, the display pixels, per-frame timings and
-/// the GPU time of padding its lightmap.
+/// the GPU work timed once at creation.
 struct GpuRender {
     radiance: Image,
     display_rgba: Vec<u8>,
     frames: Vec<FrameTimings>,
-    padding_ms: Option<f64>,
+    creation_ms: Vec<(&'static str, f64)>,
 }
 
 /// Renders every job on one headless context; returns the renders and the device's name.
@@ -346,12 +336,9 @@ fn render_on_gpu(jobs: &[GpuJob], gpu: &GpuArgs) -> Result<(Vec<GpuRender>, Stri
     Ok((result?, device))
 }
 
-fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
-    let mut renderer = match (&job.lightmap, job.transfer) {
-        (Some(lightmap), Some(transfer)) => Renderer::with_transfer(ctx, job.scene, &job.settings, lightmap, transfer),
-        _ => Renderer::with_lightmap(ctx, job.scene, &job.settings, job.lightmap.as_ref()),
-    }
-    .context("Vulkan renderer")?;
+fn render_frames(ctx: &Arc<Context>, job: &GpuJob) -> Result<GpuRender> {
+    let techniques: Vec<&dyn MakeTechnique> = job.techniques.iter().map(|t| t.as_ref()).collect();
+    let mut renderer = Headless::new(Renderer::new_blocking(ctx, job.scene, &job.settings, &techniques).context("Vulkan renderer")?)?;
     if job.frames > 1 {
         warm_up(&mut renderer, WARM_UP_SECONDS)?;
     } else {
@@ -359,10 +346,10 @@ fn render_frames(ctx: &Context, job: &GpuJob) -> Result<GpuRender> {
     }
     let frames = (0..job.frames).map(|_| renderer.render()).collect::<Result<Vec<_>, _>>()?;
     let (radiance, display_rgba) = renderer.render_and_read()?;
-    Ok(GpuRender { radiance, display_rgba, frames, padding_ms: renderer.padding_ms() })
+    Ok(GpuRender { radiance, display_rgba, frames, creation_ms: renderer.creation_timings() })
 }
 
-/// The scene re-indexed by a bake artifact, the artifact's lightmap as the renderer takes
+/// The scene re-indexed by a bake artifact, the artifact's obscurance as the renderer takes
 /// it, and its light path maps' transfer if it has one.
 struct Lit {
     scene: Scene,
@@ -380,12 +367,18 @@ impl Lit {
         Ok(Lit { scene: lit, layout: baked.layout, texels, transfer: baked.transfer })
     }
 
-    fn job(&self, settings: RenderSettings, frames: u32) -> GpuJob<'_> {
-        GpuJob { scene: &self.scene, settings, lightmap: self.lightmap(), transfer: self.transfer.as_ref(), frames }
+    fn job(&self, settings: RenderSettings, composition: Composition, frames: u32) -> GpuJob<'_> {
+        GpuJob { scene: &self.scene, settings, techniques: self.techniques(composition), frames }
     }
 
-    fn lightmap(&self) -> Option<LightmapData<'_>> {
-        Some(LightmapData::new(self.layout, &self.texels))
+    /// The obscurance technique, and the light path maps' after it when the bake has them.
+    fn techniques(&self, composition: Composition) -> Vec<Box<dyn MakeTechnique + '_>> {
+        let atlas = AtlasImage::new(self.layout, &self.texels);
+        let mut techniques: Vec<Box<dyn MakeTechnique + '_>> = vec![Box::new(ObscuranceData { obscurance: atlas })];
+        if let Some(transfer) = &self.transfer {
+            techniques.push(Box::new(LightPathMapsData { transfer, atlas, composition }));
+        }
+        techniques
     }
 }
 
@@ -399,7 +392,7 @@ fn rgba_to_rgb(rgba: &[u8]) -> Vec<u8> {
 pub(crate) const WARM_UP_SECONDS: f64 = 0.5;
 
 /// Renders untimed frames, at least three (caches, pipelines) and for at least `seconds`.
-pub(crate) fn warm_up(renderer: &mut Renderer, seconds: f64) -> Result<()> {
+pub(crate) fn warm_up(renderer: &mut Headless, seconds: f64) -> Result<()> {
     let start = std::time::Instant::now();
     let mut frames = 0;
     while frames < 3 || start.elapsed().as_secs_f64() < seconds {
@@ -423,15 +416,18 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let lit = args.bake.as_deref().map(|dir| Lit::read(dir, &scene)).transpose()?;
     let lpm = lit.as_ref().is_some_and(|lit| lit.transfer.is_some());
     let settings = render_settings(&args.scene, &args.gpu, &scene.settings, lpm)?;
+    if args.gpu.composition.is_some() && !lpm {
+        bail!("--composition: only a bake with light path maps (`relume bake --method light-path-maps`) has indirect light to compose");
+    }
     let job = match &lit {
-        Some(lit) => lit.job(settings, frames),
-        None => GpuJob { scene: &scene, settings, lightmap: None, transfer: None, frames },
+        Some(lit) => lit.job(settings, args.gpu.composition.unwrap_or_default(), frames),
+        None => GpuJob { scene: &scene, settings, techniques: Vec::new(), frames },
     };
     let (renders, device) = render_on_gpu(&[job], &args.gpu)?;
     write_render_outputs(&args.out, &renders[0])?;
     println!("device: {device}");
-    if let Some(ms) = renders[0].padding_ms {
-        println!("lightmap padding (once, at upload): {ms:.3} ms");
+    for (work, ms) in &renders[0].creation_ms {
+        println!("{work} (once, at creation): {ms:.3} ms");
     }
     print_timings(&renders[0].frames);
     Ok(())
@@ -449,17 +445,19 @@ fn write_render_outputs(exr_path: &Path, out: &GpuRender) -> Result<()> {
 /// Median GPU time of each pass over the timed frames, then the frame total (empty when
 /// the device has no timestamps).
 pub(crate) fn median_timings(frames: &[FrameTimings]) -> Vec<(String, f64)> {
-    let passes: Vec<[f64; PASS_NAMES.len()]> = frames.iter().filter_map(|f| f.passes_ms).collect();
-    if passes.is_empty() {
-        return Vec::new();
-    }
+    let Some(first) = frames.first().filter(|f| !f.passes().is_empty()) else { return Vec::new() };
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let mut rows: Vec<_> =
-        PASS_NAMES.iter().enumerate().map(|(i, name)| (name.to_string(), median(passes.iter().map(|p| p[i]).collect()))).collect();
-    rows.push(("frame".into(), median(passes.iter().map(|p| p.iter().sum()).collect())));
+    // Every frame of one renderer runs the same passes.
+    let mut rows: Vec<_> = first
+        .passes()
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| (name.to_string(), median(frames.iter().map(|f| f.passes()[i].1).collect())))
+        .collect();
+    rows.push(("frame".into(), median(frames.iter().map(FrameTimings::total_ms).collect())));
     rows
 }
 
@@ -471,7 +469,7 @@ fn print_timings(frames: &[FrameTimings]) {
     }
     println!("GPU time, median of {} frame(s):", frames.len());
     for (name, ms) in rows {
-        println!("  {name:<12} {ms:>9.3} ms");
+        println!("  {name:<34} {ms:>9.3} ms");
     }
 }
 

@@ -45,11 +45,11 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     println!("rendering with Vulkan: {} ({} timed frames each)", models.join(", "), frames);
     let direct_only = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
     let mut jobs = vec![
-        GpuJob { scene: &scene, settings: direct_only.clone(), lightmap: None, transfer: None, frames },
-        GpuJob { scene: &scene, settings: settings.clone(), lightmap: None, transfer: None, frames },
-        lit.job(settings.clone(), frames),
+        GpuJob { scene: &scene, settings: direct_only.clone(), techniques: Vec::new(), frames },
+        GpuJob { scene: &scene, settings: settings.clone(), techniques: Vec::new(), frames },
+        lit.job(settings.clone(), Composition::default(), frames),
     ];
-    jobs.extend(lpm.as_ref().map(|lpm| lpm.job(direct_only, frames)));
+    jobs.extend(lpm.as_ref().map(|lpm| lpm.job(direct_only, Composition::default(), frames)));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
     for (model, render) in models.iter().zip(&renders) {
         write_render_outputs(&args.out.join(format!("{model}.exr")), render)?;
@@ -135,7 +135,7 @@ fn report_text(
         let _ = writeln!(
             r,
             "Light path maps (Umenhoffer et al. 2008): direct light plus their indirect irradiance composed as `{}`, no ambient term.\n",
-            composition_name(settings.composition)
+            Composition::default().name()
         );
     }
     let models: Vec<&str> = rows.iter().map(|row| row.model).collect();
@@ -161,8 +161,8 @@ fn report_text(
         for (name, ms) in median_timings(&render.frames) {
             let _ = writeln!(r, "| {name} | {ms:.3} |");
         }
-        if let Some(ms) = render.padding_ms {
-            let _ = writeln!(r, "| lightmap padding (once, at upload) | {ms:.3} |");
+        for (work, ms) in &render.creation_ms {
+            let _ = writeln!(r, "| {work} (once, at creation) | {ms:.3} |");
         }
     }
     let i = &reference.images;

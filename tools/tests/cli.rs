@@ -210,7 +210,7 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
     assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
     assert!(dir.join("lpm.exr").exists() && dir.join("lpm.png").exists());
     if stdout.contains("GPU time") {
-        for pass in ["entry_irradiance", "cluster_sums", "lpm_reconstruct"] {
+        for pass in ["light_path_maps.entry_irradiance", "light_path_maps.cluster_sums", "light_path_maps.reconstruct"] {
             assert!(stdout.contains(pass), "no {pass} timing in:\n{stdout}");
         }
     }

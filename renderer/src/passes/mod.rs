@@ -1,11 +1,11 @@
-//! The passes of a frame, one file each. A pass is created once (pipelines, descriptor sets)
-//! and records into a command buffer it is given; it declares the images and buffers it reads
-//! and writes to the tracker, which records the barriers.
+//! The shared passes of a frame, one file each: variance shadow maps (moments, blur), the
+//! lighting pass, the tonemap, and the atlas padding techniques run on their images; and the
+//! one shape every compute pass takes (`compute`). A pass is created once (pipelines,
+//! descriptor sets) and records into a command buffer it is given; it declares the images and
+//! buffers it reads and writes to the tracker, which records the barriers.
 
-pub mod cluster_sums;
-pub mod entry_irradiance;
-pub mod forward;
-pub mod lpm_reconstruct;
+pub mod compute;
+pub mod lighting;
 pub mod padding;
 pub mod tonemap;
 pub mod vsm;

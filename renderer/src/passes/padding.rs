@@ -1,18 +1,23 @@
-//! Lightmap padding (compute): fills every empty texel of every layer with the value of its
-//! nearest covered texel, so that bilinear filtering and mipmapping near chart edges never
-//! blend in gutter texels. Jump flooding (Rong & Tan 2006, "Jump flooding in GPU with
-//! applications to Voronoi diagram and distance transform") with the extra k = 1 step of
-//! JFA+1, which makes it exact or within a texel of the Euclidean nearest.
+//! Atlas padding (compute): fills every empty texel of every layer of an atlas image (texel
+//! data laid out as the lightmap atlas: the obscurance, the light path maps' indirect light)
+//! with the value of its nearest covered texel, so that bilinear filtering and mipmapping near
+//! chart edges never blend in gutter texels. Jump flooding (Rong & Tan 2006, "Jump flooding in
+//! GPU with applications to Voronoi diagram and distance transform") with the extra k = 1
+//! step of JFA+1, which makes it exact or within a texel of the Euclidean nearest.
 //!
 //! Alpha is coverage: > 0 covered, <= 0 empty. After the pass, covered texels are unchanged,
 //! every empty texel holds the rgb of the covered texel it copied and alpha = -d, d >= 1 its
 //! distance in texels; alpha stays 0 only in a layer with no covered texel, which is left as
-//! it was. Padding a padded lightmap again changes nothing.
+//! it was. Padding a padded image again changes nothing.
 
+use super::compute::{per_texel, ComputePass, Slot};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, ImageDesc, Pipeline, Tracker, VkError, VkResult};
+use crate::vk::{vk, Access, CommandRecorder, Context, Image, ImageDesc, Tracker, VkError, VkResult};
+use std::sync::Arc;
 
-pub const LIGHTMAP_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// The format of every atlas image (texel data laid out as the atlas: rgb a value, alpha the
+/// coverage) that the padding fills.
+pub const ATLAS_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 const SEED_FORMAT: vk::Format = vk::Format::R32G32_SINT;
 
 /// The modes of padding.comp.
@@ -27,61 +32,53 @@ struct PaddingPush {
     step: i32,
 }
 
-pub struct PaddingPass<'a> {
-    pipeline: Pipeline<'a>,
+pub struct PaddingPass {
     /// Set i writes `seeds[i]` and reads the other; dispatch t of the pass uses set t % 2.
-    sets: [DescriptorSet<'a>; 2],
-    seeds: [Image<'a>; 2],
+    pass: ComputePass,
+    _seeds: [Image; 2],
+    groups: [u32; 3],
+    size: u32,
 }
 
-impl<'a> PaddingPass<'a> {
-    /// For `lightmap`: an RGBA32F 2D-array image with storage usage. Creates the two seed
-    /// images (8 bytes a texel each) and the descriptor sets; nothing is made per recording.
-    pub fn new(ctx: &'a Context, lightmap: &Image) -> VkResult<PaddingPass<'a>> {
-        let d = lightmap.desc;
-        if d.format != LIGHTMAP_FORMAT || d.view_type != vk::ImageViewType::TYPE_2D_ARRAY || !d.usage.contains(vk::ImageUsageFlags::STORAGE)
-        {
+impl PaddingPass {
+    /// For `image`: an RGBA32F 2D-array image with storage usage, read and written through
+    /// two seed images (8 bytes a texel each). Nothing is made per recording.
+    pub fn new(ctx: &Arc<Context>, image: &Image) -> VkResult<PaddingPass> {
+        let d = image.desc;
+        if d.format != ATLAS_FORMAT || d.view_type != vk::ImageViewType::TYPE_2D_ARRAY || !d.usage.contains(vk::ImageUsageFlags::STORAGE) {
             return Err(VkError::Invalid(format!(
-                "padding needs an RGBA32F 2D-array storage image; the lightmap is {:?} {:?} with usage {:?}",
+                "padding needs an RGBA32F 2D-array storage image; the image is {:?} {:?} with usage {:?}",
                 d.format, d.view_type, d.usage
             )));
         }
         let seed_desc = ImageDesc { format: SEED_FORMAT, usage: vk::ImageUsageFlags::STORAGE, ..d };
         let seeds = [Image::new(ctx, "padding seeds 0", seed_desc)?, Image::new(ctx, "padding seeds 1", seed_desc)?];
+        // The module statically uses all three images in every mode, and validation counts
+        // each dispatch as using them all: the image as read and written (resolve stores to
+        // it), the seeds as read and written through their bindings.
         let set = |write: usize| {
-            let bindings = [
-                Binding::StorageImage(lightmap.view),
-                Binding::StorageImage(seeds[1 - write].view),
-                Binding::StorageImage(seeds[write].view),
-            ];
-            DescriptorSet::new(ctx, vk::ShaderStageFlags::COMPUTE, &bindings)
+            [
+                Slot::StorageImage(image, Access::ComputeStorageReadWrite),
+                Slot::StorageImage(&seeds[1 - write], Access::ComputeStorageRead),
+                Slot::StorageImage(&seeds[write], Access::ComputeStorageWrite),
+            ]
         };
-        let sets = [set(0)?, set(1)?];
-        let pipeline = Pipeline::compute(ctx, shaders::PADDING_COMP, sets[0].layout, std::mem::size_of::<PaddingPush>() as u32)?;
-        Ok(PaddingPass { pipeline, sets, seeds })
+        let (set0, set1) = (set(0), set(1));
+        let pass = ComputePass::with_sets(ctx, shaders::PADDING_COMP, std::mem::size_of::<PaddingPush>() as u32, &[&set0, &set1])?;
+        Ok(PaddingPass { pass, groups: per_texel(image), size: d.width.max(d.height), _seeds: seeds })
     }
 
-    /// Reads and writes `lightmap` (storage image; the one given to `new`), through the seed
-    /// images. Cost: 3 + ceil(log2(max(width, height))) dispatches over every texel of every
-    /// layer (seed, the jump steps, the extra k = 1 step, resolve), each jump reading 9 seeds
-    /// a texel, with a barrier between consecutive dispatches. Allocates nothing.
-    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, lightmap: &Image) {
-        let d = lightmap.desc;
-        let jumps = jump_steps(d.width.max(d.height)).map(|step| PaddingPush { mode: JUMP, step });
+    /// Pads the image given to `new`. Cost: 3 + ceil(log2(max(width, height))) dispatches
+    /// over every texel of every layer (seed, the jump steps, the extra k = 1 step,
+    /// resolve), each jump reading 9 seeds a texel, with a barrier between consecutive
+    /// dispatches. Allocates nothing.
+    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
+        let jumps = jump_steps(self.size).map(|step| PaddingPush { mode: JUMP, step });
         let dispatches = std::iter::once(PaddingPush { mode: SEED, step: 0 })
             .chain(jumps)
             .chain(std::iter::once(PaddingPush { mode: RESOLVE, step: 0 }));
         for (t, push) in dispatches.enumerate() {
-            let (read, write) = (&self.seeds[1 - t % 2], &self.seeds[t % 2]);
-            // The module statically uses all three images in every mode, and validation counts
-            // each dispatch as using them all: the lightmap as read and written (resolve
-            // stores to it), the seeds as read and written through their bindings.
-            tracker.use_image(rec, lightmap, Access::ComputeStorageReadWrite);
-            tracker.use_image(rec, read, Access::ComputeStorageRead);
-            tracker.use_image(rec, write, Access::ComputeStorageWrite);
-            rec.bind_compute(self.pipeline.raw, self.pipeline.layout, self.sets[t % 2].set);
-            rec.push_constants(self.pipeline.layout, &push);
-            rec.dispatch(d.width.div_ceil(8), d.height.div_ceil(8), d.layers);
+            self.pass.dispatch(rec, tracker, t % 2, &push, self.groups);
         }
     }
 }

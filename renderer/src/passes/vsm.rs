@@ -8,6 +8,7 @@ use crate::vk::{
     vk, Access, Binding, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, ImageView, Pipeline, Tracker,
     VkResult,
 };
+use std::sync::Arc;
 
 pub const MOMENTS_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 
@@ -18,17 +19,17 @@ struct VsmPush {
     layer: u32,
 }
 
-pub struct VsmPass<'a> {
-    pipeline: Pipeline<'a>,
-    descriptors: DescriptorSet<'a>,
-    layer_views: Vec<ImageView<'a>>,
+pub struct VsmPass {
+    pipeline: Pipeline,
+    descriptors: DescriptorSet,
+    layer_views: Vec<ImageView>,
     /// The moments of every layer; the blur pass and the lighting passes read it.
-    pub moments: Image<'a>,
-    depth: Image<'a>,
+    pub moments: Image,
+    depth: Image,
 }
 
-impl<'a> VsmPass<'a> {
-    pub(crate) fn new(ctx: &'a Context, scene: &GpuScene, size: u32) -> VkResult<VsmPass<'a>> {
+impl VsmPass {
+    pub(crate) fn new(ctx: &Arc<Context>, scene: &GpuScene, size: u32) -> VkResult<VsmPass> {
         let layers = scene.shadow_views.len().max(1) as u32;
         let moments = Image::new(
             ctx,
@@ -65,6 +66,7 @@ impl<'a> VsmPass<'a> {
             &GraphicsPipelineDesc {
                 vertex: shaders::VSM_MOMENTS_VERT,
                 fragment: shaders::VSM_MOMENTS_FRAG,
+                specialization: &[],
                 vertex_stride: VERTEX_STRIDE,
                 attributes: &vertex_attributes()[..1],
                 color_formats: &[MOMENTS_FORMAT],

@@ -2,8 +2,10 @@
 //! vertical back, all layers in one dispatch each. Filtering moments is what lets variance
 //! shadow maps soften edges without aliasing (000 §3.4).
 
+use super::compute::{per_texel, ComputePass, Slot};
 use crate::shaders;
-use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, ImageDesc, Pipeline, Tracker, VkResult};
+use crate::vk::{vk, Access, CommandRecorder, Context, Image, ImageDesc, Tracker, VkResult};
+use std::sync::Arc;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -12,39 +14,32 @@ struct BlurPush {
     radius: i32,
 }
 
-pub struct VsmBlurPass<'a> {
-    pipeline: Pipeline<'a>,
-    horizontal: DescriptorSet<'a>,
-    vertical: DescriptorSet<'a>,
-    scratch: Image<'a>,
+pub struct VsmBlurPass {
+    /// Set 0 blurs `moments` horizontally into the scratch image, set 1 vertically back.
+    pass: ComputePass,
+    _scratch: Image,
     radius: u32,
+    groups: [u32; 3],
 }
 
-impl<'a> VsmBlurPass<'a> {
-    /// `radius` in texels; 0 makes the pass record nothing.
-    pub fn new(ctx: &'a Context, moments: &Image, radius: u32) -> VkResult<VsmBlurPass<'a>> {
+impl VsmBlurPass {
+    /// `radius` in texels; 0 makes the pass record nothing. Reads and writes `moments`
+    /// (storage image), through a scratch image of its size.
+    pub fn new(ctx: &Arc<Context>, moments: &Image, radius: u32) -> VkResult<VsmBlurPass> {
         let scratch = Image::new(ctx, "vsm blur scratch", ImageDesc { usage: vk::ImageUsageFlags::STORAGE, ..moments.desc })?;
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let horizontal = DescriptorSet::new(ctx, stage, &[Binding::StorageImage(moments.view), Binding::StorageImage(scratch.view)])?;
-        let vertical = DescriptorSet::new(ctx, stage, &[Binding::StorageImage(scratch.view), Binding::StorageImage(moments.view)])?;
-        let pipeline = Pipeline::compute(ctx, shaders::VSM_BLUR_COMP, horizontal.layout, std::mem::size_of::<BlurPush>() as u32)?;
-        Ok(VsmBlurPass { pipeline, horizontal, vertical, scratch, radius })
+        let (read, write) = (Access::ComputeStorageRead, Access::ComputeStorageWrite);
+        let horizontal = [Slot::StorageImage(moments, read), Slot::StorageImage(&scratch, write)];
+        let vertical = [Slot::StorageImage(&scratch, read), Slot::StorageImage(moments, write)];
+        let pass = ComputePass::with_sets(ctx, shaders::VSM_BLUR_COMP, std::mem::size_of::<BlurPush>() as u32, &[&horizontal, &vertical])?;
+        Ok(VsmBlurPass { pass, groups: per_texel(moments), _scratch: scratch, radius })
     }
 
-    /// Reads and writes `moments` (storage image), through the scratch image.
-    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, moments: &Image) {
+    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
         if self.radius == 0 {
             return;
         }
-        let d = moments.desc;
-        let groups = (d.width.div_ceil(8), d.height.div_ceil(8), d.layers);
-        let steps = [([1, 0], &self.horizontal, moments, &self.scratch), ([0, 1], &self.vertical, &self.scratch, moments)];
-        for (step, set, source, target) in steps {
-            tracker.use_image(rec, source, Access::ComputeStorageRead);
-            tracker.use_image(rec, target, Access::ComputeStorageWrite);
-            rec.bind_compute(self.pipeline.raw, self.pipeline.layout, set.set);
-            rec.push_constants(self.pipeline.layout, &BlurPush { step, radius: self.radius as i32 });
-            rec.dispatch(groups.0, groups.1, groups.2);
+        for (set, step) in [[1, 0], [0, 1]].into_iter().enumerate() {
+            self.pass.dispatch(rec, tracker, set, &BlurPush { step, radius: self.radius as i32 }, self.groups);
         }
     }
 }

@@ -6,21 +6,22 @@ use ash::vk;
 use bytemuck::NoUninit;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
 
-pub struct Buffer<'a> {
-    ctx: &'a Context,
+pub struct Buffer {
+    ctx: Arc<Context>,
     pub raw: vk::Buffer,
     pub size: u64,
     allocation: Option<Allocation>,
 }
 
-impl<'a> Buffer<'a> {
-    pub fn new(ctx: &'a Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Buffer<'a>> {
+impl Buffer {
+    pub fn new(ctx: &Arc<Context>, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Buffer> {
         let size = size.max(16);
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         // SAFETY: a valid create info on a live device.
         let raw = unsafe { ctx.device.create_buffer(&info, None) }?;
-        let mut buffer = Buffer { ctx, raw, size, allocation: None };
+        let mut buffer = Buffer { ctx: Arc::clone(ctx), raw, size, allocation: None };
         // SAFETY: a plain query of the buffer just made.
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -39,7 +40,7 @@ impl<'a> Buffer<'a> {
     }
 
     /// A host-visible buffer holding `data`.
-    pub fn with_data<T: NoUninit>(ctx: &'a Context, name: &str, usage: vk::BufferUsageFlags, data: &[T]) -> VkResult<Self> {
+    pub fn with_data<T: NoUninit>(ctx: &Arc<Context>, name: &str, usage: vk::BufferUsageFlags, data: &[T]) -> VkResult<Self> {
         let bytes = std::mem::size_of_val(data) as u64;
         let buffer = Buffer::new(ctx, name, bytes, usage, MemoryLocation::CpuToGpu)?;
         buffer.write(data)?;
@@ -82,7 +83,7 @@ impl<'a> Buffer<'a> {
     }
 }
 
-impl Drop for Buffer<'_> {
+impl Drop for Buffer {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the buffer (owners wait for their fences first).
         unsafe { self.ctx.device.destroy_buffer(self.raw, None) };

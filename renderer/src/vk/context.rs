@@ -1,10 +1,12 @@
-//! The Vulkan context: instance, device, queue, allocator and a command pool. relume makes its
-//! own headless context, or wraps a device the caller already has.
+//! The Vulkan context: instance, device, queue and allocator. relume makes its own headless
+//! context, or wraps a device the caller already has. A context is shared (`Arc<Context>`):
+//! every object made from it holds a reference, so a caller can own the context beside the
+//! renderer and other state, and it lives until the last object made from it is dropped.
 
 use super::device::{self, DeviceInfo};
 use super::instance::{self, MessageLog};
 use super::sync::Fence;
-use super::{VkError, VkResult};
+use super::VkResult;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::mem::ManuallyDrop;
@@ -18,27 +20,25 @@ pub struct ContextOptions {
     pub device: Option<String>,
 }
 
+/// Send and Sync: the allocator is behind a mutex, submissions to the queue take a lock, and
+/// the context owns no command pool (each [`super::CommandBuffer`] owns its own).
 pub struct Context {
     pub device: ash::Device,
     pub instance: ash::Instance,
     pub physical: vk::PhysicalDevice,
-    pub queue: vk::Queue,
     pub queue_family: u32,
     pub info: DeviceInfo,
+    queue: Mutex<vk::Queue>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
-    command_pool: vk::CommandPool,
     _entry: ash::Entry,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: MessageLog,
     owns_device: bool,
-    /// Not Sync: the command pool and the queue need external synchronization, and the
-    /// context gives none, so it may move between threads but not be shared by them.
-    _not_sync: std::marker::PhantomData<std::cell::Cell<()>>,
 }
 
 impl Context {
     /// A headless context on a device chosen by `options` (or the RELUME_DEVICE variable).
-    pub fn headless(options: &ContextOptions) -> VkResult<Context> {
+    pub fn headless(options: &ContextOptions) -> VkResult<Arc<Context>> {
         let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
         let parts = instance::create(options.validation, &messages)?;
         let selector = options.device.clone().or_else(|| std::env::var("RELUME_DEVICE").ok());
@@ -50,25 +50,17 @@ impl Context {
                 return Err(e);
             }
         };
-        Self::assemble(
-            parts.entry,
-            parts.instance,
-            parts.debug,
-            dev.physical,
-            dev.device,
-            dev.queue_family,
-            dev.queue,
-            dev.info,
-            messages,
-            true,
-        )
+        let kept = Kept { entry: parts.entry, debug: parts.debug, messages, owns_device: true };
+        Self::assemble(parts.instance, dev.physical, dev.device, dev.queue_family, dev.queue, dev.info, kept)
     }
 
     /// Wraps a device the caller created and keeps owning. The physical device must offer
     /// what relume needs (checked here: Vulkan 1.3, dynamicRendering, synchronization2,
-    /// shaderStorageImageExtendedFormats) and the
-    /// caller must have enabled those features. relume never waits on, nor destroys, the
-    /// caller's device or instance.
+    /// shaderStorageImageExtendedFormats) and the caller must have enabled those features.
+    /// relume never waits on, nor destroys, the caller's device or instance. It submits to
+    /// `queue` only in functions that say so (their names end in `_blocking` or start with
+    /// `read_`, and the headless driver), never while recording a frame; the caller must not
+    /// use the queue from another thread during those calls.
     pub fn from_existing(
         entry: ash::Entry,
         instance: ash::Instance,
@@ -76,25 +68,21 @@ impl Context {
         device: ash::Device,
         queue_family: u32,
         queue: vk::Queue,
-    ) -> VkResult<Context> {
+    ) -> VkResult<Arc<Context>> {
         let info = device::check_and_describe(&instance, physical, queue_family)?;
-        let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
-        Self::assemble(entry, instance, None, physical, device, queue_family, queue, info, messages, false)
+        let kept = Kept { entry, debug: None, messages: Arc::new(Mutex::new(Vec::new())), owns_device: false };
+        Self::assemble(instance, physical, device, queue_family, queue, info, kept)
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn assemble(
-        entry: ash::Entry,
         instance: ash::Instance,
-        debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         physical: vk::PhysicalDevice,
         device: ash::Device,
         queue_family: u32,
         queue: vk::Queue,
         info: DeviceInfo,
-        messages: MessageLog,
-        owns_device: bool,
-    ) -> VkResult<Context> {
+        kept: Kept,
+    ) -> VkResult<Arc<Context>> {
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -103,38 +91,31 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         });
-        let pool_info =
-            vk::CommandPoolCreateInfo::default().queue_family_index(queue_family).flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        // SAFETY: the device is live and the family exists.
-        let command_pool = allocator
-            .map_err(VkError::from)
-            .and_then(|a| unsafe { device.create_command_pool(&pool_info, None) }.map(|p| (a, p)).map_err(VkError::from));
-        let (allocator, command_pool) = match command_pool {
-            Ok(pair) => pair,
+        let allocator = match allocator {
+            Ok(a) => a,
             Err(e) => {
-                if owns_device {
+                if kept.owns_device {
                     // SAFETY: nothing was created on the device yet.
                     unsafe { device.destroy_device(None) };
-                    destroy_instance(&instance, debug.as_ref());
+                    destroy_instance(&instance, kept.debug.as_ref());
                 }
-                return Err(e);
+                return Err(e.into());
             }
         };
-        Ok(Context {
+        let Kept { entry, debug, messages, owns_device } = kept;
+        Ok(Arc::new(Context {
             device,
             instance,
             physical,
-            queue,
             queue_family,
             info,
+            queue: Mutex::new(queue),
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
-            command_pool,
             _entry: entry,
             debug,
             messages,
             owns_device,
-            _not_sync: std::marker::PhantomData,
-        })
+        }))
     }
 
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
@@ -152,24 +133,11 @@ impl Context {
         self.messages.lock().map(|m| m.clone()).unwrap_or_default()
     }
 
-    pub(super) fn allocate_command_buffer(&self) -> VkResult<vk::CommandBuffer> {
-        let info = vk::CommandBufferAllocateInfo::default()
-            .command_pool(self.command_pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        // SAFETY: the pool is live.
-        Ok(unsafe { self.device.allocate_command_buffers(&info) }?[0])
-    }
-
-    pub(super) fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller guarantees the buffer is not pending.
-        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
-    }
-
     /// Begins recording `cmd` for one submission.
     pub fn begin(&self, cmd: vk::CommandBuffer) -> VkResult<CommandRecorder<'_>> {
         let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        // SAFETY: the caller guarantees `cmd` is not pending (its fence was waited on).
+        // SAFETY: the caller guarantees `cmd` is not pending (its fence was waited on) and that
+        // no other thread records into a buffer of its pool.
         unsafe {
             self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
             self.device.begin_command_buffer(cmd, &info)?;
@@ -177,20 +145,32 @@ impl Context {
         Ok(CommandRecorder { device: &self.device, cmd })
     }
 
-    /// Ends `rec`, submits it signalling `fence`, and waits for that fence (not the device).
+    /// Ends `rec`, submits it signalling `fence`, and waits for that fence (not the device):
+    /// the one way relume submits (uploads at creation, read-backs, the headless driver).
     pub fn submit_and_wait(&self, rec: CommandRecorder, fence: &Fence) -> VkResult<()> {
         let fence = fence.raw;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(rec.cmd)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-        // SAFETY: the buffer was fully recorded; the fence is unsignalled and reset after use.
+        let queue = self.queue.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        // SAFETY: the buffer was fully recorded; the fence is unsignalled and reset after use;
+        // the lock gives the queue the external synchronization it needs.
         unsafe {
             self.device.end_command_buffer(rec.cmd)?;
-            self.device.queue_submit2(self.queue, &submit, fence)?;
+            self.device.queue_submit2(*queue, &submit, fence)?;
             self.device.wait_for_fences(&[fence], true, u64::MAX)?;
             self.device.reset_fences(&[fence])?;
         }
         Ok(())
     }
+}
+
+/// What the context keeps beside the device: the loader, relume's own validation messenger
+/// and log, and whether relume made (and so destroys) the device and instance.
+struct Kept {
+    entry: ash::Entry,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    messages: MessageLog,
+    owns_device: bool,
 }
 
 fn destroy_instance(instance: &ash::Instance, debug: Option<&(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>) {
@@ -204,16 +184,16 @@ fn destroy_instance(instance: &ash::Instance, debug: Option<&(ash::ext::debug_ut
 }
 
 impl Drop for Context {
-    /// Teardown in reverse order of creation: pool, allocator, then (when relume made them)
-    /// device, messenger and instance. Every resource made from this context must be destroyed first.
+    /// Teardown in reverse order of creation: allocator, then (when relume made them) device,
+    /// messenger and instance. Every object made from this context holds an `Arc` of it, so
+    /// all of them are gone by now.
     fn drop(&mut self) {
-        // SAFETY: every object made from this context borrows it, so all were dropped before;
-        // the wait covers submissions a caller made on relume's own device.
+        // SAFETY: no object made from this context is alive; the wait covers submissions a
+        // caller made on relume's own device.
         unsafe {
             if self.owns_device {
                 let _ = self.device.device_wait_idle();
             }
-            self.device.destroy_command_pool(self.command_pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owns_device {
                 self.device.destroy_device(None);
@@ -371,14 +351,38 @@ impl<'a> CommandRecorder<'a> {
         // vkCmdUpdateBuffer is a clear command: ALL_TRANSFER covers its stage under every
         // reading of synchronization2 (older validation layers call it COPY, newer CLEAR).
         let transfer = vk::PipelineStageFlags2::ALL_TRANSFER;
-        let before = [barrier(shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ, transfer, vk::AccessFlags2::TRANSFER_WRITE)];
-        let after = [barrier(transfer, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, vk::AccessFlags2::SHADER_STORAGE_READ)];
+        let reads = vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::UNIFORM_READ;
+        let before = [barrier(shader_stages, reads, transfer, vk::AccessFlags2::TRANSFER_WRITE)];
+        let after = [barrier(transfer, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, reads)];
         // SAFETY: recording state outside rendering; the caller keeps `data` within the limits.
         unsafe {
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&before));
             self.device.cmd_update_buffer(self.cmd, buffer, 0, data);
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&after));
         }
+    }
+
+    /// Copies all of `source` (in TRANSFER_SRC_OPTIMAL) into `destination`, an image of the same
+    /// size and texel size in TRANSFER_DST_OPTIMAL, layer 0.
+    pub fn copy_image(&self, source: &super::Image, destination: vk::Image) {
+        let layer = vk::ImageSubresourceLayers::default().aspect_mask(source.desc.aspect()).layer_count(1);
+        let region = vk::ImageCopy::default().src_subresource(layer).dst_subresource(layer).extent(vk::Extent3D {
+            width: source.desc.width,
+            height: source.desc.height,
+            depth: 1,
+        });
+        // SAFETY: recording state; both images are in the stated layouts (the caller's barrier)
+        // and the caller checked that the destination is large enough and format-compatible.
+        unsafe {
+            self.device.cmd_copy_image(
+                self.cmd,
+                source.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                destination,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
     }
 
     /// Makes the transfer writes of this submission visible to the host after its fence.

@@ -3,10 +3,12 @@
 
 use super::{Context, VkResult};
 use ash::vk;
+use std::sync::Arc;
 
 /// One binding and the resource it points at.
 pub enum Binding {
     StorageBuffer(vk::Buffer),
+    UniformBuffer(vk::Buffer),
     SampledImage { view: vk::ImageView, sampler: vk::Sampler },
     StorageImage(vk::ImageView),
 }
@@ -15,6 +17,7 @@ impl Binding {
     fn kind(&self) -> vk::DescriptorType {
         match self {
             Binding::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Binding::UniformBuffer(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::SampledImage { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
         }
@@ -27,21 +30,21 @@ impl Binding {
                 info.image_view(*view).sampler(*sampler).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
             }
             Binding::StorageImage(view) => info.image_view(*view).image_layout(vk::ImageLayout::GENERAL),
-            Binding::StorageBuffer(_) => info,
+            Binding::StorageBuffer(_) | Binding::UniformBuffer(_) => info,
         }]
     }
 }
 
-pub struct DescriptorSet<'a> {
-    ctx: &'a Context,
+pub struct DescriptorSet {
+    ctx: Arc<Context>,
     pub layout: vk::DescriptorSetLayout,
     pub set: vk::DescriptorSet,
     pool: vk::DescriptorPool,
 }
 
-impl<'a> DescriptorSet<'a> {
+impl DescriptorSet {
     /// Creates a set whose binding i is `bindings[i]`, visible to `stages`.
-    pub fn new(ctx: &'a Context, stages: vk::ShaderStageFlags, bindings: &[Binding]) -> VkResult<DescriptorSet<'a>> {
+    pub fn new(ctx: &Arc<Context>, stages: vk::ShaderStageFlags, bindings: &[Binding]) -> VkResult<DescriptorSet> {
         let layout_bindings: Vec<_> = bindings
             .iter()
             .enumerate()
@@ -56,7 +59,7 @@ impl<'a> DescriptorSet<'a> {
         let pool_sizes: Vec<_> = bindings.iter().map(|b| vk::DescriptorPoolSize { ty: b.kind(), descriptor_count: 1 }).collect();
         let device = &ctx.device;
         let mut descriptors = DescriptorSet {
-            ctx,
+            ctx: Arc::clone(ctx),
             layout: vk::DescriptorSetLayout::null(),
             set: vk::DescriptorSet::null(),
             pool: vk::DescriptorPool::null(),
@@ -81,7 +84,9 @@ impl<'a> DescriptorSet<'a> {
         let buffer_infos: Vec<_> = bindings
             .iter()
             .map(|b| match b {
-                Binding::StorageBuffer(buffer) => [vk::DescriptorBufferInfo::default().buffer(*buffer).range(vk::WHOLE_SIZE)],
+                Binding::StorageBuffer(buffer) | Binding::UniformBuffer(buffer) => {
+                    [vk::DescriptorBufferInfo::default().buffer(*buffer).range(vk::WHOLE_SIZE)]
+                }
                 _ => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
@@ -92,7 +97,7 @@ impl<'a> DescriptorSet<'a> {
             .map(|(i, b)| {
                 let write = vk::WriteDescriptorSet::default().dst_set(self.set).dst_binding(i as u32).descriptor_type(b.kind());
                 match b {
-                    Binding::StorageBuffer(_) => write.buffer_info(&buffer_infos[i]),
+                    Binding::StorageBuffer(_) | Binding::UniformBuffer(_) => write.buffer_info(&buffer_infos[i]),
                     _ => write.image_info(&image_infos[i]),
                 }
             })
@@ -102,7 +107,7 @@ impl<'a> DescriptorSet<'a> {
     }
 }
 
-impl Drop for DescriptorSet<'_> {
+impl Drop for DescriptorSet {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the set; null handles are no-ops.
         unsafe {

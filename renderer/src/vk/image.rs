@@ -5,6 +5,7 @@ use super::{Context, VkResult};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
 
 #[derive(Clone, Copy, Debug)]
 pub struct ImageDesc {
@@ -29,6 +30,21 @@ impl ImageDesc {
         vk::Extent2D { width: self.width, height: self.height }
     }
 
+    /// Bytes of one texel of the formats relume's images use (0 for any other).
+    pub fn texel_bytes(&self) -> u64 {
+        match self.format {
+            vk::Format::R32G32B32A32_SFLOAT => 16,
+            vk::Format::R32G32_SFLOAT | vk::Format::R32G32_SINT => 8,
+            vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB | vk::Format::D32_SFLOAT | vk::Format::R32_SFLOAT => 4,
+            _ => 0,
+        }
+    }
+
+    /// Texels in all layers.
+    pub fn texel_count(&self) -> u64 {
+        self.width as u64 * self.height as u64 * self.layers as u64
+    }
+
     pub fn all_layers(&self) -> vk::ImageSubresourceRange {
         self.layers(0, self.layers)
     }
@@ -38,16 +54,16 @@ impl ImageDesc {
     }
 }
 
-pub struct Image<'a> {
-    ctx: &'a Context,
+pub struct Image {
+    ctx: Arc<Context>,
     pub raw: vk::Image,
     pub view: vk::ImageView,
     pub desc: ImageDesc,
     allocation: Option<Allocation>,
 }
 
-impl<'a> Image<'a> {
-    pub fn new(ctx: &'a Context, name: &str, desc: ImageDesc) -> VkResult<Image<'a>> {
+impl Image {
+    pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> VkResult<Image> {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
@@ -60,7 +76,7 @@ impl<'a> Image<'a> {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: a valid create info on a live device.
         let raw = unsafe { ctx.device.create_image(&info, None) }?;
-        let mut image = Image { ctx, raw, view: vk::ImageView::null(), desc, allocation: None };
+        let mut image = Image { ctx: Arc::clone(ctx), raw, view: vk::ImageView::null(), desc, allocation: None };
         // SAFETY: a plain query of the image just made.
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -80,10 +96,10 @@ impl<'a> Image<'a> {
     }
 
     /// A 2D view of one layer, for rendering into it.
-    pub fn layer_view(&self, layer: u32) -> VkResult<ImageView<'a>> {
+    pub fn layer_view(&self, layer: u32) -> VkResult<ImageView> {
         let range = self.desc.layers(layer, 1);
-        let raw = create_view(self.ctx, self.raw, &self.desc, vk::ImageViewType::TYPE_2D, range)?;
-        Ok(ImageView { ctx: self.ctx, raw })
+        let raw = create_view(&self.ctx, self.raw, &self.desc, vk::ImageViewType::TYPE_2D, range)?;
+        Ok(ImageView { ctx: Arc::clone(&self.ctx), raw })
     }
 }
 
@@ -99,7 +115,7 @@ fn create_view(
     Ok(unsafe { ctx.device.create_image_view(&info, None) }?)
 }
 
-impl Drop for Image<'_> {
+impl Drop for Image {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the image; destroying a null view is a no-op.
         unsafe {
@@ -113,12 +129,12 @@ impl Drop for Image<'_> {
 }
 
 /// A view owned apart from its image (one layer of an array), destroyed on drop.
-pub struct ImageView<'a> {
-    ctx: &'a Context,
+pub struct ImageView {
+    ctx: Arc<Context>,
     pub raw: vk::ImageView,
 }
 
-impl Drop for ImageView<'_> {
+impl Drop for ImageView {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the view.
         unsafe { self.ctx.device.destroy_image_view(self.raw, None) };

@@ -10,10 +10,11 @@ mod image;
 mod instance;
 mod pipeline;
 mod query;
+mod readback;
 mod sync;
 
 pub use ash::vk;
-pub use barrier::{Access, Tracker};
+pub use barrier::{transition, Access, BufferRef, ImageRef, ImageState, Tracker};
 pub use buffer::Buffer;
 pub use context::{CommandRecorder, Context, ContextOptions};
 pub use descriptor::{Binding, DescriptorSet};
@@ -21,6 +22,7 @@ pub use device::DeviceInfo;
 pub use image::{Image, ImageDesc, ImageView};
 pub use pipeline::{GraphicsPipelineDesc, Pipeline};
 pub use query::TimestampQueries;
+pub use readback::Readback;
 pub use sync::{CommandBuffer, Fence, Sampler};
 
 /// Everything that can go wrong in the backend, each with what to do about it.

@@ -1,8 +1,10 @@
 //! Compute and graphics pipelines from embedded SPIR-V, with their layouts, destroyed on drop.
 //! Graphics pipelines use dynamic rendering (no render passes) and dynamic viewport and scissor.
+//! Specialization constants pick a shader's variant at creation (constant_id i = value i).
 
 use super::{Context, VkError, VkResult};
 use ash::vk;
+use std::sync::Arc;
 
 /// A shader module that lives only while a pipeline is created from it.
 struct ShaderModule<'a> {
@@ -27,10 +29,27 @@ impl Drop for ShaderModule<'_> {
     }
 }
 
+/// u32 specialization constants: constant_id i takes `values[i]`.
+struct Specialization {
+    entries: Vec<vk::SpecializationMapEntry>,
+    data: Vec<u8>,
+}
+
+impl Specialization {
+    fn new(values: &[u32]) -> Self {
+        let entries = (0..values.len() as u32).map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 }).collect();
+        Specialization { entries, data: values.iter().flat_map(|v| v.to_le_bytes()).collect() }
+    }
+
+    fn info(&self) -> vk::SpecializationInfo<'_> {
+        vk::SpecializationInfo::default().map_entries(&self.entries).data(&self.data)
+    }
+}
+
 /// A compute or graphics pipeline with its layout (one descriptor set, push constants
 /// visible to every stage).
-pub struct Pipeline<'a> {
-    ctx: &'a Context,
+pub struct Pipeline {
+    ctx: Arc<Context>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
 }
@@ -38,6 +57,8 @@ pub struct Pipeline<'a> {
 pub struct GraphicsPipelineDesc<'a> {
     pub vertex: &'a [u8],
     pub fragment: &'a [u8],
+    /// Specialization constants of both stages.
+    pub specialization: &'a [u32],
     pub vertex_stride: u32,
     pub attributes: &'a [vk::VertexInputAttributeDescription],
     pub color_formats: &'a [vk::Format],
@@ -47,9 +68,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub push_bytes: u32,
 }
 
-impl<'a> Pipeline<'a> {
+impl Pipeline {
     /// The pipeline layout alone; the pipeline is filled in by the caller (drop cleans up both).
-    fn with_layout(ctx: &'a Context, set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
+    fn with_layout(ctx: &Arc<Context>, set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
         let set_layouts = [set_layout];
         let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
         let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(if push_bytes > 0 {
@@ -59,10 +80,10 @@ impl<'a> Pipeline<'a> {
         });
         // SAFETY: a valid create info on a live device.
         let layout = unsafe { ctx.device.create_pipeline_layout(&info, None) }?;
-        Ok(Pipeline { ctx, raw: vk::Pipeline::null(), layout })
+        Ok(Pipeline { ctx: Arc::clone(ctx), raw: vk::Pipeline::null(), layout })
     }
 
-    pub fn compute(ctx: &'a Context, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
+    pub fn compute(ctx: &Arc<Context>, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
         let mut pipeline = Pipeline::with_layout(ctx, set_layout, push_bytes)?;
         let module = ShaderModule::new(ctx, spirv)?;
         let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module.raw).name(c"main");
@@ -73,14 +94,16 @@ impl<'a> Pipeline<'a> {
         Ok(pipeline)
     }
 
-    pub fn graphics(ctx: &'a Context, desc: &GraphicsPipelineDesc) -> VkResult<Self> {
+    pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsPipelineDesc) -> VkResult<Self> {
         let mut pipeline = Pipeline::with_layout(ctx, desc.set_layout, desc.push_bytes)?;
         let vertex = ShaderModule::new(ctx, desc.vertex)?;
         let fragment = ShaderModule::new(ctx, desc.fragment)?;
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex.raw).name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fragment.raw).name(c"main"),
-        ];
+        let specialization = Specialization::new(desc.specialization);
+        let specialization_info = specialization.info();
+        let stage = |stage, module| {
+            vk::PipelineShaderStageCreateInfo::default().stage(stage).module(module).name(c"main").specialization_info(&specialization_info)
+        };
+        let stages = [stage(vk::ShaderStageFlags::VERTEX, vertex.raw), stage(vk::ShaderStageFlags::FRAGMENT, fragment.raw)];
         let bindings =
             [vk::VertexInputBindingDescription::default().binding(0).stride(desc.vertex_stride).input_rate(vk::VertexInputRate::VERTEX)];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
@@ -121,14 +144,14 @@ impl<'a> Pipeline<'a> {
             .dynamic_state(&dynamic)
             .layout(pipeline.layout)
             .push_next(&mut rendering)];
-        // SAFETY: every state struct and both modules outlive the call.
+        // SAFETY: every state struct, the specialization data and both modules outlive the call.
         let created = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
         pipeline.raw = created.map_err(|(_, e)| e)?[0];
         Ok(pipeline)
     }
 }
 
-impl Drop for Pipeline<'_> {
+impl Drop for Pipeline {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the pipeline; a null pipeline is a no-op.
         unsafe {

@@ -1,24 +1,26 @@
-//! Timestamp queries: one before the first pass and one after each, read after the frame's fence.
+//! Timestamp queries: one before the first pass and one after each, read once the frame's
+//! submission has completed.
 
 use super::{CommandRecorder, Context, VkResult};
 use ash::vk;
+use std::sync::Arc;
 
-pub struct TimestampQueries<'a> {
-    ctx: &'a Context,
+pub struct TimestampQueries {
+    ctx: Arc<Context>,
     pool: vk::QueryPool,
     period_ns: f64,
 }
 
-impl<'a> TimestampQueries<'a> {
-    pub const CAPACITY: usize = 16;
+impl TimestampQueries {
+    pub const CAPACITY: usize = 32;
 
     /// None when the device cannot write timestamps (the frame then reports no pass times).
-    pub fn new(ctx: &'a Context) -> VkResult<Option<Self>> {
+    pub fn new(ctx: &Arc<Context>) -> VkResult<Option<Self>> {
         let Some(period_ns) = ctx.info.timestamp_period_ns else { return Ok(None) };
         let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(Self::CAPACITY as u32);
         // SAFETY: a valid create info on a live device.
         let pool = unsafe { ctx.device.create_query_pool(&info, None) }?;
-        Ok(Some(TimestampQueries { ctx, pool, period_ns }))
+        Ok(Some(TimestampQueries { ctx: Arc::clone(ctx), pool, period_ns }))
     }
 
     pub fn reset(&self, rec: &CommandRecorder) {
@@ -32,18 +34,21 @@ impl<'a> TimestampQueries<'a> {
         unsafe { rec.device.cmd_write_timestamp2(rec.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index) };
     }
 
-    /// The first N timestamps in milliseconds, after the frame's fence has signalled.
-    pub fn read_ms<const N: usize>(&self) -> VkResult<[f64; N]> {
-        let mut ticks = [0u64; N];
-        // SAFETY: the queries were written by a submission that has completed.
-        unsafe {
-            self.ctx.device.get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
-        }?;
-        Ok(ticks.map(|t| t as f64 * self.period_ns * 1e-6))
+    /// The first `out.len()` timestamps in milliseconds, once the submission that wrote them
+    /// has completed; never waits (Err NOT_READY while it has not).
+    pub fn read_ms(&self, out: &mut [f64]) -> VkResult<()> {
+        let mut ticks = [0u64; Self::CAPACITY];
+        let ticks = &mut ticks[..out.len().min(Self::CAPACITY)];
+        // SAFETY: the queries were reset and written by a recorded submission.
+        unsafe { self.ctx.device.get_query_pool_results(self.pool, 0, ticks, vk::QueryResultFlags::TYPE_64) }?;
+        for (ms, t) in out.iter_mut().zip(ticks.iter()) {
+            *ms = *t as f64 * self.period_ns * 1e-6;
+        }
+        Ok(())
     }
 }
 
-impl Drop for TimestampQueries<'_> {
+impl Drop for TimestampQueries {
     fn drop(&mut self) {
         // SAFETY: no pending GPU work uses the pool.
         unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };

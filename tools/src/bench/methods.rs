@@ -1,12 +1,14 @@
 //! The lighting methods a sweep can name. A method plugs into the bench by implementing
 //! [`Method`] and being listed in [`METHODS`]; the harness knows nothing else about it.
 
-use crate::{Lit, Renderer};
+use crate::Lit;
 use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
 use relume_bake::scene::Scene;
+use relume_renderer::techniques::light_path_maps::Composition;
 use relume_renderer::vk::Context;
-use relume_renderer::{Composition, RenderSettings};
+use relume_renderer::{Headless, MakeTechnique, RenderSettings, Renderer};
+use std::sync::Arc;
 
 /// A parameter set's run-time part: the keys the renderer reads. Every other key of a
 /// sweep's parameter table is a `relume bake` flag of the method's bake.
@@ -47,17 +49,18 @@ pub(crate) trait Method: Sync {
     fn settings(&self, base: &RenderSettings, params: &RenderParams) -> RenderSettings;
 
     /// The renderer of one parameter set; `lit` is its bake, read back (None without one).
-    fn renderer<'c>(&self, ctx: &'c Context, scene: &Scene, lit: Option<&Lit>, settings: &RenderSettings) -> Result<Renderer<'c>> {
-        let renderer = match lit {
-            Some(lit) => {
-                let lightmap = lit.lightmap();
-                match (&lightmap, &lit.transfer) {
-                    (Some(lightmap), Some(transfer)) => Renderer::with_transfer(ctx, &lit.scene, settings, lightmap, transfer),
-                    _ => Renderer::with_lightmap(ctx, &lit.scene, settings, lightmap.as_ref()),
-                }
-            }
-            None => Renderer::new(ctx, scene, settings),
-        };
+    fn renderer(
+        &self,
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        lit: Option<&Lit>,
+        settings: &RenderSettings,
+        params: &RenderParams,
+    ) -> Result<Headless> {
+        let techniques = lit.map(|lit| lit.techniques(params.composition.unwrap_or_default())).unwrap_or_default();
+        let techniques: Vec<&dyn MakeTechnique> = techniques.iter().map(|t| t.as_ref()).collect();
+        let scene = lit.map_or(scene, |lit| &lit.scene);
+        let renderer = Renderer::new_blocking(ctx, scene, settings, &techniques).and_then(Headless::new);
         renderer.with_context(|| format!("{}: Vulkan renderer", self.name()))
     }
 }
@@ -127,7 +130,7 @@ impl Method for LightPathMaps {
     }
     fn settings(&self, base: &RenderSettings, params: &RenderParams) -> RenderSettings {
         let ambient = params.ambient.unwrap_or(Vec3::ZERO);
-        RenderSettings { ambient, beta: params.beta.unwrap_or(0.0), composition: params.composition.unwrap_or_default(), ..base.clone() }
+        RenderSettings { ambient, beta: params.beta.unwrap_or(0.0), ..base.clone() }
     }
 }
 

@@ -24,9 +24,10 @@ use relume_bake::metrics;
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::{Light, Scene};
 use relume_renderer::vk::{Context, ContextOptions};
-use relume_renderer::{RenderSettings, Renderer};
+use relume_renderer::{Headless, RenderSettings, Renderer};
 use results::{Accuracy, BakeCost, FrameCost, Row};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 use sweep::{Sweep, SweepScene};
 
@@ -203,7 +204,7 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
 struct SceneBench<'s> {
     sweep: &'s Sweep,
     entry: &'s SweepScene,
-    ctx: &'s Context,
+    ctx: &'s Arc<Context>,
     out: &'s Path,
     threads: Option<usize>,
     name: String,
@@ -219,7 +220,7 @@ impl<'s> SceneBench<'s> {
     fn new(
         sweep: &'s Sweep,
         entry: &'s SweepScene,
-        ctx: &'s Context,
+        ctx: &'s Arc<Context>,
         cache: &mut ReferenceCache,
         args: &'s BenchArgs,
     ) -> Result<SceneBench<'s>> {
@@ -287,11 +288,11 @@ impl<'s> SceneBench<'s> {
         };
         let settings = config.render.apply_shadows(method.settings(&base, &config.render));
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
-        let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings)?;
+        let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings, &config.render)?;
         // Direct light alone with the same shadow maps: what the indirect part is measured against.
+        let direct_settings = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
         let mut direct_renderer =
-            Renderer::new(self.ctx, &self.scene, &RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() })
-                .context("Vulkan renderer")?;
+            Renderer::new_blocking(self.ctx, &self.scene, &direct_settings, &[]).and_then(Headless::new).context("Vulkan renderer")?;
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
@@ -477,13 +478,13 @@ fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration
     Ok(vec![at_rest()])
 }
 
-fn frame_image(renderer: &mut Renderer) -> Result<Image> {
+fn frame_image(renderer: &mut Headless) -> Result<Image> {
     Ok(renderer.render_and_read()?.0)
 }
 
 /// Warm-up frames (crate::warm_up), then `frames` timed ones: GPU time per pass from
 /// timestamps and the CPU's wall time of each `render` call (record, submit, wait for its fence).
-fn time_frames(renderer: &mut Renderer, frames: u32, warm_up_seconds: f64) -> Result<FrameCost> {
+fn time_frames(renderer: &mut Headless, frames: u32, warm_up_seconds: f64) -> Result<FrameCost> {
     crate::warm_up(renderer, warm_up_seconds)?;
     let mut timings = Vec::new();
     let mut cpu_ms = Vec::new();
@@ -492,7 +493,7 @@ fn time_frames(renderer: &mut Renderer, frames: u32, warm_up_seconds: f64) -> Re
         timings.push(renderer.render()?);
         cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
     }
-    let totals: Vec<f64> = timings.iter().filter_map(|t| t.passes_ms.map(|p| p.iter().sum())).collect();
+    let totals: Vec<f64> = timings.iter().filter(|t| !t.passes().is_empty()).map(|t| t.total_ms()).collect();
     Ok(FrameCost {
         passes_ms: median_timings(&timings).into_iter().filter(|(name, _)| name != "frame").collect(),
         gpu_ms: results::percentile(&totals, 0.5),

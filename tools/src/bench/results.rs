@@ -3,7 +3,6 @@
 
 use super::pareto;
 use anyhow::{Context as _, Result};
-use relume_renderer::PASS_NAMES;
 use serde::Serialize;
 use std::path::Path;
 
@@ -55,7 +54,7 @@ impl BakeCost {
 /// What a frame cost over the timed frames.
 #[derive(Clone, Debug, Serialize)]
 pub(crate) struct FrameCost {
-    /// Median GPU time per pass (renderer::PASS_NAMES order); empty without timestamps.
+    /// Median GPU time per pass that ran, in frame order; empty without timestamps.
     pub passes_ms: Vec<(String, f64)>,
     /// Median, 10th and 90th percentile of the GPU frame time (sum of the passes).
     pub gpu_ms: f64,
@@ -137,7 +136,9 @@ pub(crate) fn mark_front(rows: &mut [Row]) {
 }
 
 /// The CSV's columns, in order (docs/BENCH.md describes each).
-pub(crate) fn csv_header() -> Vec<String> {
+/// The header: fixed columns, then `gpu_<pass>_ms` for every pass any row ran (`passes`,
+/// in the order frames run them), then the errors.
+pub(crate) fn csv_header(passes: &[String]) -> Vec<String> {
     let mut columns: Vec<String> = [
         "scene",
         "light",
@@ -161,7 +162,7 @@ pub(crate) fn csv_header() -> Vec<String> {
     ]
     .map(String::from)
     .to_vec();
-    columns.extend(PASS_NAMES.iter().map(|p| format!("gpu_{p}_ms")));
+    columns.extend(passes.iter().map(|p| format!("gpu_{p}_ms")));
     columns.extend(
         ["rmse", "nrmse", "flip", "indirect_rmse", "indirect_nrmse", "indirect_flip", "flicker", "non_finite_pixels", "on_front", "device"]
             .map(String::from),
@@ -169,7 +170,7 @@ pub(crate) fn csv_header() -> Vec<String> {
     columns
 }
 
-fn csv_cells(row: &Row) -> Vec<String> {
+fn csv_cells(row: &Row, passes: &[String]) -> Vec<String> {
     let optional = |v: Option<f64>| v.map(number).unwrap_or_default();
     let position = |i: usize| row.light_position.map(|p| p[i].to_string()).unwrap_or_default();
     let translation = |i: usize| row.occluder_translation.map(|t| t[i].to_string()).unwrap_or_default();
@@ -195,7 +196,7 @@ fn csv_cells(row: &Row) -> Vec<String> {
         number(row.frame.gpu_p90_ms),
         number(row.frame.cpu_ms),
     ];
-    cells.extend(PASS_NAMES.iter().map(|p| optional(row.frame.passes_ms.iter().find(|(name, _)| name == p).map(|(_, ms)| *ms))));
+    cells.extend(passes.iter().map(|p| optional(row.frame.passes_ms.iter().find(|(name, _)| name == p).map(|(_, ms)| *ms))));
     let a = row.accuracy;
     cells.extend(
         [
@@ -236,8 +237,28 @@ fn quote(cell: &str) -> String {
     }
 }
 
+/// Every pass any row ran, each once, in the order the rows' frames ran them (a pass only some
+/// methods run comes after the passes before it in those rows).
+fn pass_names(rows: &[Row]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for row in rows {
+        let mut at = 0;
+        for (name, _) in &row.frame.passes_ms {
+            match names.iter().position(|n| n == name) {
+                Some(i) => at = i + 1,
+                None => {
+                    names.insert(at, name.clone());
+                    at += 1;
+                }
+            }
+        }
+    }
+    names
+}
+
 pub(crate) fn csv(rows: &[Row]) -> String {
-    std::iter::once(csv_line(&csv_header())).chain(rows.iter().map(|r| csv_line(&csv_cells(r)))).collect()
+    let passes = pass_names(rows);
+    std::iter::once(csv_line(&csv_header(&passes))).chain(rows.iter().map(|r| csv_line(&csv_cells(r, &passes)))).collect()
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 //
 // E_j(e) the light's irradiance on a surface facing it (lights.glsl's incident_light: glTF
 // falloff, range window, spot cone), the squared distance widened by the light area delta-l
-// (directional lights ignore it), V_j the same Chebyshev visibility the forward pass uses.
+// (directional lights ignore it), V_j the same Chebyshev visibility the lighting pass uses.
 // relume_bake::clustered_transfer::entry_irradiance_unshadowed is this without V_j.
 #extension GL_GOOGLE_include_directive : require
 #include "lights.glsl"
@@ -24,11 +24,10 @@ layout(set = 0, binding = 2) uniform sampler2DArray shadow_moments;
 layout(std430, set = 0, binding = 3) readonly buffer Entries { EntryPoint entries[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer Irradiance { vec4 irradiance[]; };   // rgb I_e
 
+#define FRAME_BINDING 5
+#include "frame.glsl"
+
 layout(push_constant) uniform EntryIrradiancePush {
-    uint light_count;
-    uint shadows;            // 0: every light fully visible
-    float min_variance;
-    float bleeding_reduction;
     uint entry_count;
     float light_area;        // delta-l, square metres
 } pc;
@@ -43,7 +42,7 @@ void main() {
     vec3 p = entries[e].position.xyz;
     vec3 n = entries[e].normal.xyz;
     vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < pc.light_count; ++i) {
+    for (uint i = 0u; i < frame.light_count; ++i) {
         vec3 to_light;
         vec3 incident = incident_light(lights[i], p, to_light);
         float cos_e = max(dot(n, to_light), 0.0);
@@ -55,7 +54,7 @@ void main() {
             widening = d2 / (d2 + pc.light_area / PI);
         }
         sum += incident * widening * cos_e
-               * visibility(lights[i], p, pc.shadows, pc.min_variance, pc.bleeding_reduction);
+               * visibility(lights[i], p, frame.shadows, frame.min_variance, frame.bleeding_reduction);
     }
     irradiance[e] = vec4(sum, 0.0);
 }

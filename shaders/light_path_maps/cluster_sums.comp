@@ -1,7 +1,7 @@
 #version 450
 // Step 3 of 000 §3.4: per cluster c of entry points, s_c = sum_e I_e and t_cd = sum_e I_e w^e_d,
 // written as the textures are laid out (cluster after cluster, s_c then t_c1 .. t_cD), so
-// that lpm_reconstruct.comp weighs texture k by sums[k]. One workgroup per (cluster, term):
+// that reconstruct.comp weighs texture k by sums[k]. One workgroup per (cluster, term):
 // workgroup (c, k) sums term k (0: s_c, d: t_cd) over the cluster's entry points, each
 // invocation a fixed strided share, then a tree reduction in shared memory. The order of
 // additions is fixed, so the result is the same on every run.

@@ -1,0 +1,94 @@
+//! A method's run-time part is a technique: created once from the frame's shared state and
+//! its own data (uploads, pipelines, descriptor sets), it records its passes into the frame in
+//! order and hands the lighting pass one term (docs/ARCHITECTURE.md). The frame knows
+//! techniques only through this trait; each lives in a folder under `techniques/` with its
+//! shaders in a folder of the same name under `shaders/`.
+
+use crate::gpu_scene::GpuScene;
+use crate::vk::{Buffer, CommandRecorder, Context, Image, Tracker, VkResult};
+use crate::RenderSettings;
+use relume_bake::scene::Scene;
+use std::any::Any;
+use std::sync::Arc;
+
+/// What a technique is created from besides its own data: the device, the scene as loaded
+/// (with the atlas's uv1 when a bake gave one) and as uploaded (its buffers, among them the
+/// frame's uniforms), the blurred shadow moments, and the frame's settings.
+pub struct Shared<'s> {
+    pub ctx: &'s Arc<Context>,
+    pub scene: &'s Scene,
+    pub gpu_scene: &'s GpuScene,
+    pub moments: &'s Image,
+    pub settings: &'s RenderSettings,
+}
+
+/// Where the lighting pass reads an irradiance term.
+pub enum Source<'t> {
+    /// An atlas image (RGBA32F 2D array, padded), read through each vertex's uv1.
+    Texel(&'t Image),
+    /// One rgb value (vec4) per vertex of the scene's vertex buffer, read in the vertex stage
+    /// and interpolated.
+    Vertex(&'t Buffer),
+    /// One rgb value per pixel of the frame (RGBA32F, a 2D array of one layer), read at the
+    /// fragment's pixel.
+    Pixel(&'t Image),
+}
+
+/// What a technique hands the lighting pass (lighting.frag states the formula).
+pub enum Term<'t> {
+    /// An atlas image whose rgb scales the ambient light (I_A + beta * every light's
+    /// unshadowed irradiance): 001 eq. (5)'s obscurance W.
+    Occlusion(&'t Image),
+    /// Indirect irradiance (lux), added as albedo / pi * E.
+    Irradiance {
+        source: Source<'t>,
+        /// Scaled by the frame's occlusion term, when there is one.
+        times_occlusion: bool,
+        /// With `times_occlusion`: the occlusion term also scales the direct irradiance, added
+        /// again (000 §3.4's literal reading).
+        occluded_direct: bool,
+    },
+}
+
+/// A technique's image or buffer, named for read-back (tests and tools).
+pub enum Resource<'r> {
+    Image(&'r Image),
+    Buffer(&'r Buffer),
+}
+
+/// A method's run-time part. Its passes record into the frame's command buffer in the order
+/// `passes` names them, each declaring what it reads and writes to the tracker; nothing is
+/// allocated, submitted or waited on while recording.
+pub trait Technique: Any + Send {
+    /// The technique's name: its folder's, and the prefix of its passes and resources.
+    fn name(&self) -> &'static str;
+
+    /// Its passes in frame order, each `<name>.<pass>`; every one is timed.
+    fn passes(&self) -> &'static [&'static str];
+
+    /// Records pass `pass` (an index into `passes`).
+    fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker);
+
+    /// The term it hands the lighting pass this frame, or none. Its kind and images are fixed
+    /// at creation (they pick the lighting pass's variant); its flags may change per frame.
+    fn term(&self) -> Option<Term<'_>>;
+
+    /// Tells a frame's tracker the state its uploads left its images in.
+    fn register_states(&self, _tracker: &mut Tracker) {}
+
+    /// Its resources by name (without the prefix), for read-back.
+    fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
+        Vec::new()
+    }
+
+    /// GPU work timed once at creation (`<name>.<work>`, milliseconds).
+    fn creation_timings(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+}
+
+/// A technique's data, ready to become a technique on the device.
+pub trait MakeTechnique {
+    /// Uploads the data and creates the passes; may submit and wait (once, at creation).
+    fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>>;
+}

@@ -1,0 +1,4 @@
+//! Every technique: a method's run-time part, one folder each (docs/ARCHITECTURE.md).
+
+pub mod light_path_maps;
+pub mod obscurance;

@@ -1,0 +1,73 @@
+//! One-time submissions: what creation uploads, and read-backs outside the frame. Each
+//! records into a command buffer of its own, submits it on the context's queue and waits for
+//! its own fence (never the device); every function here says so in its name (`_blocking`),
+//! and none runs in a frame.
+
+use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, Tracker, VkError, VkResult};
+use glam::Vec4;
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Records `work` with a fresh tracker, submits it and waits for its fence.
+pub fn submit_blocking(ctx: &Arc<Context>, work: impl FnOnce(&CommandRecorder, &mut Tracker)) -> VkResult<()> {
+    let cmd = CommandBuffer::new(ctx)?;
+    let fence = Fence::new(ctx)?;
+    let rec = ctx.begin(cmd.raw)?;
+    work(&rec, &mut Tracker::default());
+    ctx.submit_and_wait(rec, &fence)
+}
+
+/// Fills the top-left `extents[i]` of layer i of an RGBA32F array image from `texels` (the
+/// layers one after another, each tightly packed) through one staging buffer, records
+/// `then` (with the image in TransferDestination), and leaves the image ready for
+/// FragmentSampled reads; one submission, waited for.
+pub fn upload_array_layers_blocking(
+    ctx: &Arc<Context>,
+    image: &Image,
+    texels: &[Vec4],
+    extents: &[vk::Extent2D],
+    then: impl FnOnce(&CommandRecorder, &mut Tracker),
+) -> VkResult<()> {
+    let area = |e: &vk::Extent2D| e.width as u64 * e.height as u64;
+    let expected: u64 = extents.iter().map(area).sum();
+    if expected != texels.len() as u64 {
+        return Err(VkError::Invalid(format!("{} texels given for layers that hold {expected}", texels.len())));
+    }
+    let staging = Buffer::with_data(ctx, "upload staging", vk::BufferUsageFlags::TRANSFER_SRC, texels)?;
+    submit_blocking(ctx, |rec, tracker| {
+        tracker.use_image(rec, image, Access::TransferDestination);
+        let mut offset = 0;
+        for (layer, extent) in extents.iter().enumerate() {
+            rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
+            offset += area(extent) * 16;
+        }
+        then(rec, tracker);
+        tracker.use_image(rec, image, Access::FragmentSampled);
+    })
+}
+
+/// Device-local storage buffers holding `sources` (name, bytes), filled through one staging
+/// buffer and one submission, waited for; they are then ready for compute-shader reads.
+pub fn upload_buffers_blocking(ctx: &Arc<Context>, sources: &[(&str, &[u8])]) -> VkResult<Vec<Buffer>> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let buffers = sources
+        .iter()
+        .map(|(name, bytes)| Buffer::new(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly))
+        .collect::<VkResult<Vec<_>>>()?;
+    let total: usize = sources.iter().map(|(_, bytes)| bytes.len()).sum();
+    let staging = Buffer::new(ctx, "upload staging", total as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+    let packed: Vec<u8> = sources.iter().flat_map(|(_, bytes)| bytes.iter().copied()).collect();
+    staging.write(&packed)?;
+    submit_blocking(ctx, |rec, tracker| {
+        let mut offset = 0u64;
+        for (buffer, (_, bytes)) in buffers.iter().zip(sources) {
+            if !bytes.is_empty() {
+                tracker.use_buffer(rec, buffer, Access::TransferDestination);
+                rec.copy_buffer(staging.raw, offset, buffer.raw, bytes.len() as u64);
+                tracker.use_buffer(rec, buffer, Access::ComputeStorageRead);
+            }
+            offset += bytes.len() as u64;
+        }
+    })?;
+    Ok(buffers)
+}
