@@ -4,7 +4,7 @@
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::Atlas;
-use relume_bake::bvh::SceneBvh;
+use relume_bake::bvh::{Hit, SceneBvh};
 use relume_bake::gltf_load;
 use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::metrics;
@@ -157,4 +157,32 @@ pub fn nrmse_with_artifacts(name: &str, image: &Image, reference: &Image) -> f64
     let stats = metrics::compare(image, reference).expect("sizes match");
     assert_eq!(stats.non_finite_pixels, 0, "{name}: NaN or infinite pixels");
     stats.nrmse
+}
+
+/// Every pixel's primary ray through its centre, traced on the CPU.
+pub fn primary_hits(scene: &Scene, bvh: &SceneBvh, width: u32, height: u32) -> Vec<Option<Hit>> {
+    let eye = scene.camera.position();
+    (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let dir = scene.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
+            bvh.closest_hit(eye, dir, f32::INFINITY)
+        })
+        .collect()
+}
+
+/// Pixels whose ray and all 8 neighbours' rays hit the same mesh in the same plane: away from
+/// silhouettes and creases, where the rasteriser and the CPU ray may pick different faces.
+pub fn interior_pixels(hits: &[Option<Hit>], width: u32, height: u32) -> Vec<bool> {
+    let at = |x: i64, y: i64| hits[(y * width as i64 + x) as usize];
+    let mut keep = vec![false; hits.len()];
+    for y in 1..height as i64 - 1 {
+        for x in 1..width as i64 - 1 {
+            let Some(centre) = at(x, y) else { continue };
+            let same =
+                |h: Option<Hit>| h.is_some_and(|h| h.mesh == centre.mesh && h.geometric_normal.dot(centre.geometric_normal) > 0.9999);
+            keep[(y * width as i64 + x) as usize] = (-1..=1).all(|dy| (-1..=1).all(|dx| same(at(x + dx, y + dy))));
+        }
+    }
+    keep
 }

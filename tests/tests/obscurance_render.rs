@@ -62,35 +62,7 @@ fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     (atlas, applied, texels)
 }
 
-/// Every pixel's primary ray through its centre, traced on the CPU.
-fn primary_hits(scene: &Scene, bvh: &SceneBvh) -> Vec<Option<Hit>> {
-    let eye = scene.camera.position();
-    (0..HEIGHT)
-        .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let dir = scene.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, WIDTH, HEIGHT);
-            bvh.closest_hit(eye, dir, f32::INFINITY)
-        })
-        .collect()
-}
-
-/// Pixels whose ray and all 8 neighbours' rays hit the same mesh in the same plane: away from
-/// silhouettes and creases, where the rasteriser and the CPU ray may pick different faces.
-fn interior_pixels(hits: &[Option<Hit>]) -> Vec<bool> {
-    let at = |x: i64, y: i64| hits[(y * WIDTH as i64 + x) as usize];
-    let mut keep = vec![false; hits.len()];
-    for y in 1..HEIGHT as i64 - 1 {
-        for x in 1..WIDTH as i64 - 1 {
-            let Some(centre) = at(x, y) else { continue };
-            let same =
-                |h: Option<Hit>| h.is_some_and(|h| h.mesh == centre.mesh && h.geometric_normal.dot(centre.geometric_normal) > 0.9999);
-            keep[(y * WIDTH as i64 + x) as usize] = (-1..=1).all(|dy| (-1..=1).all(|dx| same(at(x + dx, y + dy))));
-        }
-    }
-    keep
-}
-
-/// Bilinear filtering of a padded lightmap at uv1, as shaders/forward.frag does it: page =
+/// Bilinear filtering of a padded lightmap at uv1, as shaders/lighting.frag does it: page =
 /// floor(u), texel centres at (i + 0.5) / size, clamped to the page's edge.
 fn sample_lightmap(padded: &[Vec4], (width, height, pages): (u32, u32, u32), uv1: Vec2) -> Vec3 {
     let (w, h) = (width as i64, height as i64);
@@ -168,8 +140,8 @@ fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &AtlasImage, padded: 
     let gpu = gpu_ambient_term(scene, Some(lightmap), ambient, 0.0);
 
     let bvh = SceneBvh::new(scene);
-    let hits = primary_hits(scene, &bvh);
-    let keep = interior_pixels(&hits);
+    let hits = primary_hits(scene, &bvh, WIDTH, HEIGHT);
+    let keep = interior_pixels(&hits, WIDTH, HEIGHT);
     let dims = (lightmap.width, lightmap.height, lightmap.pages);
     let mut cpu = Image::new(WIDTH, HEIGHT);
     let mut first_mesh_w = (f32::INFINITY, f32::NEG_INFINITY);
@@ -252,8 +224,8 @@ fn beta_term_errors(name: &str, scene: &Scene, beta: f32) -> (f32, f32) {
     let gpu = gpu_ambient_term(scene, None, Vec3::ZERO, beta);
 
     let bvh = SceneBvh::new(scene);
-    let hits = primary_hits(scene, &bvh);
-    let keep = interior_pixels(&hits);
+    let hits = primary_hits(scene, &bvh, WIDTH, HEIGHT);
+    let keep = interior_pixels(&hits, WIDTH, HEIGHT);
     let expected = |hit: &Hit| {
         let unshadowed: Vec3 = scene.lights.iter().map(|l| l.incident(hit.position).irradiance).sum();
         albedo(scene, hit) / std::f32::consts::PI * beta * unshadowed
