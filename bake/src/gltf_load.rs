@@ -18,7 +18,7 @@
 
 use crate::image::srgb_to_linear;
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene, Texture};
-use crate::settings::LightingSettings;
+use crate::settings::SceneSettings;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use std::borrow::Cow;
 use std::fmt;
@@ -392,7 +392,7 @@ impl<'a> Loader<'a> {
                 textures: Vec::new(),
                 lights: Vec::new(),
                 camera: placeholder_camera,
-                settings: LightingSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
+                settings: SceneSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
             },
             warnings: Vec::new(),
             material_map,
@@ -474,11 +474,11 @@ impl<'a> Loader<'a> {
             return Err(ctx.fail(ErrorKind::Empty, scene_item, "has no triangles", "add meshes with triangles to the scene's nodes"));
         }
         let bounds = self.scene.bounds();
-        let defaults = LightingSettings::defaults_for(bounds);
+        let defaults = SceneSettings::defaults_for(bounds);
         self.scene.settings = match gltf_scene.extras() {
             Some(raw) => serde_json::from_str(raw.get())
                 .map_err(|e| e.to_string())
-                .and_then(|extras| LightingSettings::from_extras(&extras, defaults))
+                .and_then(|extras| SceneSettings::from_extras(&extras, defaults))
                 .map_err(|problem| {
                     ctx.fail(ErrorKind::Invalid, scene_item.clone(), problem, "fix the scene's extras.relume block (docs/FORMATS.md)")
                 })?,

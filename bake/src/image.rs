@@ -70,10 +70,14 @@ impl exr::prelude::GetPixel for LayerPixels<'_> {
 
 /// Writes named RGB float layers (all the same size) into one EXR file, losslessly.
 pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
+    let bytes = encode_exr_layers(layers).map_err(|e| io_error(path, e))?;
+    write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| e.to_string()))
+}
+
+/// The bytes of an EXR file holding named RGB float layers (all the same size), losslessly.
+pub fn encode_exr_layers(layers: &[(&str, &Image)]) -> Result<Vec<u8>, String> {
     use exr::prelude::*;
-    let Some((_, first)) = layers.first() else {
-        return Err(io_error(path, "no layers to write"));
-    };
+    let Some((_, first)) = layers.first() else { return Err("no layers to write".into()) };
     let size = (first.width as usize, first.height as usize);
     let exr_layers: Vec<_> = layers
         .iter()
@@ -83,14 +87,22 @@ pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), Im
         .collect();
     let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(size));
     let exr_image = exr::image::Image::from_layers(attributes, Layers::from_vec(exr_layers));
-    write_atomically(path, |tmp| exr_image.write().to_file(tmp).map_err(|e| e.to_string()))
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    exr_image.write().to_buffered(&mut bytes).map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
 }
 
 /// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb").
 pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, format!("cannot read ({e})")))?;
+    decode_exr_layers(&bytes).map_err(|e| io_error(path, e))
+}
+
+/// Every RGB layer of the EXR file `bytes`, by name (an unnamed layer is called "rgb").
+pub fn decode_exr_layers(bytes: &[u8]) -> Result<Vec<(String, Image)>, String> {
     use exr::prelude::*;
     type RgbImage = crate::image::Image;
-    check_exr_size(path)?;
+    check_exr_size(bytes)?;
     let file = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -102,8 +114,8 @@ pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> 
         )
         .all_layers()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("not a readable RGB EXR file ({e})"))?;
     Ok(file
         .layer_data
         .into_iter()
@@ -119,32 +131,41 @@ const MAX_PIXELS: usize = 16384 * 16384;
 
 /// Refuses a file whose header claims a size no relume image has, before anything is
 /// allocated for it (a corrupt header must not become a huge allocation or an overflow).
-fn check_exr_size(path: &Path) -> Result<(), ImageError> {
-    let meta =
-        exr::meta::MetaData::read_from_file(path, false).map_err(|e| io_error(path, format!("not a readable RGB EXR file ({e})")))?;
+fn check_exr_size(bytes: &[u8]) -> Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| format!("not a readable RGB EXR file ({e})"))?;
     for header in meta.headers.iter() {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         if w.checked_mul(h).is_none_or(|pixels| pixels > MAX_PIXELS) {
-            return Err(io_error(
-                path,
-                format!("a layer claims {w}x{h} pixels, more than relume reads (16384x16384); the file is corrupt or not one of relume's"),
+            return Err(format!(
+                "a layer claims {w}x{h} pixels, more than relume reads (16384x16384); the file is corrupt or not one of relume's"
             ));
         }
     }
     Ok(())
 }
 
-/// Reads one layer of an EXR file: the named one, or the first when `layer` is None.
-pub fn read_exr_layer(path: &Path, layer: Option<&str>) -> Result<Image, ImageError> {
-    let layers = read_exr_layers(path)?;
+/// One layer of the EXR file `bytes`: the named one, or the first when `layer` is None; the
+/// error names what the file has.
+pub fn decode_exr_layer(bytes: &[u8], layer: Option<&str>) -> Result<Image, String> {
+    pick_layer(decode_exr_layers(bytes)?, layer)
+        .map_err(|(wanted, available)| format!("layer \"{wanted}\" not found (the file has: {available}); name one of those"))
+}
+
+fn pick_layer(layers: Vec<(String, Image)>, layer: Option<&str>) -> Result<Image, (String, String)> {
     let available = layers.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ");
     let found = match layer {
         Some(wanted) => layers.into_iter().find(|(n, _)| n == wanted),
         None => layers.into_iter().next(),
     };
-    found.map(|(_, image)| image).ok_or_else(|| ImageError::MissingLayer {
+    found.map(|(_, image)| image).ok_or_else(|| (layer.unwrap_or("(first)").to_string(), available))
+}
+
+/// Reads one layer of an EXR file: the named one, or the first when `layer` is None.
+pub fn read_exr_layer(path: &Path, layer: Option<&str>) -> Result<Image, ImageError> {
+    pick_layer(read_exr_layers(path)?, layer).map_err(|(layer, available)| ImageError::MissingLayer {
         path: path.to_path_buf(),
-        layer: layer.unwrap_or("(first)").to_string(),
+        layer,
         available,
     })
 }

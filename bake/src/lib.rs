@@ -1,25 +1,28 @@
-//! relume's CPU side: the scene, images and error metrics (plain data the renderer reads too)
-//! and, behind the `baking` feature, the BVH and the reference path tracer.
+//! relume's CPU side: the scene, images and error metrics, the bake artifact and every
+//! method's scene settings and sections (plain data the renderer reads too) and, behind the
+//! `baking` feature, the BVH, the reference path tracer and the bakers.
+//!
+//! Each method is one folder (its settings, its section, its baker); the shared parts (scene,
+//! atlas, clustered PCA, sampling, path tracer) never know the methods.
 
 pub mod artifact;
-pub mod clustered_transfer;
+pub mod atlas;
+pub mod binary;
 pub mod gltf_load;
 pub mod image;
+pub mod methods;
 pub mod metrics;
 pub mod scene;
 pub mod settings;
 pub mod testing;
 
-#[cfg(feature = "baking")]
-pub mod atlas;
+pub mod light_path_maps;
+pub mod obscurance;
+
 #[cfg(feature = "baking")]
 pub mod bvh;
 #[cfg(feature = "baking")]
 pub mod cpca;
-#[cfg(feature = "baking")]
-pub mod light_path_maps;
-#[cfg(feature = "baking")]
-pub mod obscurance;
 #[cfg(feature = "baking")]
 pub mod reference;
 #[cfg(feature = "baking")]

@@ -33,11 +33,11 @@ use crate::bvh::{Hit, SceneBvh};
 use crate::image::Image;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
-use crate::work::{progress_bar, with_threads};
+use crate::work::{progress_bar, with_threads, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// The first path vertex (0 = where the camera ray lands) whose continuation Russian roulette
 /// may cut.
@@ -49,10 +49,6 @@ const MAX_PASS_SAMPLES: u32 = 16;
 #[derive(Clone, Debug)]
 pub struct ReferenceSettings {
     pub samples_per_pixel: u32,
-    /// Stop early, after the last whole pass over the image that fits in this time (at least
-    /// one sample per pixel is always taken).
-    pub max_time: Option<Duration>,
-    pub seed: u64,
     pub width: u32,
     pub height: u32,
     /// The most scattering events a path may have (Russian roulette usually ends it sooner).
@@ -63,25 +59,21 @@ pub struct ReferenceSettings {
     /// When false, punctual lights ignore visibility (a debug mode for comparing unshadowed
     /// shading against the rasteriser). Emissive triangles are always shadowed.
     pub shadows: bool,
-    /// Worker threads; None uses rayon's global pool (all cores).
-    pub threads: Option<usize>,
-    /// Draw a progress bar on stderr (indicatif hides it when stderr is not a terminal).
-    pub progress: bool,
+    /// Seed, threads, progress, and the time limit: stop after the last whole pass over the
+    /// image that fits in it (at least one sample per pixel is always taken).
+    pub work: WorkOptions,
 }
 
 impl Default for ReferenceSettings {
     fn default() -> Self {
         ReferenceSettings {
             samples_per_pixel: 64,
-            max_time: None,
-            seed: 0,
             width: 256,
             height: 256,
             max_bounces: 64,
             pixel_centres: false,
             shadows: true,
-            threads: None,
-            progress: false,
+            work: WorkOptions::default(),
         }
     }
 }
@@ -112,14 +104,14 @@ pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSetti
     let mut sums = vec![[0.0f64; 6]; pixel_count];
     let mut nonfinite = vec![0u64; height as usize];
 
-    let progress = progress_bar(settings.samples_per_pixel as u64 * height as u64, "reference", settings.progress);
+    let progress = progress_bar(settings.samples_per_pixel as u64 * height as u64, "reference", settings.work.progress);
 
     let start = Instant::now();
     let mut taken = 0u32;
     let mut pass = 1u32;
-    with_threads(settings.threads, || {
+    with_threads(settings.work.threads, || {
         while taken < settings.samples_per_pixel && pixel_count > 0 {
-            if let (Some(limit), true) = (settings.max_time, taken > 0) {
+            if let (Some(limit), true) = (settings.work.time_limit, taken > 0) {
                 let elapsed = start.elapsed();
                 let per_sample = elapsed.as_secs_f64() / taken as f64;
                 let fit = (limit.saturating_sub(elapsed).as_secs_f64() / per_sample).floor();
@@ -174,7 +166,7 @@ pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSetti
 pub fn radiance_by_bounce(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSettings, last_bounce: u32) -> Vec<Vec3> {
     let integrator = Integrator::new(scene, bvh, settings);
     let slots = last_bounce as usize + 1;
-    let rows: Vec<Vec<[f64; 3]>> = with_threads(settings.threads, || {
+    let rows: Vec<Vec<[f64; 3]>> = with_threads(settings.work.threads, || {
         (0..settings.height)
             .into_par_iter()
             .map(|y| {
@@ -335,7 +327,7 @@ impl<'a> Integrator<'a> {
             scene,
             bvh,
             emitters: Emitters::new(scene, bvh),
-            seed: settings.seed,
+            seed: settings.work.seed,
             width: settings.width,
             height: settings.height,
             max_bounces: settings.max_bounces,

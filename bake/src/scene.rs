@@ -6,7 +6,7 @@
 //! relume treats photometric units as radiometric ones one to one (1 cd is 1 W/sr of
 //! linear radiance units), so the path tracer and the renderer agree by construction.
 
-use crate::settings::LightingSettings;
+use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
@@ -20,7 +20,7 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub camera: Camera,
     /// The scene's relume settings (glTF `extras.relume`), defaults where it states none.
-    pub settings: LightingSettings,
+    pub settings: SceneSettings,
 }
 
 /// One glTF primitive with its node transform applied: positions and normals are in world space.

@@ -8,7 +8,7 @@
 //! needed.
 
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene};
-use crate::settings::LightingSettings;
+use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
@@ -33,9 +33,9 @@ pub fn scene(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, lights: Ve
         textures: Vec::new(),
         lights,
         camera,
-        settings: LightingSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
+        settings: SceneSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
     };
-    scene.settings = LightingSettings::defaults_for(scene.bounds());
+    scene.settings = SceneSettings::defaults_for(scene.bounds());
     scene
 }
 

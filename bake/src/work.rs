@@ -2,6 +2,28 @@
 //! memory it reached.
 
 use indicatif::{ProgressBar, ProgressStyle};
+use std::time::Duration;
+
+/// What every long CPU job (a bake, the path tracer) takes from the command line: its seed,
+/// its worker threads, a time limit, and whether to draw a progress bar. The same inputs and
+/// seed give the same bytes at any thread count.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WorkOptions {
+    pub seed: u64,
+    /// Worker threads; None uses rayon's global pool (all cores).
+    pub threads: Option<usize>,
+    /// Stop early, at a whole pass of the job, after this long (at least one pass is made).
+    pub time_limit: Option<Duration>,
+    /// Draw a progress bar on stderr (hidden when stderr is not a terminal).
+    pub progress: bool,
+}
+
+impl WorkOptions {
+    /// Refuses zero threads, and more than any machine relume runs on has cores to give.
+    pub fn validate(&self) -> Result<(), String> {
+        crate::settings::first_failed_check(&[(self.threads.is_none_or(|n| (1..=1024).contains(&n)), "threads must be 1..=1024")])
+    }
+}
 
 /// Runs `f` on a pool of `threads` workers, or on rayon's global pool (all cores) for None.
 pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {

@@ -1,9 +1,12 @@
-//! The bake artifact round-trips, and every way it can be wrong is refused with the file named.
+//! The bake artifact round-trips, every way it can be wrong is refused with the file named,
+//! and its sections are checked against what they are keyed to: the scene, one mesh of it
+//! (refused for another mesh), or nothing (read without any scene).
 #![cfg(feature = "baking")]
 
 use glam::Vec3;
-use relume_bake::artifact::{BakeOutput, Baked, PageLayout};
-use relume_bake::atlas::{Atlas, AtlasSettings};
+use relume_bake::artifact::{Artifact, BakeOutput, Key, Section};
+use relume_bake::atlas::{Atlas, AtlasSection, AtlasSettings};
+use relume_bake::obscurance;
 use relume_bake::scene::Scene;
 use relume_bake::testing::{closed_box, look_at, material, point_light, scene, Facing};
 use serde_json::json;
@@ -12,13 +15,15 @@ use std::path::{Path, PathBuf};
 fn test_scene(size: f32) -> Scene {
     let camera = look_at(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 1.0);
     let room = closed_box(Vec3::ZERO, Vec3::splat(size), 2, Facing::Inward, 0);
-    scene(
+    let mut room = scene(
         "artifact test",
         vec![room],
         vec![material("grey", Vec3::splat(0.5), Vec3::ZERO)],
         vec![point_light(Vec3::ONE, Vec3::ONE)],
         camera,
-    )
+    );
+    room.meshes[0].name = "room".into();
+    room
 }
 
 fn temp_dir(tag: &str) -> PathBuf {
@@ -27,19 +32,19 @@ fn temp_dir(tag: &str) -> PathBuf {
     dir
 }
 
+/// An obscurance bake of `scene` (values made up), written into `dir`.
 fn write(scene: &Scene, dir: &Path) -> Atlas {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density: 6.0, ..Default::default() }).unwrap();
-    let lightmap: Vec<Vec3> = atlas.texels.iter().map(|t| t.centre * 0.1 + Vec3::splat(t.coverage)).collect();
+    let values: Vec<Vec3> = atlas.texels.iter().map(|t| t.centre * 0.1 + Vec3::splat(t.coverage)).collect();
+    let sections = vec![
+        atlas.to_section().section(json!({ "charts": atlas.charts.len() })),
+        obscurance::section(&values, atlas.layout(), json!({ "tau": 0.1 })).unwrap(),
+    ];
     let output = BakeOutput {
         method: "obscurance",
-        scene,
+        scene: Some(scene),
         parameters: json!({ "tau": 0.1 }),
-        atlas_summary: json!({ "charts": atlas.charts.len() }),
-        layout: PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages },
-        meshes: &atlas.meshes,
-        texels: &atlas.texels,
-        lightmap: &lightmap,
-        transfer: None,
+        sections,
         stats: json!({ "seconds": 0.0 }),
     };
     output.write(dir).unwrap();
@@ -51,13 +56,15 @@ fn an_artifact_reads_back_as_written_and_applies_uv1() {
     let scene = test_scene(2.0);
     let dir = temp_dir("roundtrip");
     let atlas = write(&scene, &dir);
-    let baked = Baked::read(&dir, &scene).unwrap();
-    assert_eq!(baked.texels, atlas.texels);
-    assert_eq!(baked.meshes, atlas.meshes);
-    assert_eq!(baked.layout.texel_count(), atlas.texels.len());
-    assert_eq!(baked.method(), "obscurance");
+    let artifact = Artifact::read(&dir).unwrap();
+    let read = AtlasSection::read(&artifact, &scene).unwrap();
+    assert_eq!(read, atlas.to_section());
+    assert_eq!(read.layout.texel_count(), atlas.texels.len());
+    assert_eq!(artifact.method(), "obscurance");
+    let values = obscurance::read(&artifact, &scene, read.layout).unwrap();
+    assert_eq!(values.len(), atlas.texels.len());
     let mut applied = scene.clone();
-    baked.apply_to(&mut applied);
+    read.apply_to(&mut applied);
     assert_eq!(applied.meshes[0].uv1.as_ref(), Some(&atlas.meshes[0].uv1));
     assert_eq!(applied.triangle_count(), scene.triangle_count());
     let manifest = std::fs::read(dir.join("manifest.json")).unwrap();
@@ -67,7 +74,10 @@ fn an_artifact_reads_back_as_written_and_applies_uv1() {
 }
 
 fn refusal(dir: &Path, scene: &Scene) -> String {
-    Baked::read(dir, scene).unwrap_err().to_string()
+    match Artifact::read(dir).and_then(|artifact| AtlasSection::read(&artifact, scene)) {
+        Ok(_) => panic!("{} was accepted", dir.display()),
+        Err(e) => e.to_string(),
+    }
 }
 
 #[test]
@@ -92,13 +102,83 @@ fn corrupt_old_foreign_and_mismatched_artifacts_are_refused() {
 
     let manifest_path = dir.join("manifest.json");
     let manifest = std::fs::read_to_string(&manifest_path).unwrap();
-    std::fs::write(&manifest_path, manifest.replace("\"version\": 1", "\"version\": 0")).unwrap();
+    std::fs::write(&manifest_path, manifest.replace("\"version\": 2", "\"version\": 0")).unwrap();
     let error = refusal(&dir, &scene);
     assert!(error.contains("version 0") && error.contains("relume bake"), "{error}");
+    let mut newer: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    newer["sections"][0]["version"] = json!(7);
+    std::fs::write(&manifest_path, newer.to_string()).unwrap();
+    let error = refusal(&dir, &scene);
+    assert!(error.contains("section atlas is version 7") && error.contains("relume bake"), "{error}");
     std::fs::write(&manifest_path, "{ not json").unwrap();
     assert!(refusal(&dir, &scene).contains("not valid JSON"));
     std::fs::remove_file(&manifest_path).unwrap();
     assert!(refusal(&dir, &scene).contains("manifest.json"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The manifest an artifact of format version 1 (before sections) began with, as relume wrote it.
+const VERSION_1_MANIFEST: &str = r#"{
+  "format": "relume-bake",
+  "version": 1,
+  "relume": "0.1.0",
+  "method": "obscurance",
+  "scene": { "file": "cornell.gltf", "checksum": "fnv1a64:0123456789abcdef" },
+  "lightmap": "obscurance.exr",
+  "files": { "atlas.bin": { "bytes": 8, "checksum": "fnv1a64:0123456789abcdef" } }
+}"#;
+
+#[test]
+fn an_artifact_of_the_old_format_is_refused_with_the_rebake_hint() {
+    let dir = temp_dir("old");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("manifest.json"), VERSION_1_MANIFEST).unwrap();
+    let error = Artifact::read(&dir).unwrap_err().to_string();
+    assert!(error.contains("manifest.json") && error.contains("version 1") && error.contains("reads version 2"), "{error}");
+    assert!(error.contains("bake it again with `relume bake`"), "{error}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An artifact of two made-up sections: a dictionary keyed to nothing, a table keyed to the
+/// mesh "room".
+fn keyed_artifact(scene: &Scene, dir: &Path) {
+    let section = |name: &str, key| Section {
+        name: name.into(),
+        version: 3,
+        key,
+        summary: json!({}),
+        files: vec![(format!("{name}.bin"), name.as_bytes().to_vec())],
+    };
+    let sections = vec![section("dictionary", Key::Nothing), section("occluder-table", Key::Mesh("room".into()))];
+    let output = BakeOutput { method: "keyed", scene: Some(scene), parameters: json!({}), sections, stats: json!({}) };
+    output.write(dir).unwrap();
+}
+
+#[test]
+fn a_scene_independent_section_is_read_without_a_scene_and_a_mesh_keyed_one_only_for_its_mesh() {
+    let scene = test_scene(2.0);
+    let dir = temp_dir("keys");
+    keyed_artifact(&scene, &dir);
+    let artifact = Artifact::read(&dir).unwrap();
+    let dictionary = artifact.section("dictionary", 3, None).expect("no scene needed");
+    assert_eq!(dictionary.file("dictionary.bin").unwrap().0, b"dictionary");
+    assert!(artifact.section("dictionary", 3, Some(&test_scene(9.0))).is_ok(), "any scene will do");
+
+    // The same mesh in another scene (more meshes, no lights) is the same mesh.
+    let mut bigger = test_scene(2.0);
+    bigger.meshes.push(closed_box(Vec3::splat(3.0), Vec3::splat(4.0), 1, Facing::Outward, 0));
+    bigger.lights.clear();
+    assert!(artifact.section("occluder-table", 3, Some(&bigger)).is_ok(), "the mesh is unchanged");
+    let error = artifact.section("occluder-table", 3, Some(&test_scene(2.5))).err().expect("another room").to_string();
+    assert!(error.contains("mesh \"room\"") && error.contains("checksum"), "{error}");
+    let mut renamed = test_scene(2.0);
+    renamed.meshes[0].name = "hall".into();
+    let error = artifact.section("occluder-table", 3, Some(&renamed)).err().expect("no room").to_string();
+    assert!(error.contains("mesh \"room\"") && error.contains("lacks"), "{error}");
+    let error = artifact.section("occluder-table", 3, None).err().expect("no scene").to_string();
+    assert!(error.contains("keyed to a scene"), "{error}");
+    let error = artifact.section("lightmap", 3, None).err().expect("no such section").to_string();
+    assert!(error.contains("no section lightmap") && error.contains("dictionary, occluder-table"), "{error}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -111,14 +191,9 @@ fn a_folder_that_is_not_an_artifact_is_never_replaced() {
     let atlas = Atlas::build(&scene, &AtlasSettings::default()).unwrap();
     let output = BakeOutput {
         method: "obscurance",
-        scene: &scene,
+        scene: Some(&scene),
         parameters: json!({}),
-        atlas_summary: json!({}),
-        layout: PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages },
-        meshes: &atlas.meshes,
-        texels: &atlas.texels,
-        lightmap: &vec![Vec3::ONE; atlas.texels.len()],
-        transfer: None,
+        sections: vec![atlas.to_section().section(json!({}))],
         stats: json!({}),
     };
     let error = output.write(&dir).unwrap_err().to_string();

@@ -3,14 +3,14 @@
 //! round trip and refusals.
 
 use glam::Vec3;
-use relume_bake::artifact::{BakeOutput, Baked, PageLayout};
+use relume_bake::artifact::{Artifact, BakeOutput};
 use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
-use relume_bake::clustered_transfer::ClusteredTransfer;
 use relume_bake::cpca;
 use relume_bake::gltf_load;
 use relume_bake::light_path_maps::*;
 use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -25,10 +25,7 @@ fn settings(threads: usize) -> LightPathMapSettings {
         walks: 2,
         threshold: 0.05,
         max_depth: 64,
-        seed: 3,
-        threads: Some(threads),
-        time_limit: None,
-        progress: false,
+        work: WorkOptions { seed: 3, threads: Some(threads), ..WorkOptions::default() },
     }
 }
 
@@ -41,7 +38,8 @@ struct Baked256 {
 fn bake(scene: &Scene, threads: usize) -> Baked256 {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density: 24.0, ..Default::default() }).unwrap();
     let bvh = SceneBvh::new(scene);
-    let tests = test_points(scene, scene.settings.light_region.as_ref(), 3).unwrap();
+    let region = LightPathMapsSceneSettings::of(scene).unwrap().region;
+    let tests = test_points(scene, region.as_ref(), 3).unwrap();
     let entries = entry_points(scene, &bvh, tests, 256, 3).unwrap();
     let transfers = bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings(threads)).unwrap();
     Baked256 { atlas, entries, transfers }
@@ -139,27 +137,23 @@ fn artifact_round_trip_keeps_the_transfer_and_refuses_a_corrupt_one() {
     let compressed = compress(&b.transfers, &b.entries.entries, n, 0.01, Compression::Fixed { clusters: 4, basis: 2 }).unwrap();
     let dir = std::env::temp_dir().join(format!("relume-lpm-artifact-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
+    let layout = b.atlas.layout();
     let output = BakeOutput {
         method: "light-path-maps",
-        scene: &scene,
+        scene: Some(&scene),
         parameters: json!({}),
-        atlas_summary: json!({}),
-        layout: PageLayout { width: b.atlas.width, height: b.atlas.height, pages: b.atlas.pages },
-        meshes: &b.atlas.meshes,
-        texels: &b.atlas.texels,
-        lightmap: &vec![Vec3::ONE; n],
-        transfer: Some(&compressed.transfer),
+        sections: vec![b.atlas.to_section().section(json!({})), section(&compressed.transfer, layout, json!({})).unwrap()],
         stats: json!({}),
     };
     output.write(&dir).unwrap();
-    let read = Baked::read(&dir, &scene).unwrap();
-    assert_eq!(read.transfer.as_ref(), Some(&compressed.transfer));
-    let bin = dir.join("transfer.bin");
+    let read = read(&Artifact::read(&dir).unwrap(), &scene, layout).unwrap();
+    assert_eq!(read, compressed.transfer);
+    let bin = dir.join("light-path-maps.bin");
     let mut bytes = std::fs::read(&bin).unwrap();
     bytes[20] ^= 1;
     std::fs::write(&bin, bytes).unwrap();
-    let error = Baked::read(&dir, &scene).unwrap_err().to_string();
-    assert!(error.contains("transfer.bin") && error.contains("checksum"), "{error}");
+    let error = Artifact::read(&dir).unwrap_err().to_string();
+    assert!(error.contains("light-path-maps.bin") && error.contains("checksum"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -9,11 +9,12 @@ use relume_bake::bvh::SceneBvh;
 use relume_bake::obscurance::{bake_obscurance, point_obscurance, ObscuranceMap, ObscuranceSettings, Variant};
 use relume_bake::scene::Scene;
 use relume_bake::testing::{closed_box, look_at, material, point_light, scene, sphere, square, Facing};
+use relume_bake::work::WorkOptions;
 use std::f32::consts::PI;
 use std::time::Duration;
 
 fn settings(variant: Variant, tau: f32, l_max: f32, rays: u32) -> ObscuranceSettings {
-    ObscuranceSettings { variant, tau, l_max, rays_per_texel: rays, seed: 7, threads: None, time_limit: None, progress: false }
+    ObscuranceSettings { variant, tau, l_max, rays_per_texel: rays, work: WorkOptions { seed: 7, ..WorkOptions::default() } }
 }
 
 fn build(name: &str, meshes: Vec<relume_bake::scene::Mesh>, albedos: &[Vec3]) -> Scene {
@@ -33,6 +34,12 @@ fn mesh_values(scene: &Scene, atlas: &Atlas, map: &ObscuranceMap, mesh: usize) -
     let offsets = relume_bake::atlas::mesh_offsets(scene);
     let range = offsets[mesh]..offsets[mesh] + (scene.meshes[mesh].indices.len() / 3) as u32;
     atlas.texels.iter().zip(&map.values).filter(|(t, _)| t.coverage > 0.0 && range.contains(&t.triangle)).map(|(_, v)| *v).collect()
+}
+
+/// `settings` with its work options changed by `change`.
+fn with_work(mut settings: ObscuranceSettings, change: impl FnOnce(&mut WorkOptions)) -> ObscuranceSettings {
+    change(&mut settings.work);
+    settings
 }
 
 #[test]
@@ -116,11 +123,10 @@ fn spectral_obscurance_bleeds_colour_and_takes_zero_over_zero_as_zero() {
 #[test]
 fn the_bake_is_deterministic_across_thread_counts_and_honours_its_time_limit() {
     let scene = room(&[Vec3::splat(0.6), Vec3::splat(0.3)]);
-    let one = bake(&scene, 8.0, &ObscuranceSettings { threads: Some(1), ..settings(Variant::Obscurance, 0.3, 1.0, 64) }).1;
-    let two = bake(&scene, 8.0, &ObscuranceSettings { threads: Some(2), ..settings(Variant::Obscurance, 0.3, 1.0, 64) }).1;
+    let one = bake(&scene, 8.0, &with_work(settings(Variant::Obscurance, 0.3, 1.0, 64), |w| w.threads = Some(1))).1;
+    let two = bake(&scene, 8.0, &with_work(settings(Variant::Obscurance, 0.3, 1.0, 64), |w| w.threads = Some(2))).1;
     assert_eq!(one.values, two.values);
-    let limited =
-        bake(&scene, 8.0, &ObscuranceSettings { time_limit: Some(Duration::ZERO), ..settings(Variant::Obscurance, 0.3, 1.0, 1024) }).1;
+    let limited = bake(&scene, 8.0, &with_work(settings(Variant::Obscurance, 0.3, 1.0, 1024), |w| w.time_limit = Some(Duration::ZERO))).1;
     assert_eq!(limited.rays_per_texel, 32, "one whole pass, then the limit");
 }
 

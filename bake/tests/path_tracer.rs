@@ -9,6 +9,7 @@ use relume_bake::reference::{direct_irradiance, radiance_by_bounce, render_refer
 use relume_bake::sampling::PathSampler;
 use relume_bake::scene::{Camera, Mesh, Scene};
 use relume_bake::testing::{closed_box, look_at, material, point_light, scene, sphere, spot_light, square, Facing};
+use relume_bake::work::WorkOptions;
 use std::f32::consts::{FRAC_PI_2, PI};
 use std::time::Duration;
 
@@ -57,7 +58,13 @@ fn furnace(albedo: f32, emission: Vec3, size: u32, samples: u32, pixel_tolerance
         vec![],
         look_at(Vec3::new(0.5, 0.0, 0.2), Vec3::new(1.0, 0.3, -1.0), Vec3::Y, FRAC_PI_2),
     );
-    let settings = ReferenceSettings { samples_per_pixel: samples, width: size, height: size, seed: 1, ..Default::default() };
+    let settings = ReferenceSettings {
+        samples_per_pixel: samples,
+        width: size,
+        height: size,
+        work: WorkOptions { seed: 1, ..WorkOptions::default() },
+        ..Default::default()
+    };
     let images = render(&s, &settings);
     let expected = emission / (1.0 - albedo);
     let m = mean(&images.combined);
@@ -275,8 +282,14 @@ fn area_light_over_plane(half: f32, height: f32, samples: u32, pixel_tolerance: 
         camera,
     );
     let (w, h) = (12, 12);
-    let settings =
-        ReferenceSettings { samples_per_pixel: samples, width: w, height: h, pixel_centres: true, seed: 7, ..Default::default() };
+    let settings = ReferenceSettings {
+        samples_per_pixel: samples,
+        width: w,
+        height: h,
+        pixel_centres: true,
+        work: WorkOptions { seed: 7, ..WorkOptions::default() },
+        ..Default::default()
+    };
     let images = render(&s, &settings);
     let (mut sum_got, mut sum_expected) = (Vec3::ZERO, Vec3::ZERO);
     let mut worst = 0.0f32;
@@ -373,14 +386,20 @@ fn bits(image: &Image) -> Vec<u32> {
 #[test]
 fn deterministic_across_thread_counts() {
     let s = busy_scene();
-    let settings = ReferenceSettings { samples_per_pixel: 8, width: 24, height: 16, seed: 42, threads: Some(1), ..Default::default() };
+    let settings = ReferenceSettings {
+        samples_per_pixel: 8,
+        width: 24,
+        height: 16,
+        work: WorkOptions { seed: 42, threads: Some(1), ..WorkOptions::default() },
+        ..Default::default()
+    };
     let one = render(&s, &settings);
-    let two = render(&s, &ReferenceSettings { threads: Some(2), ..settings.clone() });
+    let two = render(&s, &ReferenceSettings { work: WorkOptions { threads: Some(2), ..settings.work }, ..settings.clone() });
     assert_eq!(bits(&one.direct), bits(&two.direct));
     assert_eq!(bits(&one.indirect), bits(&two.indirect));
     assert_eq!(bits(&one.combined), bits(&two.combined));
     assert!(mean(&one.indirect).x > 0.0 && mean(&one.direct).x > 0.0);
-    let other = render(&s, &ReferenceSettings { seed: 43, ..settings.clone() });
+    let other = render(&s, &ReferenceSettings { work: WorkOptions { seed: 43, ..settings.work }, ..settings.clone() });
     assert_ne!(bits(&one.combined), bits(&other.combined));
 }
 
@@ -389,7 +408,7 @@ fn time_limit_stops_at_whole_passes() {
     let s = busy_scene();
     let settings = ReferenceSettings {
         samples_per_pixel: 1_000_000,
-        max_time: Some(Duration::from_millis(200)),
+        work: WorkOptions { time_limit: Some(Duration::from_millis(200)), ..WorkOptions::default() },
         width: 16,
         height: 12,
         ..Default::default()
@@ -398,7 +417,8 @@ fn time_limit_stops_at_whole_passes() {
     let taken = limited.samples_per_pixel;
     assert!(taken >= 1 && taken < settings.samples_per_pixel, "took {taken}");
     // The same image as asking for exactly that many samples.
-    let exact = render(&s, &ReferenceSettings { samples_per_pixel: taken, max_time: None, ..settings });
+    let exact =
+        render(&s, &ReferenceSettings { samples_per_pixel: taken, work: WorkOptions { time_limit: None, ..settings.work }, ..settings });
     assert_eq!(bits(&limited.combined), bits(&exact.combined));
 }
 

@@ -6,7 +6,7 @@
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
-use relume_bake::clustered_transfer::{ClusteredTransfer, EntryPoint};
+use relume_bake::light_path_maps::{ClusteredTransfer, EntryPoint};
 use relume_bake::sampling::{hash_u32, u32_to_unit};
 use relume_bake::scene::Scene;
 

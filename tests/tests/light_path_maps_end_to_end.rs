@@ -11,14 +11,16 @@
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
-use relume_bake::clustered_transfer::ClusteredTransfer;
 use relume_bake::image::Image;
+use relume_bake::light_path_maps::ClusteredTransfer;
 use relume_bake::light_path_maps::{bake_transfers, compress, entry_points, test_points, Compression, LightPathMapSettings};
+use relume_bake::light_path_maps::{LightPathMapsSceneSettings, LightRegion};
 use relume_bake::metrics;
+use relume_bake::obscurance::ObscuranceSceneSettings;
 use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::{Light, Scene};
-use relume_bake::settings::LightRegion;
+use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::vk::Context;
@@ -44,13 +46,10 @@ struct Bake {
 fn obscurance_lightmap(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, variant: Variant) -> Vec<Vec4> {
     let settings = ObscuranceSettings {
         variant,
-        tau: scene.settings.tau,
-        l_max: scene.settings.l_max,
+        tau: ObscuranceSceneSettings::of(scene).unwrap().tau,
+        l_max: ObscuranceSceneSettings::of(scene).unwrap().l_max,
         rays_per_texel: 256,
-        seed: 0,
-        threads: None,
-        time_limit: None,
-        progress: false,
+        work: WorkOptions { ..WorkOptions::default() },
     };
     let map = bake_obscurance(scene, bvh, atlas, &settings).unwrap();
     map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect()
@@ -61,15 +60,15 @@ fn obscurance_lightmap(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, variant: Va
 fn bake(scene: &Scene) -> Bake {
     let atlas = Atlas::build_for_patch_count(scene, &AtlasSettings { max_size: 128, ..AtlasSettings::default() }, 7000).unwrap();
     let bvh = SceneBvh::new(scene);
-    let tests = test_points(scene, scene.settings.light_region.as_ref(), 0).unwrap();
+    let tests = test_points(scene, LightPathMapsSceneSettings::of(scene).unwrap().region.as_ref(), 0).unwrap();
     let entries = entry_points(scene, &bvh, tests, 4096, 0).unwrap();
-    let settings = LightPathMapSettings::new(4096, scene.settings.l_max);
+    let settings = LightPathMapSettings::new(4096, ObscuranceSceneSettings::of(scene).unwrap().l_max);
     let transfers = bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings).unwrap();
     let compressed = compress(
         &transfers,
         &entries.entries,
         atlas.texels.len(),
-        scene.settings.light_area,
+        LightPathMapsSceneSettings::of(scene).unwrap().light_area,
         Compression::Fixed { clusters: 32, basis: 2 },
     )
     .unwrap();
@@ -203,10 +202,10 @@ fn print_table(title: &str, rows: &[Row]) {
 #[test]
 fn light_path_maps_beat_obscurance_ambient_along_a_light_path_on_cornell() {
     let scene = load_scene("cornell");
-    let Some(LightRegion::Box { min, max, .. }) = scene.settings.light_region.clone() else {
+    let Some(LightRegion::Box { min, max, .. }) = LightPathMapsSceneSettings::of(&scene).unwrap().region else {
         panic!("cornell declares a light region box")
     };
-    let region = scene.settings.light_region.clone().unwrap();
+    let region = LightPathMapsSceneSettings::of(&scene).unwrap().region.unwrap();
     let bake = bake(&scene);
     let bvh = SceneBvh::new(&scene);
     let default_mode = Composition::ALL.iter().position(|c| *c == Composition::default()).unwrap();

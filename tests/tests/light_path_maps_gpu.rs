@@ -10,9 +10,9 @@
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::clustered_transfer::{entry_irradiance_unshadowed, ClusteredTransfer};
 use relume_bake::image::Image;
 use relume_bake::light_path_maps::entry_irradiance;
+use relume_bake::light_path_maps::{entry_irradiance_unshadowed, ClusteredTransfer};
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMaps, LightPathMapsData};

@@ -11,7 +11,9 @@ use glam::Vec3;
 use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
-use relume_bake::light_path_maps::{bake_transfers, entry_irradiance, entry_points, test_points, LightPathMapSettings};
+use relume_bake::light_path_maps::{
+    bake_transfers, entry_irradiance, entry_points, test_points, LightPathMapSettings, LightPathMapsSceneSettings, LightRegion,
+};
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use relume_renderer::techniques::obscurance::ObscuranceData;
@@ -25,10 +27,8 @@ const TEST_POINTS: u32 = 256;
 fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density: 48.0, ..Default::default() }).unwrap();
     let bvh = SceneBvh::new(scene);
-    let region = match scene.settings.light_region.clone() {
-        Some(relume_bake::settings::LightRegion::Box { min, max, .. }) => {
-            relume_bake::settings::LightRegion::Box { min, max, test_points: TEST_POINTS }
-        }
+    let region = match LightPathMapsSceneSettings::of(scene).unwrap().region {
+        Some(LightRegion::Box { min, max, .. }) => LightRegion::Box { min, max, test_points: TEST_POINTS },
         other => other.unwrap(),
     };
     let tests = test_points(scene, Some(&region), 0).unwrap();
@@ -63,7 +63,7 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
 #[test]
 fn uncompressed_transfer_reproduces_the_reference_indirect_light_on_cornell() {
     let scene = load_scene("cornell");
-    let region = scene.settings.light_region.as_ref().expect("cornell declares a light region");
+    let region = LightPathMapsSceneSettings::of(&scene).unwrap().region.expect("cornell declares a light region");
     assert!(scene.lights.iter().all(|l| region.contains(l.position, 0.0)), "the test light must be inside the region");
     let reference = render_reference(
         &scene,

@@ -52,6 +52,7 @@ use relume_bake::image::Image;
 use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
 use relume_bake::scene::{Mesh, Scene};
 use relume_bake::testing::{self, Facing};
+use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::vk::Context;
 use relume_renderer::{AtlasImage, RenderSettings};
@@ -104,10 +105,7 @@ fn bake(scene: &Scene) -> Baked {
         tau: 0.2,
         l_max: 0.6,
         rays_per_texel: 1024,
-        seed: 17,
-        threads: None,
-        time_limit: None,
-        progress: false,
+        work: WorkOptions { seed: 17, ..WorkOptions::default() },
     };
     let map = bake_obscurance(scene, &SceneBvh::new(scene), &atlas, &settings).expect("bake");
     let texels = map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect();

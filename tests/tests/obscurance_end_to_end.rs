@@ -9,9 +9,10 @@ use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
 use relume_bake::metrics;
-use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
+use relume_bake::obscurance::{bake_obscurance, ObscuranceSceneSettings, ObscuranceSettings, Variant};
 use relume_bake::reference::{render_reference, ReferenceImages, ReferenceSettings};
 use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{MakeTechnique, RenderSettings};
 use relume_tests::*;
@@ -29,13 +30,10 @@ fn renders(scene: &Scene) -> [Image; 3] {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density: scene.settings.texel_density, ..Default::default() }).unwrap();
     let obscurance = ObscuranceSettings {
         variant: Variant::Obscurance,
-        tau: scene.settings.tau,
-        l_max: scene.settings.l_max,
+        tau: ObscuranceSceneSettings::of(scene).unwrap().tau,
+        l_max: ObscuranceSceneSettings::of(scene).unwrap().l_max,
         rays_per_texel: 128,
-        seed: 0,
-        threads: None,
-        time_limit: None,
-        progress: false,
+        work: WorkOptions { ..WorkOptions::default() },
     };
     let map = bake_obscurance(scene, &SceneBvh::new(scene), &atlas, &obscurance).unwrap();
     let mut lit = scene.clone();

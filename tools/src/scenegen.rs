@@ -799,8 +799,9 @@ mod tests {
     use super::*;
     use glam::{Vec3, Vec4Swizzles};
     use relume_bake::gltf_load;
+    use relume_bake::light_path_maps::{LightPathMapsSceneSettings, LightRegion};
+    use relume_bake::obscurance::ObscuranceSceneSettings;
     use relume_bake::scene::{LightKind, Scene};
-    use relume_bake::settings::LightRegion;
 
     fn temp_dir(tag: &str) -> PathBuf {
         let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos()).unwrap_or(0);
@@ -920,20 +921,27 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    fn settings(s: Settings) -> relume_bake::settings::LightingSettings {
-        relume_bake::settings::LightingSettings {
-            ambient: Vec3::from_array(s.ambient.map(|x| x as f32)),
-            beta: s.beta as f32,
-            texel_density: s.texel_density as f32,
-            tau: s.tau as f32,
-            l_max: s.l_max as f32,
-            light_region: s.light_region.map(|(min, max, test_points)| LightRegion::Box {
-                min: Vec3::from_array(min.map(|x| x as f32)),
-                max: Vec3::from_array(max.map(|x| x as f32)),
-                test_points,
-            }),
-            light_area: s.light_area as f32,
-        }
+    /// Everything a scene's settings say: the shared keys and each method's block.
+    type Stated = (Vec3, f32, f32, ObscuranceSceneSettings, LightPathMapsSceneSettings);
+
+    fn stated(scene: &Scene) -> Stated {
+        let s = &scene.settings;
+        (s.ambient, s.beta, s.texel_density, ObscuranceSceneSettings::of(scene).unwrap(), LightPathMapsSceneSettings::of(scene).unwrap())
+    }
+
+    fn settings(s: Settings) -> Stated {
+        let region = s.light_region.map(|(min, max, test_points)| LightRegion::Box {
+            min: Vec3::from_array(min.map(|x| x as f32)),
+            max: Vec3::from_array(max.map(|x| x as f32)),
+            test_points,
+        });
+        (
+            Vec3::from_array(s.ambient.map(|x| x as f32)),
+            s.beta as f32,
+            s.texel_density as f32,
+            ObscuranceSceneSettings { tau: s.tau as f32, l_max: s.l_max as f32 },
+            LightPathMapsSceneSettings { region, light_area: s.light_area as f32 },
+        )
     }
 
     #[test]
@@ -948,11 +956,11 @@ mod tests {
             ("classroom", CLASSROOM_SETTINGS),
             ("cornell-wall-light", CORNELL_WALL_LIGHT_SETTINGS),
         ] {
-            assert_eq!(load(&dir, name).settings, settings(expected), "{name}");
+            assert_eq!(stated(&load(&dir, name)), settings(expected), "{name}");
         }
         // The values the brief set, spelled out once rather than only through the constants.
-        let table_chair = load(&dir, "table-chair").settings;
-        assert_eq!((table_chair.texel_density, table_chair.tau, table_chair.l_max), (24.0, 0.2, 0.6));
+        let table_chair = stated(&load(&dir, "table-chair"));
+        assert_eq!((table_chair.2, table_chair.3.tau, table_chair.3.l_max), (24.0, 0.2, 0.6));
         let cornell = load(&dir, "cornell").settings;
         assert_eq!((cornell.ambient, cornell.beta, cornell.texel_density), (Vec3::ONE, 0.0, 128.0));
         let _ = std::fs::remove_dir_all(&dir);

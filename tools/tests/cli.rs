@@ -216,7 +216,7 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
     }
     // A value the flag's parser refuses is a usage error (exit code 2, clap's); the rest are 1.
     for (args, expected, code) in [
-        (vec!["render", cornell, "--composition", "plain", "--out", "none.exr"], "light path maps", 1),
+        (vec!["render", cornell, "--composition", "plain", "--out", "none.exr"], "light-path-maps", 1),
         (vec!["render", cornell, "--bake", "lpm", "--composition", "sideways", "--out", "none.exr"], "times-obscurance", 2),
     ] {
         let result = relume(&[&args[..], &small].concat(), &dir);

@@ -4,7 +4,7 @@
 //! writes results.csv, results.json, the charts and report.md into one folder.
 
 mod charts;
-mod methods;
+mod config;
 mod pareto;
 mod perceptual;
 mod reference_cache;
@@ -12,17 +12,21 @@ mod report;
 mod results;
 mod sweep;
 
-use crate::{load_scene, median_timings, Lit, SceneArgs};
+use crate::args::{load_scene, SceneArgs};
+use crate::gpu::{self, median_timings, warm_up};
+use crate::methods;
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
+use config::Config;
 use glam::Vec3;
-use methods::{Method, RenderParams};
 use reference_cache::{Reference, ReferenceCache};
+use relume_bake::artifact::Artifact;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::{self, Image};
 use relume_bake::metrics;
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::{Light, Scene};
+use relume_bake::work::WorkOptions;
 use relume_renderer::vk::{Context, ContextOptions};
 use relume_renderer::{Headless, RenderSettings, Renderer};
 use results::{Accuracy, BakeCost, FrameCost, Row};
@@ -58,15 +62,6 @@ pub(crate) struct BenchArgs {
     /// Worker threads of the reference path tracer and the bakes (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-}
-
-/// One method with one parameter set, as the sweep gives it.
-pub(crate) struct Config {
-    method: &'static dyn Method,
-    table: toml::Table,
-    label: String,
-    render: RenderParams,
-    bake_flags: Vec<String>,
 }
 
 /// What a sweep run leaves for the outputs.
@@ -118,21 +113,14 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
 }
 
 /// Every method configuration of the sweep, checked before any work starts: the method
-/// exists and its bake takes the flags.
+/// exists and takes every key.
 fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
     let mut configs = Vec::new();
     for entry in &sweep.methods {
         let method = methods::find(&entry.method)?;
         let tables = if entry.params.is_empty() { vec![toml::Table::new()] } else { entry.params.clone() };
         for table in tables {
-            let label = methods::label(&table);
-            let (render, bake_flags) =
-                methods::split_params(method, &table).with_context(|| format!("method {} [{label}]", method.name()))?;
-            if let Some(bake) = method.bake_method() {
-                crate::bake::BakeArgs::from_flags(Path::new("scene.gltf"), bake, &bake_flags)
-                    .with_context(|| format!("method {} [{label}]", method.name()))?;
-            }
-            configs.push(Config { method, table, label, render, bake_flags });
+            configs.push(config::config(method, table)?);
         }
     }
     Ok(configs)
@@ -203,7 +191,6 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
 /// One scene of the sweep: its light configurations, their references and direct-only frames.
 struct SceneBench<'s> {
     sweep: &'s Sweep,
-    entry: &'s SweepScene,
     ctx: &'s Arc<Context>,
     out: &'s Path,
     threads: Option<usize>,
@@ -233,8 +220,7 @@ impl<'s> SceneBench<'s> {
             width: sweep.width,
             height: sweep.height,
             pixel_centres: true,
-            threads: args.threads,
-            progress: true,
+            work: WorkOptions { threads: args.threads, progress: true, ..WorkOptions::default() },
             ..ReferenceSettings::default()
         };
         let mut references = Vec::new();
@@ -253,18 +239,7 @@ impl<'s> SceneBench<'s> {
             )?;
             references.push(reference);
         }
-        Ok(SceneBench {
-            sweep,
-            entry,
-            ctx,
-            out: &args.out,
-            threads: args.threads,
-            name,
-            scene,
-            configurations,
-            references,
-            bakes: Vec::new(),
-        })
+        Ok(SceneBench { sweep, ctx, out: &args.out, threads: args.threads, name, scene, configurations, references, bakes: Vec::new() })
     }
 
     /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
@@ -272,27 +247,21 @@ impl<'s> SceneBench<'s> {
         let method = config.method;
         println!("{}: {} [{}]", self.name, method.name(), config.label);
         let id = self.config_id(config);
-        let (bake, lit) = match method.bake_method() {
-            Some(bake_method) => {
-                let dir = self.bake(bake_method, &config.bake_flags, &id)?;
-                (self.bakes.iter().find(|b| b.1 == dir).map(|b| b.2.clone()).unwrap_or_default(), Some(Lit::read(&dir, &self.scene)?))
+        let (bake, artifact) = match method.bakes() {
+            true => {
+                let (dir, cost) = self.bake(config, &id)?;
+                (cost, Some(Artifact::read(&dir)?))
             }
-            None => (BakeCost::default(), None),
+            false => (BakeCost::default(), None),
         };
-        let base = RenderSettings {
-            width: self.sweep.width,
-            height: self.sweep.height,
-            ambient: self.scene.settings.ambient,
-            beta: self.scene.settings.beta,
-            ..RenderSettings::default()
-        };
-        let settings = config.render.apply_shadows(method.settings(&base, &config.render));
+        let loaded = method.load(artifact.as_ref(), &self.scene, &config.values)?;
+        let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ..RenderSettings::default() };
+        let settings = config.frame.settings(method, &self.scene, base);
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
-        let mut renderer = method.renderer(self.ctx, &self.scene, lit.as_ref(), &settings, &config.render)?;
+        let mut renderer = gpu::renderer(self.ctx, loaded.as_ref(), &settings)?;
         // Direct light alone with the same shadow maps: what the indirect part is measured against.
         let direct_settings = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
-        let mut direct_renderer =
-            Renderer::new_blocking(self.ctx, &self.scene, &direct_settings, &[]).and_then(Headless::new).context("Vulkan renderer")?;
+        let mut direct_renderer = gpu::renderer(self.ctx, &methods::Plain(self.scene.clone()), &direct_settings)?;
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
@@ -364,19 +333,19 @@ impl<'s> SceneBench<'s> {
         (0..self.configurations.len()).map(|k| Row { status: format!("failed: {why}"), ..self.row(config, k) }).collect()
     }
 
-    /// The folder of the bake `relume bake --method bake_method flags` of this scene: made
-    /// now into bakes/`id`, or the one made earlier in this run with the same method and flags.
-    fn bake(&mut self, bake_method: &str, flags: &[String], id: &str) -> Result<PathBuf> {
-        let key = format!("{bake_method} {}", flags.join(" "));
-        if let Some((_, dir, _)) = self.bakes.iter().find(|b| b.0 == key) {
-            return Ok(dir.clone());
+    /// The folder and cost of the bake of `config` on this scene: made now into bakes/`id`,
+    /// or the one made earlier in this run with the same method and bake values.
+    fn bake(&mut self, config: &Config, id: &str) -> Result<(PathBuf, BakeCost)> {
+        let key = config.bake_key();
+        if let Some((_, dir, cost)) = self.bakes.iter().find(|b| b.0 == key) {
+            return Ok((dir.clone(), cost.clone()));
         }
         let dir = self.out.join("bakes").join(id);
-        let mut bake_args = crate::bake::BakeArgs::from_flags(&self.entry.path, bake_method, flags)?;
-        bake_args.threads = self.threads;
-        crate::bake::bake_scene(&self.scene, &bake_args, &dir)?;
-        self.bakes.push((key, dir.clone(), BakeCost::read(&dir)?));
-        Ok(dir)
+        let work = WorkOptions { threads: self.threads, progress: true, ..WorkOptions::default() };
+        crate::bake::bake_scene(&self.scene, config.method, &config.values, work, &dir)?;
+        let cost = BakeCost::read(&dir)?;
+        self.bakes.push((key, dir.clone(), cost.clone()));
+        Ok((dir, cost))
     }
 
     /// Writes the point's pictures (image, false-colour error) and scores it.
@@ -405,7 +374,7 @@ fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Resu
     if !combined.nrmse.is_finite() {
         return Ok(Err("the reference is black (the camera sees nothing the lights reach): NRMSE has no meaning".into()));
     }
-    let indirect_part = subtract(image, direct);
+    let indirect_part = metrics::difference(image, direct)?;
     let indirect = metrics::compare(&indirect_part, &reference.indirect)?;
     Ok(Ok(Accuracy {
         rmse: combined.rmse,
@@ -485,7 +454,7 @@ fn frame_image(renderer: &mut Headless) -> Result<Image> {
 /// Warm-up frames (crate::warm_up), then `frames` timed ones: GPU time per pass from
 /// timestamps and the CPU's wall time of each `render` call (record, submit, wait for its fence).
 fn time_frames(renderer: &mut Headless, frames: u32, warm_up_seconds: f64) -> Result<FrameCost> {
-    crate::warm_up(renderer, warm_up_seconds)?;
+    warm_up(renderer, warm_up_seconds)?;
     let mut timings = Vec::new();
     let mut cpu_ms = Vec::new();
     for _ in 0..frames {
@@ -501,10 +470,6 @@ fn time_frames(renderer: &mut Headless, frames: u32, warm_up_seconds: f64) -> Re
         gpu_p90_ms: results::percentile(&totals, 0.9),
         cpu_ms: results::percentile(&cpu_ms, 0.5),
     })
-}
-
-fn subtract(a: &Image, b: &Image) -> Image {
-    Image { width: a.width, height: a.height, pixels: a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect() }
 }
 
 fn count_non_finite(image: &Image) -> usize {

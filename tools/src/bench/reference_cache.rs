@@ -64,7 +64,7 @@ fn key(scene: &Scene, settings: &ReferenceSettings) -> String {
         settings.samples_per_pixel,
         settings.width,
         settings.height,
-        settings.seed,
+        settings.work.seed,
         settings.max_bounces,
         settings.pixel_centres,
         settings.shadows,

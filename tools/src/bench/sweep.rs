@@ -41,7 +41,7 @@ fn default_frames() -> u32 {
 }
 
 fn default_warmup() -> f64 {
-    crate::WARM_UP_SECONDS
+    crate::gpu::WARM_UP_SECONDS
 }
 
 #[derive(Deserialize, Debug)]

@@ -1,5 +1,5 @@
 //! Cluster sums (compute), step 3 of 000 §3.4: per cluster c of entry points, s_c = sum_e I_e
-//! and t_cd = sum_e I_e w^e_d (relume_bake::clustered_transfer::ClusteredTransfer::cluster_sums
+//! and t_cd = sum_e I_e w^e_d (relume_bake::light_path_maps::ClusteredTransfer::cluster_sums
 //! on the CPU), which turn the per-texel sum over every entry point into one over the
 //! clusters' C * (1 + D) textures.
 //!

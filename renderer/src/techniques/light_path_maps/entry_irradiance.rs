@@ -1,7 +1,7 @@
 //! Entry-point irradiance (compute), step 2 of 000 §3.4: the irradiance I_e every light sends
 //! to every entry point of the light path maps, with the entry point's visibility from the
 //! variance shadow maps (shaders/light_path_maps/entry_irradiance.comp states the formula;
-//! without shadows it is relume_bake::clustered_transfer::entry_irradiance_unshadowed summed
+//! without shadows it is relume_bake::light_path_maps::entry_irradiance_unshadowed summed
 //! over the lights).
 //!
 //! Reads: the scene's light and shadow-layer buffers and the frame's uniforms, the shadow

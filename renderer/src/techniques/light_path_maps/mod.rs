@@ -33,7 +33,7 @@ use entry_irradiance::EntryIrradiancePass;
 use glam::{Vec3, Vec4};
 use gpu_allocator::MemoryLocation;
 use reconstruct::ReconstructPass;
-use relume_bake::clustered_transfer::ClusteredTransfer;
+use relume_bake::light_path_maps::ClusteredTransfer;
 
 /// How the light path maps' indirect irradiance I is added to a surface of albedo a, with W
 /// the frame's occlusion term (the spectral obscurance, 000 §3.3) and E_d the shadowed direct

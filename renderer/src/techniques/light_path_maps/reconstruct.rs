@@ -1,6 +1,6 @@
 //! Light-path-map reconstruction (compute), step 4 of 000 §3.4: per atlas texel, the indirect
 //! irradiance I[u, v] = sum_c s_c M^c[u, v] + sum_{c,d} t_cd B^c_d[u, v]
-//! (relume_bake::clustered_transfer::ClusteredTransfer::reconstruct on the CPU), into the
+//! (relume_bake::light_path_maps::ClusteredTransfer::reconstruct on the CPU), into the
 //! indirect image with alpha = coverage; empty texels get 0, which the padding pass that
 //! follows replaces by their nearest covered neighbour.
 //!

@@ -1,7 +1,7 @@
 //! The large-scale transfer of Umenhoffer et al., "Partial, Multi-scale Precomputed Radiance
 //! Transfer" (000), as the renderer reads it: entry points, and per cluster of entry points
 //! the mean light path map M^c and D eigen-textures B^c_d, with each entry point's weights
-//! w^e_d (§3.2.3). Plain data shared by the baker (`light_path_maps`, `cpca`), the bake
+//! w^e_d (§3.2.3). Plain data shared by the baker (`baker.rs`, `cpca`), the bake
 //! artifact and the renderer; the CPU evaluation here is the formula the GPU passes compute.
 //!
 //! Units: a texture holds, per atlas texel, the irradiance (rgb) that unit irradiance at an

@@ -1,4 +1,4 @@
-//! Light path maps (Umenhoffer et al., "Partial, Multi-scale Precomputed Radiance Transfer",
+//! Baking light path maps (Umenhoffer et al., "Partial, Multi-scale Precomputed Radiance Transfer",
 //! §3.2.1-3.2.2): entry points shot from the test points of the region lights may move in,
 //! and for each entry point e the transfer T_e to every atlas texel, by random walks whose
 //! vertices act as virtual lights. Connections shorter than the small-scale threshold are
@@ -7,23 +7,22 @@
 //! Units: T_e[t] is the irradiance at texel t (lux, rgb) from paths that start with unit
 //! irradiance at e and bounce at least once (at e itself), divided by the entry-point
 //! density d(e), so that sum_e I_e T_e[t] estimates the indirect irradiance at t
-//! (`clustered_transfer` holds the formula the renderer evaluates).
+//! (`transfer.rs` holds the formula the renderer evaluates).
 
-use crate::artifact::Texel;
+use super::{entry_irradiance_unshadowed, ClusteredTransfer, EntryPoint, LightRegion};
 use crate::atlas::Atlas;
+use crate::atlas::Texel;
 use crate::bvh::SceneBvh;
-use crate::clustered_transfer::{entry_irradiance_unshadowed, ClusteredTransfer, EntryPoint};
 use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Scene};
 use crate::settings::first_failed_check;
-use crate::settings::LightRegion;
-use crate::work::{progress_bar, with_threads};
+use crate::work::{progress_bar, with_threads, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Sobol groups of the test points and entry directions, apart from the walks' (0, 1, ...).
 const TEST_POINT_GROUP: u32 = u32::MAX;
@@ -42,18 +41,15 @@ pub struct LightPathMapSettings {
     pub threshold: f32,
     /// Virtual lights per walk at most (Russian roulette usually ends a walk sooner).
     pub max_depth: u32,
-    pub seed: u64,
-    pub threads: Option<usize>,
-    /// Stop after this long, at a whole walk per entry point (at least one is made).
-    pub time_limit: Option<Duration>,
-    pub progress: bool,
+    /// Seed, threads, progress, and the time limit: stop at a whole pass (see the baker).
+    pub work: WorkOptions,
 }
 
 impl LightPathMapSettings {
     /// E entry points and a short-connection threshold, the rest at the command line's
     /// defaults: one walk, 64 virtual lights at most, seed 0, every core, no time limit, quiet.
     pub fn new(entry_points: u32, threshold: f32) -> Self {
-        LightPathMapSettings { entry_points, walks: 1, threshold, max_depth: 64, seed: 0, threads: None, time_limit: None, progress: false }
+        LightPathMapSettings { entry_points, walks: 1, threshold, max_depth: 64, work: WorkOptions::default() }
     }
 
     pub fn validate(&self) -> Result<(), String> {
@@ -62,9 +58,9 @@ impl LightPathMapSettings {
             ((1..=1 << 16).contains(&self.walks), "walks per entry point must be 1..=65536"),
             (self.threshold.is_finite() && self.threshold >= 0.0, "the short-connection threshold must be finite and >= 0 metres"),
             ((1..=1024).contains(&self.max_depth), "the walk depth must be 1..=1024"),
-            (self.threads != Some(0), "threads must be at least 1"),
         ];
-        first_failed_check(&checks)
+        first_failed_check(&checks)?;
+        self.work.validate()
     }
 }
 
@@ -239,7 +235,7 @@ impl Walker<'_> {
     /// on the albedo; each vertex a virtual light (Keller 1997, as §3.2.2 uses it).
     fn walk(&self, index: u32, entry: &BakedEntry, walk: u32, lights: &mut Vec<VirtualLight>) {
         lights.clear();
-        let sampler = PathSampler::new(self.settings.seed, index, walk);
+        let sampler = PathSampler::new(self.settings.work.seed, index, walk);
         let (mut position, mut normal, mut albedo) = (entry.point.position, entry.point.normal, entry.albedo);
         let mut throughput = Vec3::splat(1.0 / entry.density);
         for depth in 0..self.settings.max_depth {
@@ -366,19 +362,19 @@ pub fn bake_transfers(
         scene,
         bvh,
         settings,
-        texels: covered.par_iter().map(|&t| exit_point(atlas, bvh, t, settings.seed)).collect(),
+        texels: covered.par_iter().map(|&t| exit_point(atlas, bvh, t, settings.work.seed)).collect(),
         patch_area_over_pi: covered.iter().map(|&t| atlas.pieces_of(t as usize).iter().map(|p| p.area).sum::<f32>() / PI).collect(),
         bounce_area: scene_area(scene) / entries.len().max(1) as f32,
     };
     let n = covered.len();
     let mut values = vec![Vec3::ZERO; entries.len() * n];
     let (lights_made, rays) = (AtomicU64::new(0), AtomicU64::new(0));
-    let progress = progress_bar(entries.len() as u64 * settings.walks as u64, "light path maps", settings.progress);
+    let progress = progress_bar(entries.len() as u64 * settings.walks as u64, "light path maps", settings.work.progress);
     let start = Instant::now();
     let mut walks = 0;
-    with_threads(settings.threads, || {
+    with_threads(settings.work.threads, || {
         while walks < settings.walks {
-            if settings.time_limit.is_some_and(|limit| walks > 0 && start.elapsed() >= limit) {
+            if settings.work.time_limit.is_some_and(|limit| walks > 0 && start.elapsed() >= limit) {
                 break;
             }
             values.par_chunks_mut(n).zip(entries.par_iter()).enumerate().for_each_init(Vec::new, |lights, (e, (row, entry))| {

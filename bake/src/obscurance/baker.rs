@@ -14,10 +14,10 @@ use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
 use crate::settings::first_failed_check;
-use crate::work::{progress_bar, with_threads};
+use crate::work::{progress_bar, with_threads, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variant {
@@ -52,11 +52,8 @@ pub struct ObscuranceSettings {
     /// Metres (001 §4.4).
     pub l_max: f32,
     pub rays_per_texel: u32,
-    pub seed: u64,
-    pub threads: Option<usize>,
-    /// Stop after this long, at a whole pass over the texels (at least one pass is made).
-    pub time_limit: Option<Duration>,
-    pub progress: bool,
+    /// Seed, threads, progress, and the time limit: stop at a whole pass (see the baker).
+    pub work: WorkOptions,
 }
 
 impl ObscuranceSettings {
@@ -65,9 +62,9 @@ impl ObscuranceSettings {
             (self.tau.is_finite() && self.tau > 0.0, "tau must be finite and > 0 metres"),
             (self.l_max.is_finite() && self.l_max > 0.0, "l_max must be finite and > 0 metres"),
             ((1..=1 << 20).contains(&self.rays_per_texel), "rays per texel must be 1..=1048576"),
-            (self.threads != Some(0), "threads must be at least 1"),
         ];
-        first_failed_check(&checks)
+        first_failed_check(&checks)?;
+        self.work.validate()
     }
 
     /// 001 eq. (2) cut at L_max (eq. 8), or the step of ambient occlusion.
@@ -153,7 +150,7 @@ pub fn point_obscurance(scene: &Scene, bvh: &SceneBvh, settings: &ObscuranceSett
     let estimator = Estimator { scene, bvh, settings, average_albedo: average_albedo(scene) };
     let sum: Vec3 = (0..rays)
         .map(|i| {
-            let s = PathSampler::new(settings.seed, 0, i).sobol4(0);
+            let s = PathSampler::new(settings.work.seed, 0, i).sobol4(0);
             estimator.ray(point, normal, Vec2::new(s[0], s[1]))
         })
         .sum();
@@ -171,12 +168,12 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
     let estimator = Estimator { scene, bvh, settings, average_albedo: average_albedo(scene) };
     let covered: Vec<u32> = (0..atlas.texels.len() as u32).filter(|&t| atlas.texels[t as usize].coverage > 0.0).collect();
     let mut sums = vec![Vec3::ZERO; covered.len()];
-    let progress = progress_bar(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.progress);
+    let progress = progress_bar(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.work.progress);
     let start = Instant::now();
     let mut taken = 0;
-    with_threads(settings.threads, || {
+    with_threads(settings.work.threads, || {
         while taken < settings.rays_per_texel {
-            if settings.time_limit.is_some_and(|limit| taken > 0 && start.elapsed() >= limit) {
+            if settings.work.time_limit.is_some_and(|limit| taken > 0 && start.elapsed() >= limit) {
                 break;
             }
             let rays = taken..(taken + RAYS_PER_PASS).min(settings.rays_per_texel);
@@ -208,7 +205,7 @@ fn texel_rays(estimator: &Estimator, atlas: &Atlas, texel: u32, rays: std::ops::
     let total_area: f32 = pieces.iter().map(|p| p.area).sum();
     let mut sum = Vec3::ZERO;
     for i in rays {
-        let sampler = PathSampler::new(estimator.settings.seed, texel, i);
+        let sampler = PathSampler::new(estimator.settings.work.seed, texel, i);
         let s = sampler.sobol4(0);
         let mut pick = sampler.uniform(4) * total_area;
         let piece = pieces.iter().find(|p| {

@@ -1,17 +1,12 @@
-//! The lightmap atlas every per-texel method shares (Iones et al., "Fast realistic lighting
-//! for video games", §3): triangles grouped into charts by breadth-first search over their
-//! adjacency, each chart mapped to a plane and cut into patches by a regular grid (one patch a
-//! texel), the charts packed into pages with a gutter between them, and per texel the
-//! geometry a baker needs: coverage, patch centre, smoothed normal, triangle, and the pieces
-//! of faces the patch is made of (so a baker can spread its samples over the whole patch).
-//!
-//! Texel space: page `p` is `width` x `height` texels; texel (i, j) is the square
-//! [i, i+1] x [j, j+1], row 0 at the top. A vertex's uv1 is its texel-space position divided
-//! by the page size, with the page number added to u: u in [p, p+1) lies on page p. Charts
-//! never touch a page's border (there is a gutter all round), so a triangle's three u values
-//! always have the same integer part.
+//! Building the atlas (Iones et al., "Fast realistic lighting for video games", §3): triangles
+//! grouped into charts by breadth-first search over their adjacency, each chart mapped to a
+//! plane and cut into patches by a regular grid (one patch a texel), the charts packed into
+//! pages with a gutter between them, and per texel the geometry a baker needs: coverage,
+//! patch centre, smoothed normal, triangle, and the pieces of faces the patch is made of (so a
+//! baker can spread its samples over the whole patch).
 
-pub use crate::artifact::{AtlasMesh, Texel, EMPTY};
+use super::{AtlasMesh, AtlasSection, Texel, EMPTY};
+use crate::artifact::PageLayout;
 use crate::scene::{Mesh, Scene};
 use crate::settings::first_failed_check;
 use glam::{UVec2, Vec2, Vec3};
@@ -179,6 +174,15 @@ impl Atlas {
             density = (lo * hi).sqrt();
         }
         Ok(best.expect("the loop runs at least once"))
+    }
+
+    pub fn layout(&self) -> PageLayout {
+        PageLayout { width: self.width, height: self.height, pages: self.pages }
+    }
+
+    /// What a bake artifact keeps of the atlas.
+    pub fn to_section(&self) -> AtlasSection {
+        AtlasSection { meshes: self.meshes.clone(), layout: self.layout(), texels: self.texels.clone() }
     }
 
     pub fn covered_texels(&self) -> usize {

@@ -1,0 +1,159 @@
+//! The flags several subcommands share, and what they turn into: the scene (with a camera and
+//! an image size), the frame's settings (shadow maps, the ambient light, the device), and the
+//! reference path tracer's settings.
+
+use crate::bake::WorkArgs;
+use anyhow::{bail, Result};
+use clap::Args;
+use glam::Vec3;
+use relume_bake::gltf_load::{load_with_camera, CameraOverride};
+use relume_bake::reference::ReferenceSettings;
+use relume_bake::scene::Scene;
+use relume_renderer::RenderSettings;
+use std::path::PathBuf;
+
+#[derive(Args, Clone)]
+pub(crate) struct SceneArgs {
+    /// A glTF 2.0 scene (.gltf or .glb).
+    pub scene: PathBuf,
+    /// Camera instead of the scene's: "eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]".
+    #[arg(long)]
+    pub camera: Option<String>,
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct GpuArgs {
+    /// Shadow-map size in texels per layer.
+    #[arg(long, default_value_t = 1024)]
+    pub shadow_map_size: u32,
+    /// Gaussian blur radius of the shadow moments, texels (0: none).
+    #[arg(long, default_value_t = 2)]
+    pub blur_radius: u32,
+    /// Floor on the variance in the Chebyshev bound (m^2).
+    #[arg(long, default_value_t = 1e-5)]
+    pub min_variance: f32,
+    /// Light-bleeding reduction in [0, 1).
+    #[arg(long, default_value_t = 0.2)]
+    pub bleeding_reduction: f32,
+    /// Turn shadows off (shading only).
+    #[arg(long)]
+    pub no_shadows: bool,
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe;
+    /// the RELUME_DEVICE variable does the same).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Turn on the Vulkan validation layers; any message fails the command.
+    #[arg(long)]
+    pub validation: bool,
+    /// Ambient irradiance I_A of the frame's ambient light (001 eq. 5), lux: "r,g,b" or one
+    /// value (default: the method's; the scene's extras.relume.ambient where the method
+    /// models ambient light).
+    #[arg(long)]
+    pub ambient: Option<String>,
+    /// beta of the ambient light's share of every light (001 eq. 7), in [0, 1) (default: as
+    /// --ambient).
+    #[arg(long)]
+    pub beta: Option<f32>,
+    /// Direct light only: no ambient light (ambient and beta 0).
+    #[arg(long, conflicts_with_all = ["ambient", "beta"])]
+    pub direct_only: bool,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct PathTracerArgs {
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    #[command(flatten)]
+    pub work: WorkArgs,
+    /// Sample pixel centres only (as a rasteriser does).
+    #[arg(long)]
+    pub pixel_centres: bool,
+    #[arg(long, default_value_t = 64)]
+    pub max_bounces: u32,
+}
+
+pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
+    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
+        bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
+    }
+    let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
+    let loaded = load_with_camera(&args.scene, camera.as_ref())?;
+    for warning in &loaded.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(loaded.scene)
+}
+
+/// `--ambient`: "r,g,b" or one value for all three channels.
+fn parse_ambient(text: &str) -> Result<Vec3> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("--ambient {text}: give \"r,g,b\" or one number (lux)"))?;
+    match values[..] {
+        [v] => Ok(Vec3::splat(v)),
+        [r, g, b] => Ok(Vec3::new(r, g, b)),
+        _ => bail!("--ambient {text}: give \"r,g,b\" or one number (lux)"),
+    }
+}
+
+/// The frame's settings from the flags; `ambient` gives I_A and beta when no flag does (the
+/// method's defaults).
+pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, (default_ambient, default_beta): (Vec3, f32)) -> Result<RenderSettings> {
+    let (ambient, beta) = match gpu.direct_only {
+        true => (Vec3::ZERO, 0.0),
+        false => (gpu.ambient.as_deref().map(parse_ambient).transpose()?.unwrap_or(default_ambient), gpu.beta.unwrap_or(default_beta)),
+    };
+    let settings = RenderSettings {
+        width: scene.width,
+        height: scene.height,
+        shadow_map_size: gpu.shadow_map_size,
+        blur_radius: gpu.blur_radius,
+        min_variance: gpu.min_variance,
+        bleeding_reduction: gpu.bleeding_reduction,
+        shadows: !gpu.no_shadows,
+        exposure: gpu.exposure,
+        ambient,
+        beta,
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("render settings: {e}"))?;
+    Ok(settings)
+}
+
+pub(crate) fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shadows: bool) -> Result<ReferenceSettings> {
+    if trace.spp == 0 {
+        bail!("--spp 0: take at least one sample per pixel");
+    }
+    Ok(ReferenceSettings {
+        samples_per_pixel: trace.spp,
+        width: scene.width,
+        height: scene.height,
+        max_bounces: trace.max_bounces,
+        pixel_centres: trace.pixel_centres,
+        shadows,
+        work: trace.work.options()?,
+    })
+}
+
+pub(crate) fn positive(flag: &str, value: f32) -> Result<f32> {
+    if !(value.is_finite() && value > 0.0) {
+        bail!("{flag} {value}: give a finite number above 0");
+    }
+    Ok(value)
+}
+
+/// Timed frames: at least one, at most a number that cannot exhaust memory.
+pub(crate) fn frame_count(frames: u32) -> Result<u32> {
+    if !(1..=100_000).contains(&frames) {
+        bail!("--frames {frames}: render 1..=100000 frames");
+    }
+    Ok(frames)
+}

@@ -1,0 +1,134 @@
+//! What every method baked on the lightmap atlas shares (a shared part, not a method): the
+//! atlas's parameters, its bake stage and summary, and reading it back with the scene
+//! re-indexed by it.
+
+use super::params::{Default, Kind, Param, Stage, Values};
+use super::Stages;
+use anyhow::{bail, Result};
+use relume_bake::artifact::{Artifact, Section};
+use relume_bake::atlas::{Atlas, AtlasSection, AtlasSettings};
+use relume_bake::scene::Scene;
+use serde_json::{json, Value};
+
+pub(crate) const TEXEL_DENSITY: Param = Param {
+    name: "texel-density",
+    help: "lightmap texels per metre (001 §3's patch grid)",
+    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
+    default: Default::From("the scene's texel_density"),
+    stage: Stage::Bake,
+};
+pub(crate) const PATCHES: Param = Param {
+    name: "patches",
+    help: "aim for about this many covered texels instead of a texel density (bisects the density)",
+    kind: Kind::Count { min: 1, max: 1 << 28 },
+    default: Default::From("none: the texel density decides"),
+    stage: Stage::Bake,
+};
+pub(crate) const GUTTER: Param = Param {
+    name: "gutter",
+    help: "empty texels between charts",
+    kind: Kind::Count { min: 1, max: 64 },
+    default: Default::Value("2"),
+    stage: Stage::Bake,
+};
+pub(crate) const ATLAS_MAX: Param = Param {
+    name: "atlas-max",
+    help: "largest atlas page side in texels; more pages when the charts do not fit one",
+    kind: Kind::Count { min: 16, max: 16384 },
+    default: Default::Value("4096"),
+    stage: Stage::Bake,
+};
+pub(crate) const DISCONTINUITY_ANGLE: Param = Param {
+    name: "discontinuity-angle",
+    help: "largest angle between faces of one chart, degrees (001 §3)",
+    kind: Kind::Number { min: 0.0, max: 180.0, above: true },
+    default: Default::Value("60"),
+    stage: Stage::Bake,
+};
+
+pub(crate) const PARAMS: [&Param; 5] = [&TEXEL_DENSITY, &PATCHES, &GUTTER, &ATLAS_MAX, &DISCONTINUITY_ANGLE];
+
+/// The atlas's settings from `values` over the scene's.
+pub(crate) fn settings(scene: &Scene, values: &Values) -> Result<AtlasSettings> {
+    if values.given(TEXEL_DENSITY.name) && values.given(PATCHES.name) {
+        bail!("--texel-density and --patches: give one of them");
+    }
+    let settings = AtlasSettings {
+        texel_density: values.number(&TEXEL_DENSITY).map_or(scene.settings.texel_density, |d| d as f32),
+        gutter: values.count(&GUTTER).unwrap_or(2) as u32,
+        max_size: values.count(&ATLAS_MAX).unwrap_or(4096) as u32,
+        discontinuity_angle: (values.number(&DISCONTINUITY_ANGLE).unwrap_or(60.0) as f32).to_radians(),
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e} (--texel-density, --gutter, --atlas-max, --discontinuity-angle)"))?;
+    Ok(settings)
+}
+
+/// The atlas stage of a bake: built for the settings (or bisected to about `--patches`
+/// covered texels).
+pub(crate) fn build(scene: &Scene, values: &Values, stages: &mut Stages) -> Result<(Atlas, AtlasSettings)> {
+    let settings = settings(scene, values)?;
+    let atlas = stages.timed("atlas", || match values.count(&PATCHES) {
+        Some(patches) => Atlas::build_for_patch_count(scene, &settings, patches as u32),
+        None => Atlas::build(scene, &settings),
+    })?;
+    Ok((atlas, settings))
+}
+
+/// The atlas's section, with its facts for the manifest.
+pub(crate) fn section(atlas: &Atlas, settings: &AtlasSettings) -> Section {
+    atlas.to_section().section(json!({
+        "width": atlas.width,
+        "height": atlas.height,
+        "pages": atlas.pages,
+        "charts": atlas.charts.len(),
+        "covered_texels": atlas.covered_texels(),
+        "utilization": atlas.utilization(),
+        "too_small_triangles": atlas.too_small,
+        "texel_density": short(settings.texel_density),
+    }))
+}
+
+/// The atlas's parameters as used, for the manifest.
+pub(crate) fn parameters(settings: &AtlasSettings, values: &Values) -> Value {
+    json!({
+        "texel_density": short(settings.texel_density),
+        "patches": values.count(&PATCHES),
+        "gutter": settings.gutter,
+        "atlas_max": settings.max_size,
+        "discontinuity_angle_degrees": short(settings.discontinuity_angle.to_degrees()),
+    })
+}
+
+/// The atlas in a line (and a warning for triangles too small to cover a texel).
+pub(crate) fn summary(atlas: &Atlas) -> String {
+    let mut text = format!(
+        "atlas: {} charts, {} x {} x {} page(s), {} patches, utilization {:.1}%\n",
+        atlas.charts.len(),
+        atlas.width,
+        atlas.height,
+        atlas.pages,
+        atlas.covered_texels(),
+        100.0 * atlas.utilization()
+    );
+    if !atlas.too_small.is_empty() {
+        text.push_str(&format!(
+            "warning: {} triangle(s) too small to cover a texel measurably: {:?}\n",
+            atlas.too_small.len(),
+            atlas.too_small
+        ));
+    }
+    text
+}
+
+/// The artifact's atlas and `scene` re-indexed by it.
+pub(crate) fn read(artifact: &Artifact, scene: &Scene) -> Result<(AtlasSection, Scene)> {
+    let atlas = AtlasSection::read(artifact, scene)?;
+    let mut applied = scene.clone();
+    atlas.apply_to(&mut applied);
+    Ok((atlas, applied))
+}
+
+/// An f32 as JSON in its shortest round-trip form (0.15, not 0.15000000596046448).
+pub(crate) fn short(x: f32) -> Value {
+    x.to_string().parse::<f64>().map_or(Value::Null, |v| json!(v))
+}

@@ -1,0 +1,33 @@
+//! Direct light plus a constant ambient term: the illumination model of Iones et al., "Fast
+//! realistic lighting for video games" (001), eq. (5)-(7), with W = 1 everywhere. No bake.
+
+use super::params::Param;
+use super::{Loaded, Method, Plain};
+use anyhow::Result;
+use glam::Vec3;
+use relume_bake::artifact::Artifact;
+use relume_bake::scene::Scene;
+
+pub(crate) struct Constant;
+
+impl Method for Constant {
+    fn name(&self) -> &'static str {
+        "constant"
+    }
+
+    fn description(&self) -> &'static str {
+        "direct light plus constant ambient light (001 eq. 5-7 with W = 1)"
+    }
+
+    fn params(&self) -> Vec<&'static Param> {
+        Vec::new()
+    }
+
+    fn ambient(&self, scene: &Scene) -> (Vec3, f32) {
+        (scene.settings.ambient, scene.settings.beta)
+    }
+
+    fn load(&self, _: Option<&Artifact>, scene: &Scene, _: &super::Values) -> Result<Box<dyn Loaded>> {
+        Ok(Box::new(Plain(scene.clone())))
+    }
+}

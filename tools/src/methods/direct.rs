@@ -1,0 +1,28 @@
+//! Direct light alone: every punctual light with its variance shadow maps, no ambient light,
+//! no bake. The floor every other method adds to.
+
+use super::params::Param;
+use super::{Loaded, Method, Plain};
+use anyhow::Result;
+use relume_bake::artifact::Artifact;
+use relume_bake::scene::Scene;
+
+pub(crate) struct Direct;
+
+impl Method for Direct {
+    fn name(&self) -> &'static str {
+        "direct"
+    }
+
+    fn description(&self) -> &'static str {
+        "direct light with variance shadow maps (000 §3.4), no ambient light"
+    }
+
+    fn params(&self) -> Vec<&'static Param> {
+        Vec::new()
+    }
+
+    fn load(&self, _: Option<&Artifact>, scene: &Scene, _: &super::Values) -> Result<Box<dyn Loaded>> {
+        Ok(Box::new(Plain(scene.clone())))
+    }
+}

@@ -1,0 +1,279 @@
+//! Multi-scale precomputed radiance transfer with light path maps (Umenhoffer et al.,
+//! "Partial, Multi-scale Precomputed Radiance Transfer", 000): the atlas and the spectral
+//! obscurance (the small scale, §3.3), entry points from the scene's light region (§3.2.1),
+//! their transfers by virtual lights with short connections dropped (§3.2.2) and the transfers'
+//! clustered PCA (§3.2.3); at run time the obscurance technique and the light path maps'
+//! four passes, composed as `--composition` says (§3.4).
+
+use super::obscurance::{self, OnAtlas};
+use super::params::{Default, Kind, Param, Stage, Values};
+use super::{atlas, Bake, Loaded, Method, Stages};
+use anyhow::{bail, Result};
+use relume_bake::artifact::Artifact;
+use relume_bake::atlas::Atlas;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::light_path_maps::{
+    self as lpm, ClusteredTransfer, Compression, LightPathMapSettings, LightPathMapsSceneSettings, LightRegion,
+};
+use relume_bake::obscurance::Variant;
+use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
+use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::MakeTechnique;
+use serde_json::json;
+
+const ENTRY_POINTS: Param = Param {
+    name: "entry-points",
+    help: "entry points wanted, E (000 §3.2.1: whole rounds of one ray per test point until E hit)",
+    kind: Kind::Count { min: 1, max: 1 << 20 },
+    default: Default::Value("4096"),
+    stage: Stage::Bake,
+};
+const TEST_POINTS: Param = Param {
+    name: "test-points",
+    help: "test points re-sampling the scene's light region box, M",
+    kind: Kind::Count { min: 1, max: 65536 },
+    default: Default::From("the scene's region"),
+    stage: Stage::Bake,
+};
+const WALKS: Param = Param {
+    name: "walks",
+    help: "random walks per entry point (more entry points beat more walks)",
+    kind: Kind::Count { min: 1, max: 65536 },
+    default: Default::Value("1"),
+    stage: Stage::Bake,
+};
+const THRESHOLD: Param = Param {
+    name: "threshold",
+    help: "connections shorter than this are dropped, metres (000 §3.2.2; 0 keeps every one)",
+    kind: Kind::Number { min: 0.0, max: 1e6, above: false },
+    default: Default::From("L_max"),
+    stage: Stage::Bake,
+};
+const CLUSTERS: Param = Param {
+    name: "clusters",
+    help: "clusters C of the transfers' PCA (with --basis)",
+    kind: Kind::Count { min: 1, max: 1 << 20 },
+    default: Default::From("chosen by --error-budget"),
+    stage: Stage::Bake,
+};
+const BASIS: Param = Param {
+    name: "basis",
+    help: "eigen-textures per cluster D (with --clusters)",
+    kind: Kind::Count { min: 0, max: 1024 },
+    default: Default::From("chosen by --error-budget"),
+    stage: Stage::Bake,
+};
+const ERROR_BUDGET: Param = Param {
+    name: "error-budget",
+    help: "the smallest C in 1, 2, 4 .. 128 and D in 0..8 storing the fewest values within this relative error of the transfers",
+    kind: Kind::Number { min: 0.0, max: 1e6, above: false },
+    default: Default::Value("0.1"),
+    stage: Stage::Bake,
+};
+const UNCOMPRESSED: Param = Param {
+    name: "uncompressed",
+    help: "keep every transfer (one cluster per entry point, no PCA)",
+    kind: Kind::Flag,
+    default: Default::Value("false"),
+    stage: Stage::Bake,
+};
+const COMPOSITION: Param = Param {
+    name: "composition",
+    help: "how the indirect irradiance I is added (000 §3.4): plain (albedo/pi I), times-obscurance (albedo/pi W I), times-obscurance-with-direct (albedo/pi W (I + E_direct))",
+    kind: Kind::Choice(&["plain", "times-obscurance", "times-obscurance-with-direct"]),
+    default: Default::Value("times-obscurance"),
+    stage: Stage::Render,
+};
+
+const PARAMS: [&Param; 9] =
+    [&ENTRY_POINTS, &TEST_POINTS, &WALKS, &THRESHOLD, &CLUSTERS, &BASIS, &ERROR_BUDGET, &UNCOMPRESSED, &COMPOSITION];
+
+pub(crate) struct LightPathMaps;
+
+/// The compression the flags ask for.
+fn compression(values: &Values) -> Result<Compression> {
+    let given = |p: &Param| values.given(p.name);
+    if given(&CLUSTERS) != given(&BASIS) {
+        bail!("--clusters and --basis: give both, or neither (then --error-budget chooses them)");
+    }
+    if values.flag(&UNCOMPRESSED) && (given(&CLUSTERS) || given(&ERROR_BUDGET)) {
+        bail!("--uncompressed keeps every transfer: give it without --clusters, --basis or --error-budget");
+    }
+    if given(&CLUSTERS) && given(&ERROR_BUDGET) {
+        bail!("--clusters with --basis fix the compression: give them without --error-budget");
+    }
+    Ok(match (values.flag(&UNCOMPRESSED), values.count(&CLUSTERS), values.count(&BASIS)) {
+        (true, _, _) => Compression::None,
+        (false, Some(clusters), Some(basis)) => Compression::Fixed { clusters: clusters as usize, basis: basis as usize },
+        _ => Compression::Budget(values.number(&ERROR_BUDGET).unwrap_or(0.1)),
+    })
+}
+
+/// The scene's region, with its box re-sampled at `--test-points` when given.
+fn region(scene: &Scene, values: &Values) -> Result<Option<LightRegion>> {
+    let region = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?.region;
+    Ok(match (region, values.count(&TEST_POINTS)) {
+        (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min, max, test_points: m as u32 }),
+        (_, Some(_)) => bail!("--test-points needs a scene whose extras.relume.light_path_maps.region is a box"),
+        (region, None) => region,
+    })
+}
+
+/// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
+/// transfer and the facts for the manifest, stats.json and the summary.
+fn bake_transfer(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    atlas: &Atlas,
+    values: &Values,
+    l_max: f32,
+    work: WorkOptions,
+    stages: &mut Stages,
+) -> Result<(ClusteredTransfer, Bake)> {
+    let settings = LightPathMapSettings {
+        entry_points: values.count(&ENTRY_POINTS).unwrap_or(4096) as u32,
+        walks: values.count(&WALKS).unwrap_or(1) as u32,
+        threshold: values.number(&THRESHOLD).map_or(l_max, |t| t as f32),
+        max_depth: 64,
+        work,
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
+    let region = region(scene, values)?;
+    let compression = compression(values)?;
+    let light_area = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?.light_area;
+    let entries = stages
+        .timed("entry_points", || {
+            let tests = lpm::test_points(scene, region.as_ref(), work.seed)?;
+            lpm::entry_points(scene, bvh, tests, settings.entry_points, work.seed)
+        })
+        .map_err(anyhow::Error::msg)?;
+    let transfers =
+        stages.timed("transfer", || lpm::bake_transfers(scene, bvh, atlas, &entries.entries, &settings)).map_err(anyhow::Error::msg)?;
+    let compressed = stages
+        .timed("cpca", || lpm::compress(&transfers, &entries.entries, atlas.texels.len(), light_area, compression))
+        .map_err(anyhow::Error::msg)?;
+    let uncompressed_bytes = transfers.values.len() * 12;
+    let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
+    let summary = format!(
+        "light path maps: {} entry points from {} test points, {} texels, {} virtual lights, {} connections; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB\n",
+        entries.entries.len(),
+        entries.test_points.len(),
+        transfers.texels.len(),
+        transfers.virtual_lights,
+        transfers.connections,
+        compressed.clusters,
+        compressed.basis,
+        compressed.relative_error,
+        mib(uncompressed_bytes),
+        mib(compressed.transfer.size_bytes()),
+    );
+    let facts = Bake {
+        sections: Vec::new(),
+        parameters: json!({
+            "entry_points": settings.entry_points,
+            "test_points": entries.test_points.len(),
+            "walks": settings.walks,
+            "threshold": atlas::short(settings.threshold),
+            "compression": format!("{compression:?}"),
+            "seed": work.seed,
+        }),
+        stats: json!({
+            "entry_points": entries.entries.len(),
+            "rays_per_test_point": entries.rays_per_test_point,
+            "covered_texels": transfers.texels.len(),
+            "walks": transfers.walks,
+            "virtual_lights": transfers.virtual_lights,
+            "connections": transfers.connections,
+            "clusters": compressed.clusters,
+            "basis": compressed.basis,
+            "relative_error": compressed.relative_error,
+            "uncompressed_bytes": uncompressed_bytes,
+            "compressed_bytes": compressed.transfer.size_bytes(),
+        }),
+        summary,
+    };
+    Ok((compressed.transfer, facts))
+}
+
+/// The spectral obscurance on its atlas and the transfer, as the renderer takes them.
+struct Maps {
+    on_atlas: OnAtlas,
+    transfer: ClusteredTransfer,
+    composition: Composition,
+}
+
+impl Loaded for Maps {
+    fn scene(&self) -> &relume_bake::scene::Scene {
+        &self.on_atlas.scene
+    }
+
+    fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
+        let atlas = self.on_atlas.image();
+        vec![
+            Box::new(ObscuranceData { obscurance: atlas }),
+            Box::new(LightPathMapsData { transfer: &self.transfer, atlas, composition: self.composition }),
+        ]
+    }
+}
+
+impl Method for LightPathMaps {
+    fn name(&self) -> &'static str {
+        "light-path-maps"
+    }
+
+    fn description(&self) -> &'static str {
+        "direct light plus light path maps' indirect light composed with the spectral obscurance (Umenhoffer et al. 2008)"
+    }
+
+    fn params(&self) -> Vec<&'static Param> {
+        [&atlas::PARAMS[..], &obscurance::PARAMS[..], &PARAMS[..]].concat()
+    }
+
+    fn bakes(&self) -> bool {
+        true
+    }
+
+    /// A scene that declares where its lights move: without a region the light path maps
+    /// serve only the lights where they stand.
+    fn suits(&self, scene: &Scene) -> bool {
+        LightPathMapsSceneSettings::of(scene).is_ok_and(|s| s.region.is_some())
+    }
+
+    /// 000 §3.2.3's sizes: C = 32 clusters, D = 2 eigen-textures.
+    fn main_job_values(&self, rays: u32) -> Vec<(String, String)> {
+        [(obscurance::RAYS.name, rays.to_string()), (CLUSTERS.name, "32".into()), (BASIS.name, "2".into())]
+            .map(|(k, v)| (k.to_string(), v))
+            .to_vec()
+    }
+
+    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
+        let spectral = obscurance::settings(scene, values, Variant::Spectral, work)?;
+        compression(values)?;
+        let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
+        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+        let map = obscurance::bake_stage(scene, &bvh, &atlas, &spectral, stages)?;
+        let (transfer, facts) = bake_transfer(scene, &bvh, &atlas, values, spectral.l_max, work, stages)?;
+        let section = lpm::section(&transfer, atlas.layout(), facts.parameters.clone()).map_err(anyhow::Error::msg)?;
+        let mut parameters = obscurance::parameters(&spectral);
+        parameters["atlas"] = atlas::parameters(&atlas_settings, values);
+        parameters["light_path_maps"] = facts.parameters;
+        let mut stats = obscurance::stats(&map, &spectral);
+        stats["light_path_maps"] = facts.stats;
+        Ok(Bake {
+            sections: vec![atlas::section(&atlas, &atlas_settings), obscurance::section(&map, &atlas, &spectral)?, section],
+            parameters,
+            stats,
+            summary: atlas::summary(&atlas) + &obscurance::summary(&map) + &facts.summary,
+        })
+    }
+
+    fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
+        let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-path-maps renders from a bake: give --bake"))?;
+        let on_atlas = OnAtlas::read(artifact, scene)?;
+        let transfer = lpm::read(artifact, scene, on_atlas.layout)?;
+        let composition = values.choice(&COMPOSITION).and_then(Composition::parse).unwrap_or_default();
+        Ok(Box::new(Maps { on_atlas, transfer, composition }))
+    }
+}

@@ -1,0 +1,154 @@
+//! The one registry of relume's methods. A method is one type implementing [`Method`] and one
+//! line in [`METHODS`]; `relume bake`, `render`, `run`, `bench` and `methods` read it and know
+//! nothing else about any method (docs/ARCHITECTURE.md, "Adding a method").
+
+mod atlas;
+mod constant;
+mod direct;
+mod light_path_maps;
+mod obscurance;
+pub(crate) mod params;
+
+use anyhow::{Context as _, Result};
+use glam::Vec3;
+use params::{Param, Stage, Values};
+use relume_bake::artifact::{Artifact, Section};
+use relume_bake::scene::Scene;
+use relume_bake::work::{peak_memory_bytes, reset_peak_memory, WorkOptions};
+use relume_renderer::MakeTechnique;
+use serde_json::{json, Value};
+use std::time::Instant;
+
+/// Every method, in the order reports list them.
+pub(crate) const METHODS: [&dyn Method; 4] =
+    [&direct::Direct, &constant::Constant, &obscurance::Obscurance, &light_path_maps::LightPathMaps];
+
+pub(crate) trait Method: Sync {
+    /// Its one name: the `--method` of `relume bake`, a sweep's `method`, an artifact's
+    /// `method`, the main job's file names.
+    fn name(&self) -> &'static str;
+
+    /// One line: what it renders, after which paper.
+    fn description(&self) -> &'static str;
+
+    /// Its parameters, bake and run time (see `params`).
+    fn params(&self) -> Vec<&'static Param>;
+
+    /// Whether it renders from a bake artifact.
+    fn bakes(&self) -> bool {
+        false
+    }
+
+    /// Whether the main job runs it on `scene`: a method that needs what the scene does not
+    /// declare is left out (relume models no more than a scene needs).
+    fn suits(&self, _scene: &Scene) -> bool {
+        true
+    }
+
+    /// Parameter values the main job gives it instead of the defaults.
+    fn main_job_values(&self, _rays: u32) -> Vec<(String, String)> {
+        Vec::new()
+    }
+
+    /// I_A and beta of the frame's ambient light when the user gives none: the scene's for
+    /// the methods of the obscurance illumination model, none for the others.
+    fn ambient(&self, _scene: &Scene) -> (Vec3, f32) {
+        (Vec3::ZERO, 0.0)
+    }
+
+    /// Bakes `scene` with `values` into sections, timing its stages in `stages`.
+    fn bake(&self, _scene: &Scene, _values: &Values, _work: WorkOptions, _stages: &mut Stages) -> Result<Bake> {
+        anyhow::bail!("{} has no bake", self.name())
+    }
+
+    /// What its techniques are made from: read from `artifact` (its bake; None for a method
+    /// without one) for `scene`, with the run-time `values`.
+    fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>>;
+}
+
+/// A method's data for one scene, read and ready to become the renderer's techniques.
+pub(crate) trait Loaded {
+    /// The scene as its techniques need it (re-indexed with the atlas's uv1, when it has one).
+    fn scene(&self) -> &Scene;
+
+    /// Its techniques, in frame order.
+    fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>>;
+}
+
+/// A method without a bake: the scene as it is and no technique.
+pub(crate) struct Plain(pub Scene);
+
+impl Loaded for Plain {
+    fn scene(&self) -> &Scene {
+        &self.0
+    }
+
+    fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
+        Vec::new()
+    }
+}
+
+/// What a method's bake made: its sections, what it was made with, and what it found.
+pub(crate) struct Bake {
+    pub sections: Vec<Section>,
+    /// Every parameter the bake used (given and defaulted), for the manifest.
+    pub parameters: Value,
+    /// Method-specific statistics for stats.json.
+    pub stats: Value,
+    /// Lines for the terminal and the main job's report.
+    pub summary: String,
+}
+
+/// One bake stage's cost, as stats.json records it.
+pub(crate) struct TimedStage {
+    pub name: &'static str,
+    pub seconds: f64,
+    pub peak_memory_bytes: Option<u64>,
+}
+
+/// The timed stages of one bake.
+#[derive(Default)]
+pub(crate) struct Stages(pub Vec<TimedStage>);
+
+impl Stages {
+    /// Runs `work` as the stage `name`: its wall time and the peak memory it reached.
+    pub fn timed<R>(&mut self, name: &'static str, work: impl FnOnce() -> R) -> R {
+        reset_peak_memory();
+        let start = Instant::now();
+        let result = work();
+        self.0.push(TimedStage { name, seconds: start.elapsed().as_secs_f64(), peak_memory_bytes: peak_memory_bytes() });
+        result
+    }
+
+    pub fn json(&self) -> Value {
+        json!(self
+            .0
+            .iter()
+            .map(|s| json!({ "name": s.name, "seconds": s.seconds, "peak_memory_bytes": s.peak_memory_bytes }))
+            .collect::<Vec<_>>())
+    }
+
+    /// One line per stage: seconds and peak memory.
+    pub fn summary(&self) -> String {
+        self.0
+            .iter()
+            .map(|s| {
+                let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64));
+                format!("  {:<13} {:>8.3} s, peak memory {memory}\n", s.name, s.seconds)
+            })
+            .collect()
+    }
+}
+
+/// The method of that name, or a refusal that lists them.
+pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
+    METHODS.iter().copied().find(|m| m.name() == name).with_context(|| {
+        format!("method \"{name}\": not a relume method; use one of {}", METHODS.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "))
+    })
+}
+
+/// `values` parsed for `method`, keeping only the parameters of `stage` (None: every one).
+pub(crate) fn parse_values(method: &dyn Method, pairs: &[(String, String)], stage: Option<Stage>) -> Result<Values> {
+    let params: Vec<&'static Param> = method.params().into_iter().filter(|p| stage.is_none_or(|s| p.stage == s)).collect();
+    Values::parse(method.name(), &params, pairs)
+}

@@ -1,0 +1,184 @@
+//! Obscurances (Iones et al., "Fast realistic lighting for video games", 001): the atlas, W per
+//! texel by Monte Carlo rays (any variant: obscurance, ambient occlusion, the spectral
+//! obscurance of 000 §3.3), and at run time the obscurance technique scaling the ambient
+//! light, eq. (5)-(7). Its parameters and stages serve the light path maps too, whose
+//! small-scale term is the spectral obscurance.
+
+use super::params::{Default, Kind, Param, Stage, Values};
+use super::{atlas, Bake, Loaded, Method, Stages};
+use anyhow::Result;
+use glam::{Vec3, Vec4};
+use relume_bake::artifact::{Artifact, PageLayout, Section};
+use relume_bake::atlas::Atlas;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::obscurance::{self as bake_obscurance, ObscuranceMap, ObscuranceSceneSettings, ObscuranceSettings, Variant};
+use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
+use relume_renderer::techniques::obscurance::ObscuranceData;
+use relume_renderer::{AtlasImage, MakeTechnique};
+use serde_json::{json, Value};
+
+pub(crate) const VARIANT: Param = Param {
+    name: "variant",
+    help: "obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3's colour bleeding)",
+    kind: Kind::Choice(&["obscurance", "ao", "spectral"]),
+    default: Default::From("obscurance; spectral for light-path-maps"),
+    stage: Stage::Bake,
+};
+pub(crate) const TAU: Param = Param {
+    name: "tau",
+    help: "tau of rho(L) = 1 - exp(-L / tau), metres (001 eq. 2)",
+    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
+    default: Default::From("the scene's obscurance.tau"),
+    stage: Stage::Bake,
+};
+pub(crate) const L_MAX: Param = Param {
+    name: "l-max",
+    help: "L_max, metres: rho is 1 from here on (001 §4.4)",
+    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
+    default: Default::From("the scene's obscurance.l_max"),
+    stage: Stage::Bake,
+};
+pub(crate) const RAYS: Param = Param {
+    name: "rays",
+    help: "rays per texel, spread over the texel's patch",
+    kind: Kind::Count { min: 1, max: 1 << 20 },
+    default: Default::Value("256"),
+    stage: Stage::Bake,
+};
+
+pub(crate) const PARAMS: [&Param; 4] = [&VARIANT, &TAU, &L_MAX, &RAYS];
+
+/// The obscurance bake's settings from `values` over the scene's, `variant` unless given.
+pub(crate) fn settings(scene: &Scene, values: &Values, variant: Variant, work: WorkOptions) -> Result<ObscuranceSettings> {
+    let scene_settings = ObscuranceSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
+    let variant = values.choice(&VARIANT).and_then(Variant::parse).unwrap_or(variant);
+    let settings = ObscuranceSettings {
+        variant,
+        tau: values.number(&TAU).map_or(scene_settings.tau, |t| t as f32),
+        l_max: values.number(&L_MAX).map_or(scene_settings.l_max, |l| l as f32),
+        rays_per_texel: values.count(&RAYS).unwrap_or(256) as u32,
+        work,
+    };
+    settings.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --rays, --threads)"))?;
+    Ok(settings)
+}
+
+/// The obscurance stage, timed.
+pub(crate) fn bake_stage(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    atlas: &Atlas,
+    settings: &ObscuranceSettings,
+    stages: &mut Stages,
+) -> Result<ObscuranceMap> {
+    stages.timed("obscurance", || bake_obscurance::bake_obscurance(scene, bvh, atlas, settings)).map_err(anyhow::Error::msg)
+}
+
+/// The obscurance's section, with what it was made with.
+pub(crate) fn section(map: &ObscuranceMap, atlas: &Atlas, settings: &ObscuranceSettings) -> Result<Section> {
+    let summary = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
+    bake_obscurance::section(&map.values, atlas.layout(), summary).map_err(anyhow::Error::msg)
+}
+
+pub(crate) fn parameters(settings: &ObscuranceSettings) -> Value {
+    json!({
+        "variant": settings.variant.name(),
+        "tau": atlas::short(settings.tau),
+        "l_max": atlas::short(settings.l_max),
+        "rays_per_texel": settings.rays_per_texel,
+        "seed": settings.work.seed,
+    })
+}
+
+pub(crate) fn stats(map: &ObscuranceMap, settings: &ObscuranceSettings) -> Value {
+    json!({
+        "rays_per_texel": map.rays_per_texel,
+        "rays_per_texel_asked": settings.rays_per_texel,
+        "rays_traced": map.rays_traced,
+        "rays_per_second": map.rays_traced as f64 / map.seconds.max(1e-9),
+    })
+}
+
+pub(crate) fn summary(map: &ObscuranceMap) -> String {
+    let rate = map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6;
+    format!("{} rays per texel, {} rays in {:.3} s ({rate:.2} M rays/s)\n", map.rays_per_texel, map.rays_traced, map.seconds)
+}
+
+/// The scene re-indexed by an artifact's atlas and the obscurance on it (rgb W, alpha the
+/// coverage), as the renderer takes them.
+pub(crate) struct OnAtlas {
+    pub scene: Scene,
+    pub layout: PageLayout,
+    pub texels: Vec<Vec4>,
+}
+
+impl OnAtlas {
+    pub fn read(artifact: &Artifact, scene: &Scene) -> Result<OnAtlas> {
+        let (atlas, applied) = atlas::read(artifact, scene)?;
+        let values: Vec<Vec3> = bake_obscurance::read(artifact, scene, atlas.layout)?;
+        Ok(OnAtlas { scene: applied, layout: atlas.layout, texels: atlas.with_coverage(&values) })
+    }
+
+    pub fn image(&self) -> AtlasImage<'_> {
+        AtlasImage::new(self.layout, &self.texels)
+    }
+}
+
+impl Loaded for OnAtlas {
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
+        vec![Box::new(ObscuranceData { obscurance: self.image() })]
+    }
+}
+
+pub(crate) struct Obscurance;
+
+impl Method for Obscurance {
+    fn name(&self) -> &'static str {
+        "obscurance"
+    }
+
+    fn description(&self) -> &'static str {
+        "direct light plus ambient light scaled by baked obscurances (Iones et al. 2003, eq. 5-7)"
+    }
+
+    fn params(&self) -> Vec<&'static Param> {
+        [&atlas::PARAMS[..], &PARAMS[..]].concat()
+    }
+
+    fn bakes(&self) -> bool {
+        true
+    }
+
+    fn main_job_values(&self, rays: u32) -> Vec<(String, String)> {
+        vec![(RAYS.name.into(), rays.to_string())]
+    }
+
+    fn ambient(&self, scene: &Scene) -> (Vec3, f32) {
+        (scene.settings.ambient, scene.settings.beta)
+    }
+
+    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
+        let obscurance = settings(scene, values, Variant::Obscurance, work)?;
+        let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
+        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+        let map = bake_stage(scene, &bvh, &atlas, &obscurance, stages)?;
+        let mut parameters = parameters(&obscurance);
+        parameters["atlas"] = atlas::parameters(&atlas_settings, values);
+        Ok(Bake {
+            sections: vec![atlas::section(&atlas, &atlas_settings), section(&map, &atlas, &obscurance)?],
+            parameters,
+            stats: stats(&map, &obscurance),
+            summary: atlas::summary(&atlas) + &summary(&map),
+        })
+    }
+
+    fn load(&self, artifact: Option<&Artifact>, scene: &Scene, _: &Values) -> Result<Box<dyn Loaded>> {
+        let artifact = artifact.ok_or_else(|| anyhow::anyhow!("obscurance renders from a bake: give --bake"))?;
+        Ok(Box::new(OnAtlas::read(artifact, scene)?))
+    }
+}

@@ -1,0 +1,107 @@
+//! `relume reference` (the CPU path tracer's ground truth) and `relume compare` (RMSE and
+//! NRMSE of one EXR against another, with a false-colour error image).
+
+use crate::args::{load_scene, positive, reference_settings, PathTracerArgs, SceneArgs};
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::image;
+use relume_bake::metrics;
+use relume_bake::reference::{render_reference, ReferenceImages, ReferenceSettings};
+use relume_bake::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args)]
+pub(crate) struct ReferenceArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    trace: PathTracerArgs,
+    /// Ignore visibility of punctual lights (shading only, to compare with `render --no-shadows`).
+    #[arg(long)]
+    no_shadows: bool,
+    #[arg(long, short, default_value = "reference.exr")]
+    out: PathBuf,
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+}
+
+#[derive(Args)]
+pub(crate) struct CompareArgs {
+    /// The image under test (EXR).
+    image: PathBuf,
+    /// The reference (EXR).
+    reference: PathBuf,
+    /// Layer of the image to compare (default: its first layer).
+    #[arg(long)]
+    layer: Option<String>,
+    /// Layer of the reference (default: "combined" when it has one, else its first layer).
+    #[arg(long)]
+    reference_layer: Option<String>,
+    /// Write a false-colour error image (PNG) here.
+    #[arg(long)]
+    error_image: Option<PathBuf>,
+    /// Error that maps to red in the error image, relative to the reference RMS.
+    #[arg(long, default_value_t = 0.5)]
+    error_scale: f32,
+}
+
+/// The reference's three layers and how long they took.
+pub(crate) struct ReferenceRun {
+    pub images: ReferenceImages,
+    pub seconds: f64,
+}
+
+pub(crate) fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> ReferenceRun {
+    let start = Instant::now();
+    let bvh = SceneBvh::new(scene);
+    let images = render_reference(scene, &bvh, settings);
+    ReferenceRun { images, seconds: start.elapsed().as_secs_f64() }
+}
+
+pub(crate) fn write_reference(path: &Path, run: &ReferenceRun, exposure: f32) -> Result<()> {
+    let i = &run.images;
+    image::write_exr_layers(path, &[("direct", &i.direct), ("indirect", &i.indirect), ("combined", &i.combined)])?;
+    let png = path.with_extension("png");
+    image::write_png_tonemapped(&png, &i.combined, exposure)?;
+    println!("wrote {} and {}", path.display(), png.display());
+    Ok(())
+}
+
+pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
+    positive("--exposure", args.exposure)?;
+    let run = trace_reference(&scene, &settings);
+    write_reference(&args.out, &run, args.exposure)?;
+    println!("{} samples per pixel in {:.2} s, {:.0} paths/s", run.images.samples_per_pixel, run.seconds, run.images.paths_per_second);
+    if run.images.nonfinite_samples > 0 {
+        bail!("{} samples were NaN or infinite; the scene holds degenerate data", run.images.nonfinite_samples);
+    }
+    Ok(())
+}
+
+pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
+    positive("--error-scale", args.error_scale)?;
+    let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
+    let reference = match &args.reference_layer {
+        Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,
+        None => image::read_exr_layer(&args.reference, Some("combined")).or_else(|_| image::read_exr_layer(&args.reference, None))?,
+    };
+    let stats =
+        metrics::compare(&image, &reference).with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
+    println!("RMSE  {:.6}\nNRMSE {:.6}", stats.rmse, stats.nrmse);
+    if stats.dark_pixels > 0 {
+        println!("light where the reference is black: {:.6} of its RMS over {} pixels", stats.dark_leak, stats.dark_pixels);
+    }
+    if let Some(path) = &args.error_image {
+        let rgb = metrics::false_colour(&image, &reference, args.error_scale)?;
+        image::write_png_rgb8(path, image.width, image.height, &rgb)?;
+        println!("wrote {}", path.display());
+    }
+    if stats.non_finite_pixels > 0 {
+        bail!("{}: {} pixel(s) are NaN or infinite", args.image.display(), stats.non_finite_pixels);
+    }
+    Ok(())
+}

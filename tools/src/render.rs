@@ -1,0 +1,62 @@
+//! `relume render`: one scene through the Vulkan renderer, headless, to EXR and PNG, with the
+//! techniques of the method that baked `--bake` (or none: constant ambient light).
+
+use crate::args::{frame_count, load_scene, render_settings, GpuArgs, SceneArgs};
+use crate::gpu::{print_timings, render_on_gpu, write_render_outputs, GpuJob};
+use crate::methods::params::{RenderParams, Stage};
+use crate::methods::{self, Loaded, Plain};
+use anyhow::{bail, Result};
+use clap::Args;
+use relume_bake::artifact::Artifact;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub(crate) struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Output EXR; a tonemapped PNG is written beside it.
+    #[arg(long, short, default_value = "render.exr")]
+    out: PathBuf,
+    /// Render this many frames and report the median GPU time of every pass.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// A bake artifact folder (`relume bake --out`): the method that baked it renders, with
+    /// its own ambient light unless --ambient or --beta say otherwise. Without one: direct light
+    /// plus the scene's constant ambient light.
+    #[arg(long)]
+    bake: Option<PathBuf>,
+    #[command(flatten)]
+    params: RenderParams,
+}
+
+pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let frames = frame_count(args.frames)?;
+    let artifact = args.bake.as_deref().map(Artifact::read).transpose()?;
+    let (loaded, ambient): (Box<dyn Loaded>, _) = match &artifact {
+        Some(artifact) => {
+            let method = methods::find(artifact.method())?;
+            let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Render))?;
+            (method.load(Some(artifact), &scene, &values)?, method.ambient(&scene))
+        }
+        None => {
+            if let Some((name, _)) = args.params.pairs.first() {
+                let takers: Vec<&str> =
+                    methods::METHODS.iter().filter(|m| m.params().iter().any(|p| p.name == name)).map(|m| m.name()).collect();
+                bail!("--{name}: a run-time parameter of {}; render a bake of it (--bake)", takers.join(", "));
+            }
+            (Box::new(Plain(scene.clone())), (scene.settings.ambient, scene.settings.beta))
+        }
+    };
+    let settings = render_settings(&args.scene, &args.gpu, ambient)?;
+    let (renders, device) = render_on_gpu(&[GpuJob { loaded: loaded.as_ref(), settings, frames }], &args.gpu)?;
+    write_render_outputs(&args.out, &renders[0])?;
+    println!("device: {device}");
+    for (work, ms) in &renders[0].creation_ms {
+        println!("{work} (once, at creation): {ms:.3} ms");
+    }
+    print_timings(&renders[0].frames);
+    Ok(())
+}
