@@ -12,7 +12,7 @@
 //              no visibility (the lux of a directional light);
 //   I_A      = the ambient irradiance (lux), constant over the scene (001 eq. (5));
 //   O        = the occlusion term (rgb), bilinear from its atlas image through uv1; 1 without
-//              one (OCCLUSION_TERM false): 001 eq. (5)'s obscurance W;
+//              one (OCCLUSION_TERM false): W of 001 eq. (5);
 //   E_term   = the irradiance term (lux) of kind IRRADIANCE_TERM: bilinear through uv1 (texel),
 //              interpolated from the vertices (vertex) or this pixel's (pixel); times O when
 //              frame.irradiance_times_occlusion; plus O * E_direct when frame.occluded_direct

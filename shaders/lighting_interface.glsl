@@ -2,7 +2,7 @@
 // (specialization constants: which terms the frame's techniques hand over), the frame's
 // uniform buffer, the per-vertex irradiance of a vertex term, and the per-draw push block.
 
-// A texel term scaling the ambient light, read through uv1 (obscurance W).
+// A texel term scaling the ambient light, read through uv1 (W of 001 eq. (5)).
 layout(constant_id = 0) const bool OCCLUSION_TERM = false;
 // The indirect irradiance term's kind: TERM_NONE, TERM_TEXEL (through uv1), TERM_VERTEX
 // (one value per vertex, interpolated), TERM_PIXEL (one value per pixel of the frame).

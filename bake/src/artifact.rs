@@ -237,7 +237,8 @@ fn replace_folder(staging: &Path, dir: &Path) -> Result<(), ArtifactError> {
 
 // --- reading ------------------------------------------------------------------------------------
 
-/// An artifact read back: its manifest checked, every file read and checked against it.
+/// An artifact read back: its manifest checked, every file checked against it (and read
+/// again when a section is read, so that no file's bytes are held longer than its decoding).
 #[derive(Debug)]
 pub struct Artifact {
     dir: PathBuf,
@@ -250,25 +251,46 @@ struct StoredSection {
     name: String,
     version: u32,
     key: Value,
-    files: Vec<(String, Vec<u8>)>,
+    /// Each file's name and checksum, as the manifest lists them (every one checked by `read`).
+    files: Vec<(String, String)>,
 }
 
 /// One section's files, once its version and key have been checked.
 pub struct SectionData<'a> {
     dir: &'a Path,
     pub name: &'a str,
-    files: &'a [(String, Vec<u8>)],
+    files: &'a [(String, String)],
 }
 
 impl SectionData<'_> {
-    /// The bytes of `file` and its path (for messages); refused when the section lacks it.
-    pub fn file(&self, file: &str) -> Result<(&[u8], PathBuf), ArtifactError> {
+    /// The path of `file` (checked when the artifact was read); refused when the section
+    /// lacks it. For files a reader streams (images).
+    pub fn path(&self, file: &str) -> Result<PathBuf, ArtifactError> {
         let path = self.dir.join(file);
-        match self.files.iter().find(|(name, _)| name == file) {
-            Some((_, bytes)) => Ok((bytes, path)),
-            None => Err(fail(&path, format!("section {} has no file {file}", self.name), REBAKE)),
+        match self.files.iter().any(|(name, _)| name == file) {
+            true => Ok(path),
+            false => Err(fail(&path, format!("section {} has no file {file}", self.name), REBAKE)),
         }
     }
+
+    /// The bytes of `file` and its path, checked against the manifest's checksum again (the
+    /// folder may have changed since it was read).
+    pub fn file(&self, file: &str) -> Result<(Vec<u8>, PathBuf), ArtifactError> {
+        let path = self.path(file)?;
+        let expected = self.files.iter().find(|(name, _)| name == file).map(|(_, c)| c.as_str()).unwrap_or_default();
+        Ok((checked_bytes(&path, expected)?, path))
+    }
+}
+
+/// The bytes of the file at `path`, refused unless their checksum is `expected`.
+fn checked_bytes(path: &Path, expected: &str) -> Result<Vec<u8>, ArtifactError> {
+    let bytes = std::fs::read(path).map_err(|e| fail(path, format!("cannot read ({e})"), REBAKE))?;
+    if checksum(&bytes) != expected {
+        let problem =
+            format!("checksum {} differs from the manifest's {expected}: the file is corrupt or from another bake", checksum(&bytes));
+        return Err(fail(path, problem, REBAKE));
+    }
+    Ok(bytes)
 }
 
 const GIVE_ARTIFACT: &str = "give the folder `relume bake --out` wrote";
@@ -341,15 +363,9 @@ fn read_section(dir: &Path, manifest_path: &Path, entry: &Value) -> Result<Store
         if file.contains(['/', '\\']) || file.starts_with('.') {
             return Err(fail(manifest_path, format!("section {name} names a file outside the folder: {file}"), REBAKE));
         }
-        let path = dir.join(file);
-        let bytes = std::fs::read(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?;
         let expected = facts["checksum"].as_str().unwrap_or("(none)");
-        if checksum(&bytes) != expected {
-            let problem =
-                format!("checksum {} differs from the manifest's {expected}: the file is corrupt or from another bake", checksum(&bytes));
-            return Err(fail(&path, problem, REBAKE));
-        }
-        read.push((file.clone(), bytes));
+        checked_bytes(&dir.join(file), expected)?;
+        read.push((file.clone(), expected.to_string()));
     }
     Ok(StoredSection { name, version, key: entry["key"].clone(), files: read })
 }

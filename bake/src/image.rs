@@ -92,17 +92,18 @@ pub fn encode_exr_layers(layers: &[(&str, &Image)]) -> Result<Vec<u8>, String> {
     Ok(bytes.into_inner())
 }
 
-/// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb").
+/// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb"),
+/// streaming it from the file.
 pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, format!("cannot read ({e})")))?;
-    decode_exr_layers(&bytes).map_err(|e| io_error(path, e))
+    let open = || std::fs::File::open(path).map(std::io::BufReader::new).map_err(|e| io_error(path, format!("cannot read ({e})")));
+    check_exr_size(open()?).map_err(|e| io_error(path, e))?;
+    decode_exr_layers(open()?).map_err(|e| io_error(path, e))
 }
 
-/// Every RGB layer of the EXR file `bytes`, by name (an unnamed layer is called "rgb").
-pub fn decode_exr_layers(bytes: &[u8]) -> Result<Vec<(String, Image)>, String> {
+/// Every RGB layer of the EXR file `reader` reads, by name (an unnamed layer is called "rgb").
+fn decode_exr_layers(reader: impl std::io::Read + std::io::Seek + Send) -> Result<Vec<(String, Image)>, String> {
     use exr::prelude::*;
     type RgbImage = crate::image::Image;
-    check_exr_size(bytes)?;
     let file = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -114,7 +115,7 @@ pub fn decode_exr_layers(bytes: &[u8]) -> Result<Vec<(String, Image)>, String> {
         )
         .all_layers()
         .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
+        .from_buffered(reader)
         .map_err(|e| format!("not a readable RGB EXR file ({e})"))?;
     Ok(file
         .layer_data
@@ -131,9 +132,8 @@ const MAX_PIXELS: usize = 16384 * 16384;
 
 /// Refuses a file whose header claims a size no relume image has, before anything is
 /// allocated for it (a corrupt header must not become a huge allocation or an overflow).
-fn check_exr_size(bytes: &[u8]) -> Result<(), String> {
-    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-        .map_err(|e| format!("not a readable RGB EXR file ({e})"))?;
+fn check_exr_size(reader: impl std::io::Read + std::io::Seek) -> Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_buffered(reader, false).map_err(|e| format!("not a readable RGB EXR file ({e})"))?;
     for header in meta.headers.iter() {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         if w.checked_mul(h).is_none_or(|pixels| pixels > MAX_PIXELS) {
@@ -143,13 +143,6 @@ fn check_exr_size(bytes: &[u8]) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// One layer of the EXR file `bytes`: the named one, or the first when `layer` is None; the
-/// error names what the file has.
-pub fn decode_exr_layer(bytes: &[u8], layer: Option<&str>) -> Result<Image, String> {
-    pick_layer(decode_exr_layers(bytes)?, layer)
-        .map_err(|(wanted, available)| format!("layer \"{wanted}\" not found (the file has: {available}); name one of those"))
 }
 
 fn pick_layer(layers: Vec<(String, Image)>, layer: Option<&str>) -> Result<Image, (String, String)> {

@@ -1,25 +1,22 @@
 //! The settings a scene carries, in one place: the glTF scene's `extras.relume` block
 //! (documented in docs/FORMATS.md). Its top-level keys are what every method may read (the
 //! ambient light and the atlas's texel density); each method reads its own block under its
-//! key (`extras.relume.obscurance`, ...), checked when the scene loads by the reader the
-//! method registers in `crate::methods`. Every key is optional; a scene without the block gets
-//! [`SceneSettings::defaults_for`], sized from its bounds. The command line overrides any of
-//! them.
+//! key, checked when the scene loads by the reader the method registers in `crate::methods`.
+//! Every key is optional; a scene without the block gets [`SceneSettings::defaults_for`],
+//! sized from its bounds. The command line overrides any of them.
 //!
 //! ```json
 //! "scenes": [{ "nodes": [0, 1], "extras": { "relume": {
 //!     "ambient": [0.0, 0.0, 0.0], "beta": 0.3, "texel_density": 64.0,
-//!     "obscurance": { "tau": 0.1, "l_max": 0.3 },
-//!     "light_path_maps": { "region": { "box": [[-1, 2, -1], [1, 2.5, 1]], "test_points": 64 },
-//!                          "light_area": 0.01 } } } }]
+//!     "<a method's key>": { ... } } } }]
 //! ```
 
 use glam::Vec3;
 use serde_json::{Map, Value};
 
-/// The top-level settings (the obscurance illumination model's ambient light, Iones et al.,
-/// "Fast realistic lighting for video games", eq. (5)-(7), which the lighting pass adds for
-/// every method; and the lightmap atlas's density), and every method's block as given.
+/// The top-level settings (the ambient light of Iones et al., "Fast realistic lighting for
+/// video games" (001), eq. (5)-(7), which the lighting pass adds for every method; and the
+/// lightmap atlas's density), and every method's block as given.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneSettings {
     /// I_A of eq. (5): the ambient irradiance (lux) an unoccluded surface receives.

@@ -400,6 +400,60 @@ fn non_triangle_mode_refused() {
     assert_eq!(e.kind, ErrorKind::NotTriangles);
 }
 
+/// Each triangle of `mesh` as its corners' positions, turned so the smallest comes first: the
+/// same triangle with the same winding, whichever vertices carry it.
+fn turned(mesh: &relume_bake::scene::Mesh) -> Vec<[[u32; 3]; 3]> {
+    let corner = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
+    let mut triangles: Vec<[[u32; 3]; 3]> = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let c = [corner(t[0]), corner(t[1]), corner(t[2])];
+            let first = (0..3).min_by_key(|&k| c[k]).unwrap();
+            [c[first], c[(first + 1) % 3], c[(first + 2) % 3]]
+        })
+        .collect();
+    triangles.sort();
+    triangles
+}
+
+#[test]
+fn triangle_strips_and_fans_read_as_the_same_triangles() {
+    let dir = temp_dir("strips");
+    let (json, bin) = read_scene("occluder-plane");
+    let listed = load_ok(&write_scene(&dir, "list", &json, Some(&bin)));
+    let ground = mesh(&listed.scene, "Ground");
+    let at = accessor_offset(&json, json["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize);
+    let list: Vec<u32> = (0..6).map(|k| u32::from_le_bytes(bin[at + 4 * k..at + 4 * k + 4].try_into().unwrap())).collect();
+    // The ground quad as two triangles (w u v) and one with the edge v-u and a vertex d: the
+    // strip w u v d and the fan v w u d make the same two triangles with the same winding.
+    let at_vertex = |i: u32| ground.positions[i as usize];
+    let (first, second) = (&list[..3], &list[3..]);
+    let shared = |i: u32| second.iter().any(|&j| at_vertex(j) == at_vertex(i));
+    let lone = (0..3).find(|&k| !shared(first[k])).expect("the two triangles share an edge");
+    let [w, u, v] = [first[lone], first[(lone + 1) % 3], first[(lone + 2) % 3]];
+    let d = *second.iter().find(|&&j| at_vertex(j) != at_vertex(u) && at_vertex(j) != at_vertex(v)).expect("a vertex off the edge");
+    for (mode, order) in [(5, [w, u, v, d]), (6, [v, w, u, d])] {
+        let mut json = json.clone();
+        let mut bin = bin.clone();
+        let offset = bin.len();
+        bin.extend(order.iter().flat_map(|i| i.to_le_bytes()));
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_json::json!({ "buffer": 0, "byteOffset": offset, "byteLength": 16 }));
+        let view = views.len() - 1;
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(serde_json::json!({ "bufferView": view, "componentType": 5125, "count": 4, "type": "SCALAR" }));
+        json["meshes"][0]["primitives"][0]["indices"] = json!(accessors.len() - 1);
+        json["meshes"][0]["primitives"][0]["mode"] = json!(mode);
+        json["buffers"][0]["byteLength"] = json!(bin.len());
+        let loaded = load_ok(&write_scene(&dir, &format!("mode{mode}"), &json, Some(&bin)));
+        let other = mesh(&loaded.scene, "Ground");
+        assert_eq!(other.indices.len(), 6, "mode {mode}: two triangles");
+        assert_eq!(turned(other), turned(ground), "mode {mode}: the triangles differ");
+        assert!(loaded.warnings.is_empty(), "mode {mode}: {:?}", loaded.warnings);
+    }
+}
+
 #[test]
 fn degenerate_triangles_are_dropped_and_counted() {
     let dir = temp_dir("degenerate");

@@ -135,7 +135,7 @@ fn artifact_round_trip_keeps_the_transfer_and_refuses_a_corrupt_one() {
     let b = bake(&scene, 2);
     let n = b.atlas.texels.len();
     let compressed = compress(&b.transfers, &b.entries.entries, n, 0.01, Compression::Fixed { clusters: 4, basis: 2 }).unwrap();
-    let dir = std::env::temp_dir().join(format!("relume-lpm-artifact-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("relume-light-path-maps-artifact-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let layout = b.atlas.layout();
     let output = BakeOutput {

@@ -14,8 +14,8 @@ pub(crate) struct GpuVertex {
     position: [f32; 3],
     normal: [f32; 3],
     uv0: [f32; 2],
-    /// Lightmap coordinate (relume_bake::atlas): the page in the integer part of u; zero for
-    /// meshes without one (the renderer then has no lightmap, only a single texel of W = 1).
+    /// Atlas coordinate (relume_bake::atlas): the page in the integer part of u; zero for
+    /// meshes without one (the renderer then reads no texel term).
     uv1: [f32; 2],
 }
 

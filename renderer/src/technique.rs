@@ -37,7 +37,7 @@ pub enum Source<'t> {
 /// What a technique hands the lighting pass (lighting.frag states the formula).
 pub enum Term<'t> {
     /// An atlas image whose rgb scales the ambient light (I_A + beta * every light's
-    /// unshadowed irradiance): 001 eq. (5)'s obscurance W.
+    /// unshadowed irradiance): W of 001 eq. (5).
     Occlusion(&'t Image),
     /// Indirect irradiance (lux), added as albedo / pi * E.
     Irradiance {

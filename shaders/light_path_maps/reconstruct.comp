@@ -7,7 +7,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 layout(std430, set = 0, binding = 0) readonly buffer Sums { vec4 sums[]; };          // rgb, K of them
-// Texture k's texel t at 3 * (k * texel_count + t): packed rgb, texels in lightmap order.
+// Texture k's texel t at 3 * (k * texel_count + t): packed rgb, texels in atlas order.
 layout(std430, set = 0, binding = 1) readonly buffer Textures { float textures[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Coverage { float coverage[]; };  // > 0 covered
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2DArray indirect;

@@ -1,6 +1,6 @@
 //! Shared helpers of relume's cross-crate tests: shipped scenes, validated headless renderers
 //! and their refusals, techniques from test data, the reference's direct layer at pixel
-//! centres, failure images, and synthetic light path maps (`synthetic_lpm`).
+//! centres, failure images, and synthetic light path maps (`synthetic_light_path_maps`).
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::Atlas;
@@ -16,7 +16,7 @@ use relume_renderer::{AtlasImage, Headless, MakeTechnique, RenderSettings, Rende
 use std::path::PathBuf;
 use std::sync::Arc;
 
-pub mod synthetic_lpm;
+pub mod synthetic_light_path_maps;
 
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -1,6 +1,6 @@
 //! The frame loop allocates nothing: a counting allocator watches the thread that renders
 //! while frames are rendered, lights are moved, the ambient term (and the composition of the
-//! light path maps) changes and timings are read, without a lightmap, with one, and with
+//! light path maps) changes and timings are read, without obscurance, with it, and with
 //! light path maps. (Its own test binary, so no other test shares the allocator.)
 
 use glam::{Vec3, Vec4};
@@ -9,7 +9,7 @@ use relume_bake::scene::Scene;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{Headless, RenderSettings};
-use relume_tests::synthetic_lpm::{atlas_scene, constant_obscurance, synthetic_transfer};
+use relume_tests::synthetic_light_path_maps::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -101,7 +101,7 @@ fn frames_with_a_moving_occluder_allocate_nothing() {
 }
 
 #[test]
-fn frames_with_a_lightmap_and_changing_ambient_allocate_nothing() {
+fn frames_with_obscurance_and_changing_ambient_allocate_nothing() {
     let mut scene = load_scene("cornell");
     let atlas = Atlas::build(&scene, &AtlasSettings { texel_density: 8.0, ..AtlasSettings::default() }).expect("atlas");
     for (mesh, atlas_mesh) in scene.meshes.iter_mut().zip(&atlas.meshes) {

@@ -43,7 +43,7 @@ struct Bake {
     transfer: ClusteredTransfer,
 }
 
-fn obscurance_lightmap(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, variant: Variant) -> Vec<Vec4> {
+fn bake_obscurance_texels(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, variant: Variant) -> Vec<Vec4> {
     let settings = ObscuranceSettings {
         variant,
         tau: ObscuranceSceneSettings::of(scene).unwrap().tau,
@@ -85,8 +85,8 @@ fn bake(scene: &Scene) -> Bake {
         *mesh = atlas_mesh.apply(mesh);
     }
     Bake {
-        spectral: obscurance_lightmap(scene, &bvh, &atlas, Variant::Spectral),
-        obscurance: obscurance_lightmap(scene, &bvh, &atlas, Variant::Obscurance),
+        spectral: bake_obscurance_texels(scene, &bvh, &atlas, Variant::Spectral),
+        obscurance: bake_obscurance_texels(scene, &bvh, &atlas, Variant::Obscurance),
         scene: applied,
         atlas,
         transfer: compressed.transfer,
@@ -129,7 +129,7 @@ struct Row {
     direct: f64,
     obscurance: Error,
     /// One per [`Composition::ALL`].
-    lpm: [Error; 3],
+    light_path_maps: [Error; 3],
 }
 
 /// The renderers of the comparison on one context: direct light only, obscurance ambient, and
@@ -137,7 +137,7 @@ struct Row {
 struct Renderers {
     direct: Headless,
     obscurance: Headless,
-    lpm: Headless,
+    light_path_maps: Headless,
 }
 
 fn frame(renderer: &mut Headless, lights: &[Light]) -> Image {
@@ -155,7 +155,7 @@ impl Renderers {
         Renderers {
             direct: new_renderer(ctx, scene, &settings, &[]),
             obscurance: new_renderer(ctx, &bake.scene, &ambient, &[&obscurance]),
-            lpm: new_renderer(ctx, &bake.scene, &settings, &[&ObscuranceData { obscurance: spectral }, &maps]),
+            light_path_maps: new_renderer(ctx, &bake.scene, &settings, &[&ObscuranceData { obscurance: spectral }, &maps]),
         }
     }
 
@@ -177,11 +177,11 @@ impl Renderers {
             indirect: metrics::compare(&difference(image, &direct), &reference.indirect).unwrap().nrmse,
         };
         let obscurance = error(&frame(&mut self.obscurance, &lights), "obscurance");
-        let lpm = Composition::ALL.map(|composition| {
-            set_composition(&mut self.lpm, composition);
-            error(&frame(&mut self.lpm, &lights), &format!("lpm_{composition:?}"))
+        let light_path_maps = Composition::ALL.map(|composition| {
+            set_composition(&mut self.light_path_maps, composition);
+            error(&frame(&mut self.light_path_maps, &lights), &format!("light_path_maps_{composition:?}"))
         });
-        Row { position, direct: error(&direct, "direct").combined, obscurance, lpm }
+        Row { position, direct: error(&direct, "direct").combined, obscurance, light_path_maps }
     }
 }
 
@@ -191,12 +191,20 @@ fn print_table(title: &str, rows: &[Row]) {
     let cell = |e: Error| format!("{:.4} / {:.4}", e.combined, e.indirect);
     for r in rows {
         let p = r.position;
-        println!("| {:.3}, {:.3}, {:.3} | {:.4} | {} | {} |", p.x, p.y, p.z, r.direct, cell(r.obscurance), r.lpm.map(cell).join(" | "));
+        println!(
+            "| {:.3}, {:.3}, {:.3} | {:.4} | {} | {} |",
+            p.x,
+            p.y,
+            p.z,
+            r.direct,
+            cell(r.obscurance),
+            r.light_path_maps.map(cell).join(" | ")
+        );
     }
     let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / rows.len() as f64;
     let mean_error = |f: &dyn Fn(&Row) -> Error| Error { combined: mean(&|r| f(r).combined), indirect: mean(&|r| f(r).indirect) };
-    let lpm_means: Vec<String> = (0..3).map(|i| cell(mean_error(&|r| r.lpm[i]))).collect();
-    println!("| mean | {:.4} | {} | {} |", mean(&|r| r.direct), cell(mean_error(&|r| r.obscurance)), lpm_means.join(" | "));
+    let light_path_maps_means: Vec<String> = (0..3).map(|i| cell(mean_error(&|r| r.light_path_maps[i]))).collect();
+    println!("| mean | {:.4} | {} | {} |", mean(&|r| r.direct), cell(mean_error(&|r| r.obscurance)), light_path_maps_means.join(" | "));
 }
 
 #[test]
@@ -228,14 +236,18 @@ fn light_path_maps_beat_obscurance_ambient_along_a_light_path_on_cornell() {
     print_table(&format!("NRMSE vs reference combined, {SIZE}x{SIZE}, {SAMPLES} spp, inside the region:"), &inside);
     print_table("outside the region:", &outside);
     for r in &inside {
-        let (lpm, obscurance) = (r.lpm[default_mode].combined, r.obscurance.combined);
-        assert!(lpm < obscurance, "light at {}: light path maps {lpm:.4} do not beat obscurance ambient {obscurance:.4}", r.position);
+        let (light_path_maps, obscurance) = (r.light_path_maps[default_mode].combined, r.obscurance.combined);
+        assert!(
+            light_path_maps < obscurance,
+            "light at {}: light path maps {light_path_maps:.4} do not beat obscurance ambient {obscurance:.4}",
+            r.position
+        );
     }
     for r in &outside {
-        let lpm = r.lpm[default_mode].combined;
+        let light_path_maps = r.light_path_maps[default_mode].combined;
         assert!(
-            lpm < r.direct,
-            "light at {} (outside the region): light path maps {lpm:.4} are worse than direct light alone {:.4}",
+            light_path_maps < r.direct,
+            "light at {} (outside the region): light path maps {light_path_maps:.4} are worse than direct light alone {:.4}",
             r.position,
             r.direct
         );

@@ -4,7 +4,7 @@
 //! the baker's ray-traced `entry_irradiance` for most entry points), cluster
 //! sums and reconstruction (`cluster_sums` + `reconstruct` of the GPU's own I_e), the padding
 //! of the indirect image, the three `Composition` modes of the lighting pass, and the
-//! refusal of transfers that do not fit. Data is synthetic (tests/src/synthetic_lpm.rs):
+//! refusal of transfers that do not fit. Data is synthetic (tests/src/synthetic_light_path_maps.rs):
 //! cornell's atlas, entry points at covered texel centres, hashed textures and weights.
 
 use glam::{Vec3, Vec4};
@@ -19,7 +19,7 @@ use relume_renderer::techniques::light_path_maps::{Composition, LightPathMaps, L
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::vk::{Context, Readback, VkResult};
 use relume_renderer::{AtlasImage, Headless, RenderSettings};
-use relume_tests::synthetic_lpm::{atlas_scene, constant_obscurance, synthetic_transfer};
+use relume_tests::synthetic_light_path_maps::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
 use std::sync::Arc;
 

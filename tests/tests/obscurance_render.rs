@@ -1,9 +1,9 @@
 //! The obscurance illumination model in the forward pass (001 eq. (5)-(7)), GPU against CPU:
 //! with I_A = beta = 0 the frame is bit for bit the direct-only frame; the ambient term
-//! albedo / pi * I_A * W with W read from a lightmap through uv1 matches a CPU evaluation at
+//! albedo / pi * I_A * W with W read from the obscurance through uv1 matches a CPU evaluation at
 //! pixel centres (primary rays through the BVH, uv1 interpolated with the hit's barycentrics,
-//! the padded lightmap filtered bilinearly by the same convention); the beta term matches
-//! albedo / pi * beta * sum_j E_j; bad lightmaps, scenes and settings are refused.
+//! the padded obscurance filtered bilinearly by the same convention); the beta term matches
+//! albedo / pi * beta * sum_j E_j; bad obscurances, scenes and settings are refused.
 //!
 //! The ambient term of a frame is isolated by rendering it twice with one renderer, with and
 //! without the ambient settings ([`Renderer::set_ambient`]), and subtracting: the direct term
@@ -49,7 +49,7 @@ fn synthetic_w(centre: Vec3) -> Vec3 {
 }
 
 /// The scene's atlas (small pages, so the floor and the box land on different pages), the
-/// scene with the atlas applied (uv1 set), and the synthetic lightmap: rgb W, alpha coverage.
+/// scene with the atlas applied (uv1 set), and the synthetic obscurance: rgb W, alpha coverage.
 fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     let atlas_settings = AtlasSettings { texel_density: 12.0, gutter: 2, max_size: 64, ..AtlasSettings::default() };
     let atlas = Atlas::build(scene, &atlas_settings).expect("atlas");
@@ -62,9 +62,9 @@ fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     (atlas, applied, texels)
 }
 
-/// Bilinear filtering of a padded lightmap at uv1, as shaders/lighting.frag does it: page =
+/// Bilinear filtering of a padded atlas image at uv1, as shaders/lighting.frag does it: page =
 /// floor(u), texel centres at (i + 0.5) / size, clamped to the page's edge.
-fn sample_lightmap(padded: &[Vec4], (width, height, pages): (u32, u32, u32), uv1: Vec2) -> Vec3 {
+fn sample_atlas(padded: &[Vec4], (width, height, pages): (u32, u32, u32), uv1: Vec2) -> Vec3 {
     let (w, h) = (width as i64, height as i64);
     let page = uv1.x.floor();
     let layer = (page as i64).clamp(0, pages as i64 - 1);
@@ -110,8 +110,8 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
     let mut plain = new_renderer(&ctx, &scene, &settings(), &[]);
     let direct_only = render(&mut plain);
     let mut lit = new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: atlas_image(&atlas, &texels) }]);
-    let with_lightmap = render(&mut lit);
-    assert_eq!(with_lightmap, direct_only, "a lightmap with I_A = beta = 0 changed the frame");
+    let with_obscurance = render(&mut lit);
+    assert_eq!(with_obscurance, direct_only, "an obscurance with I_A = beta = 0 changed the frame");
 
     lit.set_ambient(Vec3::splat(2.0), 0.3).expect("valid ambient");
     let ambient = render(&mut lit);
@@ -125,29 +125,29 @@ fn zero_ambient_and_beta_give_the_direct_only_frame_bit_for_bit() {
     assert!(plain.creation_timings().is_empty(), "no obscurance, no padding time");
     if let Some((_, ms)) = lit.creation_timings().first().copied() {
         assert!(ms.is_finite() && ms >= 0.0, "padding took {ms} ms");
-        println!("padding of a {}x{}x{} lightmap: {ms:.3} ms", atlas.width, atlas.height, atlas.pages);
+        println!("padding of a {}x{}x{} obscurance: {ms:.3} ms", atlas.width, atlas.height, atlas.pages);
     }
     drop((plain, lit));
     assert_clean(ctx);
 }
 
-/// Renders `scene` (uv1 on every mesh) with `lightmap` and I_A = 1, 1, 1, beta = 0, and returns
+/// Renders `scene` (uv1 on every mesh) with `obscurance` and I_A = 1, 1, 1, beta = 0, and returns
 /// the NRMSE of its ambient term against the CPU's albedo / pi * I_A * W over the pixels away
-/// from silhouettes, W filtered from `padded` (the lightmap as the GPU padded it). Also
+/// from silhouettes, W filtered from `padded` (the obscurance as the GPU padded it). Also
 /// returns how many pixels count, and the range of W's red channel over mesh 0.
-fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &AtlasImage, padded: &[Vec4]) -> (f64, usize, (f32, f32)) {
+fn ambient_term_nrmse(name: &str, scene: &Scene, obscurance: &AtlasImage, padded: &[Vec4]) -> (f64, usize, (f32, f32)) {
     let ambient = Vec3::ONE;
-    let gpu = gpu_ambient_term(scene, Some(lightmap), ambient, 0.0);
+    let gpu = gpu_ambient_term(scene, Some(obscurance), ambient, 0.0);
 
     let bvh = SceneBvh::new(scene);
     let hits = primary_hits(scene, &bvh, WIDTH, HEIGHT);
     let keep = interior_pixels(&hits, WIDTH, HEIGHT);
-    let dims = (lightmap.width, lightmap.height, lightmap.pages);
+    let dims = (obscurance.width, obscurance.height, obscurance.pages);
     let mut cpu = Image::new(WIDTH, HEIGHT);
     let mut first_mesh_w = (f32::INFINITY, f32::NEG_INFINITY);
     for (pixel, hit) in cpu.pixels.iter_mut().zip(&hits) {
         let Some(hit) = hit else { continue };
-        let w = sample_lightmap(padded, dims, hit_uv1(scene, hit));
+        let w = sample_atlas(padded, dims, hit_uv1(scene, hit));
         if hit.mesh == 0 {
             first_mesh_w = (first_mesh_w.0.min(w.x), first_mesh_w.1.max(w.x));
         }
@@ -164,16 +164,16 @@ fn ambient_term_nrmse(name: &str, scene: &Scene, lightmap: &AtlasImage, padded: 
         .filter(|(_, k)| **k)
         .map(|((g, c), _)| (*g - *c).abs().max_element() / c.max_element().max(1e-6))
         .fold(0.0f32, f32::max);
-    println!("{name}: {}x{}x{} lightmap, NRMSE {nrmse:.2e} over {kept} pixels, worst relative {worst:.2e}", dims.0, dims.1, dims.2);
+    println!("{name}: {}x{}x{} obscurance, NRMSE {nrmse:.2e} over {kept} pixels, worst relative {worst:.2e}", dims.0, dims.1, dims.2);
     (nrmse, kept, first_mesh_w)
 }
 
 #[test]
-fn the_ambient_term_through_the_lightmap_matches_the_cpu() {
+fn the_ambient_term_through_the_obscurance_matches_the_cpu() {
     let scene = floor_and_box(vec![point_light()]);
     let (atlas, applied, texels) = atlas_scene(&scene);
     assert!(atlas.pages >= 2, "the floor and the box should land on different pages ({} pages)", atlas.pages);
-    // The padded lightmap as the renderer holds it: the same texels uploaded and padded by
+    // The padded obscurance as the renderer holds it: the same texels uploaded and padded by
     // the same (deterministic) GPU pass, read back.
     let padded = {
         let ctx = validated_context();
@@ -184,17 +184,17 @@ fn the_ambient_term_through_the_lightmap_matches_the_cpu() {
         assert_clean(ctx);
         padded
     };
-    let lightmap = atlas_image(&atlas, &texels);
-    let (nrmse, _, floor_w) = ambient_term_nrmse("obscurance_ambient_term", &applied, &lightmap, &padded);
+    let obscurance = atlas_image(&atlas, &texels);
+    let (nrmse, _, floor_w) = ambient_term_nrmse("obscurance_ambient_term", &applied, &obscurance, &padded);
     assert!(floor_w.1 - floor_w.0 > 0.5, "W hardly varies over the floor ({floor_w:?}); the test would prove little");
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
 }
 
 /// An atlas never puts a chart against a page's edge; this floor's uv1 spans its whole page
-/// in v and starts at its left edge in u, on page 1 of a 4 x 4 x 2 lightmap of contrasting
+/// in v and starts at its left edge in u, on page 1 of a 4 x 4 x 2 obscurance of contrasting
 /// texels, so the filter's edge clamp (and not wrapping, nor the other page) shows.
 #[test]
-fn lightmap_pages_are_clamped_at_their_edges() {
+fn atlas_pages_are_clamped_at_their_edges() {
     let floor_material = testing::material("floor", Vec3::new(0.8, 0.6, 0.4), Vec3::ZERO);
     let mut floor = testing::square(Vec3::ZERO, Vec3::X * 2.0, -Vec3::Z * 2.0, 4, 0);
     floor.uv1 = Some(floor.positions.iter().map(|p| Vec2::new(1.0 + 0.75 * (p.x + 2.0) / 4.0, (p.z + 2.0) / 4.0)).collect());
@@ -211,13 +211,13 @@ fn lightmap_pages_are_clamped_at_their_edges() {
             }
         })
         .collect();
-    let lightmap = AtlasImage { width: 4, height: 4, pages: 2, texels: &texels };
-    let (nrmse, _, w) = ambient_term_nrmse("obscurance_page_edges", &scene, &lightmap, &texels);
+    let obscurance = AtlasImage { width: 4, height: 4, pages: 2, texels: &texels };
+    let (nrmse, _, w) = ambient_term_nrmse("obscurance_page_edges", &scene, &obscurance, &texels);
     assert!(w.1 <= 1.0, "page 0 bled into page 1 (W up to {})", w.1);
     assert!(nrmse <= 0.01, "NRMSE {nrmse} > 0.01");
 }
 
-/// The beta term alone (I_A = 0, no lightmap so W = 1) at the pixels whose ray hits the
+/// The beta term alone (I_A = 0, no obscurance so W = 1) at the pixels whose ray hits the
 /// floor, against albedo / pi * beta * sum_j E_j with E_j from the CPU's Light::incident at
 /// the primary hit; returns the relative error at the image centre and the worst.
 fn beta_term_errors(name: &str, scene: &Scene, beta: f32) -> (f32, f32) {
@@ -303,7 +303,7 @@ fn the_beta_term_is_beta_times_every_lights_unshadowed_irradiance() {
 }
 
 #[test]
-fn bad_lightmaps_scenes_and_settings_are_refused() {
+fn bad_obscurances_scenes_and_settings_are_refused() {
     let scene = floor_and_box(vec![point_light()]);
     let (atlas, applied, texels) = atlas_scene(&scene);
     let ctx = validated_context();
@@ -312,19 +312,19 @@ fn bad_lightmaps_scenes_and_settings_are_refused() {
     let message = refusal(try_new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: atlas_image(&atlas, short) }]));
     says(&message, &[&format!("{} texels", texels.len()), &format!("{} were given", short.len())]);
 
-    let lightmap = atlas_image(&atlas, &texels);
-    let message = refusal(try_new_renderer(&ctx, &scene, &settings(), &[&ObscuranceData { obscurance: lightmap }]));
+    let obscurance = atlas_image(&atlas, &texels);
+    let message = refusal(try_new_renderer(&ctx, &scene, &settings(), &[&ObscuranceData { obscurance }]));
     says(&message, &["mesh 0 \"square\"", "no uv1", "0 of 2"]);
     let mut half = scene.clone();
     half.meshes[0] = atlas.meshes[0].apply(&scene.meshes[0]);
-    let message = refusal(try_new_renderer(&ctx, &half, &settings(), &[&ObscuranceData { obscurance: lightmap }]));
+    let message = refusal(try_new_renderer(&ctx, &half, &settings(), &[&ObscuranceData { obscurance }]));
     says(&message, &["mesh 1 \"box\"", "no uv1", "1 of 2"]);
-    // uv1 on a page the lightmap does not have.
+    // uv1 on a page the atlas does not have.
     let first_page = (atlas.width * atlas.height) as usize;
-    let one_page = AtlasImage { pages: 1, texels: &texels[..first_page], ..lightmap };
+    let one_page = AtlasImage { pages: 1, texels: &texels[..first_page], ..obscurance };
     let message = refusal(try_new_renderer(&ctx, &applied, &settings(), &[&ObscuranceData { obscurance: one_page }]));
     says(&message, &["1 pages", "uv1"]);
-    // Without a lightmap, meshes with uv1 on some meshes only are fine (W = 1 everywhere).
+    // Without an obscurance, meshes with uv1 on some meshes only are fine (W = 1 everywhere).
     drop(try_new_renderer(&ctx, &half, &settings(), &[]).expect("no obscurance: uv1 is not needed"));
 
     let bad = [

@@ -1,4 +1,4 @@
-//! The GPU lightmap padding pass against a brute-force CPU nearest fill: covered texels stay
+//! The GPU atlas padding pass against a brute-force CPU nearest fill: covered texels stay
 //! bit for bit, every empty texel copies a covered texel within a texel of the nearest and
 //! says how far it is, a layer without coverage stays empty, bad sizes are refused. Every
 //! covered texel has an rgb of its own (its coordinates), so the texel a padded one copied
@@ -14,7 +14,7 @@ use std::sync::Arc;
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 48;
 
-/// The coverage of texel (x, y) of `layer` in the synthetic lightmap, 0 for empty. Layer 0:
+/// The coverage of texel (x, y) of `layer` in the synthetic atlas image, 0 for empty. Layer 0:
 /// a disc, a right triangle and one lone texel; layer 1: a one-texel-wide diagonal band and
 /// a block in the corner. Coverages differ so that "unchanged" covers alpha too.
 fn coverage(layer: u32, x: i32, y: i32) -> f32 {
@@ -54,7 +54,7 @@ fn distance(a: IVec2, b: IVec2) -> f32 {
     ((a - b).length_squared() as f32).sqrt()
 }
 
-/// Checks one layer of a padded lightmap against its input; returns how many empty texels
+/// Checks one layer of a padded atlas image against its input; returns how many empty texels
 /// copied an exactly nearest covered texel, and how many empty texels there were.
 fn check_layer(layer: u32, input: &[Vec4], padded: &[Vec4]) -> (usize, usize) {
     let texels = || (0..HEIGHT as i32).flat_map(|y| (0..WIDTH as i32).map(move |x| IVec2::new(x, y)));
@@ -99,17 +99,17 @@ fn upload(ctx: &Arc<Context>, width: u32, height: u32, pages: u32, texels: &[Vec
 fn padding_copies_a_nearest_covered_texel_into_every_empty_one() {
     let ctx = validated_context();
     let input = synthetic_texels(2, coverage);
-    let lightmap = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
-    let padded = lightmap.read_back_blocking().expect("read back");
+    let image = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
+    let padded = image.read_back_blocking().expect("read back");
     for layer in 0..2 {
         let (exact, empty) = check_layer(layer, &input, &padded);
         println!("layer {layer}: {exact} of {empty} empty texels copied an exactly nearest covered texel");
     }
-    assert_eq!(lightmap.read_back_blocking().expect("read back"), padded, "a read-back leaves the image as it was");
+    assert_eq!(image.read_back_blocking().expect("read back"), padded, "a read-back leaves the image as it was");
     let mut tracker = Tracker::default();
-    lightmap.register_state(&mut tracker);
-    assert_eq!(tracker.state(&lightmap.image), Access::FragmentSampled);
-    drop(lightmap);
+    image.register_state(&mut tracker);
+    assert_eq!(tracker.state(&image.image), Access::FragmentSampled);
+    drop(image);
     assert_clean(ctx);
 }
 
@@ -118,12 +118,12 @@ fn a_layer_without_coverage_stays_empty_and_layers_do_not_mix() {
     let ctx = validated_context();
     let lone_texel = |layer, x, y| if layer == 1 && (x, y) == (40, 7) { 1.0 } else { 0.0 };
     let input = synthetic_texels(2, lone_texel);
-    let lightmap = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
-    let padded = lightmap.read_back_blocking().expect("read back");
+    let image = upload(&ctx, WIDTH, HEIGHT, 2, &input).expect("upload");
+    let padded = image.read_back_blocking().expect("read back");
     let layer_size = (WIDTH * HEIGHT) as usize;
     assert!(padded[..layer_size].iter().all(|t| *t == Vec4::ZERO), "the layer without coverage changed");
     check_layer(1, &input, &padded);
-    drop(lightmap);
+    drop(image);
     assert_clean(ctx);
 }
 

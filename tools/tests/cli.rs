@@ -176,7 +176,7 @@ fn relume(args: &[&str], dir: &Path) -> std::process::Output {
 /// takes `--composition`; a composition without such a bake, or an unknown one, is refused.
 #[test]
 fn render_takes_a_light_path_maps_bake_and_its_composition() {
-    let dir = temp_dir("lpm");
+    let dir = temp_dir("light-path-maps");
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
     let cornell = cornell.to_str().unwrap();
     let bake = relume(
@@ -196,19 +196,23 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
             "--rays",
             "16",
             "--out",
-            "lpm",
+            "light-path-maps",
         ],
         &dir,
     );
     assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
     let small = ["--width", "32", "--height", "32", "--shadow-map-size", "64"];
     let render = relume(
-        &[&["render", cornell, "--bake", "lpm", "--validation", "--composition", "plain", "--out", "lpm.exr"][..], &small].concat(),
+        &[
+            &["render", cornell, "--bake", "light-path-maps", "--validation", "--composition", "plain", "--out", "light-path-maps.exr"][..],
+            &small,
+        ]
+        .concat(),
         &dir,
     );
     let stdout = String::from_utf8_lossy(&render.stdout);
     assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
-    assert!(dir.join("lpm.exr").exists() && dir.join("lpm.png").exists());
+    assert!(dir.join("light-path-maps.exr").exists() && dir.join("light-path-maps.png").exists());
     if stdout.contains("GPU time") {
         for pass in ["light_path_maps.entry_irradiance", "light_path_maps.cluster_sums", "light_path_maps.reconstruct"] {
             assert!(stdout.contains(pass), "no {pass} timing in:\n{stdout}");
@@ -217,7 +221,7 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
     // A value the flag's parser refuses is a usage error (exit code 2, clap's); the rest are 1.
     for (args, expected, code) in [
         (vec!["render", cornell, "--composition", "plain", "--out", "none.exr"], "light-path-maps", 1),
-        (vec!["render", cornell, "--bake", "lpm", "--composition", "sideways", "--out", "none.exr"], "times-obscurance", 2),
+        (vec!["render", cornell, "--bake", "light-path-maps", "--composition", "sideways", "--out", "none.exr"], "times-obscurance", 2),
     ] {
         let result = relume(&[&args[..], &small].concat(), &dir);
         let stderr = String::from_utf8_lossy(&result.stderr);

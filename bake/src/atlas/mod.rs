@@ -112,7 +112,7 @@ impl AtlasSection {
     pub fn read(artifact: &Artifact, scene: &Scene) -> Result<AtlasSection, ArtifactError> {
         let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
         let (bytes, path) = data.file(FILE)?;
-        let mut r = Reader::new(bytes, &path, MAGIC, "atlas")?;
+        let mut r = Reader::new(&bytes, &path, MAGIC, "atlas")?;
         let mesh_count = r.u32("the mesh count")?;
         if mesh_count as usize != scene.meshes.len() {
             return Err(fail(

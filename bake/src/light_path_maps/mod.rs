@@ -14,7 +14,7 @@ pub use transfer::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};
-use crate::image::{decode_exr_layer, encode_exr_layers, Image};
+use crate::image::{encode_exr_layers, read_exr_layer, Image};
 use crate::methods::SceneBlock;
 use crate::scene::Scene;
 use crate::settings::{as_object, known_keys, number, vec3};
@@ -163,7 +163,7 @@ pub fn section(transfer: &ClusteredTransfer, layout: PageLayout, summary: Value)
 pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<ClusteredTransfer, ArtifactError> {
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
-    let mut r = Reader::new(bin, &path, MAGIC, "light path maps")?;
+    let mut r = Reader::new(&bin, &path, MAGIC, "light path maps")?;
     let [entries, clusters, basis_count, texel_count] =
         [r.u32("the entry-point count")?, r.u32("the cluster count")?, r.u32("D")?, r.u32("the texel count")?];
     if texel_count as usize != layout.texel_count() || entries > 1 << 24 || clusters > entries || basis_count > 1024 {
@@ -182,8 +182,8 @@ pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<Cl
         .collect();
     let weights = r.f32s(entries as usize * basis_count as usize, "the weights")?;
     r.finish("the weights")?;
-    let (exr, exr_path) = data.file(EXR)?;
-    let image = decode_exr_layer(exr, Some(LAYER)).map_err(|e| fail(&exr_path, e, REBAKE))?;
+    let exr_path = data.path(EXR)?;
+    let image = read_exr_layer(&exr_path, Some(LAYER)).map_err(|e| fail(&exr_path, e.to_string(), REBAKE))?;
     let transfer = ClusteredTransfer {
         entry_points,
         cluster_starts,

@@ -7,7 +7,7 @@
 //! point, drawn uniformly by area over the face pieces of the patch, and leaves in a
 //! cosine-distributed direction about the face's front (counter-clockwise) normal, so a
 //! ray's estimate is rho(L) itself (the 1/pi and the cosine cancel the density).
-//! The lightmap holds the front side: a two-sided surface shows the same value on its back.
+//! The obscurance holds the front side: a two-sided surface shows the same value on its back.
 
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;

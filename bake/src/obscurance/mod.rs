@@ -9,7 +9,7 @@ mod baker;
 pub use baker::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
-use crate::image::{decode_exr_layer, encode_exr_layers, Image};
+use crate::image::{encode_exr_layers, read_exr_layer, Image};
 use crate::methods::SceneBlock;
 use crate::scene::Scene;
 use crate::settings::{as_object, diagonal, first_failed_check, known_keys, number};
@@ -79,8 +79,8 @@ pub fn section(values: &[Vec3], layout: PageLayout, summary: Value) -> Result<Se
 /// the atlas's or a value is not finite and >= 0.
 pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<Vec<Vec3>, ArtifactError> {
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
-    let (bytes, path) = data.file(FILE)?;
-    let image = decode_exr_layer(bytes, Some(LAYER)).map_err(|e| fail(&path, e, REBAKE))?;
+    let path = data.path(FILE)?;
+    let image = read_exr_layer(&path, Some(LAYER)).map_err(|e| fail(&path, e.to_string(), REBAKE))?;
     if (image.width, image.height) != (layout.width, layout.height * layout.pages) {
         let problem =
             format!("is {} x {}, the atlas {} x {} x {} pages", image.width, image.height, layout.width, layout.height, layout.pages);

@@ -109,11 +109,11 @@ mod tests {
     fn parameters_split_into_frame_keys_and_the_methods_own() {
         let table: toml::Table =
             toml::from_str("rays = 64\nuncompressed = true\nvariant = 'ao'\nbeta = 0.5\ncomposition = 'plain'").unwrap();
-        let lpm = methods::find("light-path-maps").unwrap();
-        let config = config(lpm, table.clone()).unwrap();
+        let method = methods::find("light-path-maps").unwrap();
+        let config = config(method, table.clone()).unwrap();
         assert_eq!(config.frame.beta, Some(0.5));
-        assert_eq!(config.values.of_stage(&lpm.params(), Stage::Render), ["composition=plain"]);
-        assert_eq!(config.values.of_stage(&lpm.params(), Stage::Bake), ["rays=64", "uncompressed=true", "variant=ao"]);
+        assert_eq!(config.values.of_stage(&method.params(), Stage::Render), ["composition=plain"]);
+        assert_eq!(config.values.of_stage(&method.params(), Stage::Bake), ["rays=64", "uncompressed=true", "variant=ao"]);
         let refused = super::config(methods::find("direct").unwrap(), table).err().expect("direct takes no rays");
         assert!(format!("{refused:#}").contains("not a parameter of direct"), "{refused:#}");
         assert!(methods::find("photon-mapping").err().expect("refused").to_string().contains("light-path-maps"));

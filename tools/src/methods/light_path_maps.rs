@@ -12,9 +12,7 @@ use anyhow::{bail, Result};
 use relume_bake::artifact::Artifact;
 use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::light_path_maps::{
-    self as lpm, ClusteredTransfer, Compression, LightPathMapSettings, LightPathMapsSceneSettings, LightRegion,
-};
+use relume_bake::light_path_maps::{self, ClusteredTransfer, Compression, LightPathMapSettings, LightPathMapsSceneSettings, LightRegion};
 use relume_bake::obscurance::Variant;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -145,14 +143,15 @@ fn bake_transfer(
     let light_area = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?.light_area;
     let entries = stages
         .timed("entry_points", || {
-            let tests = lpm::test_points(scene, region.as_ref(), work.seed)?;
-            lpm::entry_points(scene, bvh, tests, settings.entry_points, work.seed)
+            let tests = light_path_maps::test_points(scene, region.as_ref(), work.seed)?;
+            light_path_maps::entry_points(scene, bvh, tests, settings.entry_points, work.seed)
         })
         .map_err(anyhow::Error::msg)?;
-    let transfers =
-        stages.timed("transfer", || lpm::bake_transfers(scene, bvh, atlas, &entries.entries, &settings)).map_err(anyhow::Error::msg)?;
+    let transfers = stages
+        .timed("transfer", || light_path_maps::bake_transfers(scene, bvh, atlas, &entries.entries, &settings))
+        .map_err(anyhow::Error::msg)?;
     let compressed = stages
-        .timed("cpca", || lpm::compress(&transfers, &entries.entries, atlas.texels.len(), light_area, compression))
+        .timed("cpca", || light_path_maps::compress(&transfers, &entries.entries, atlas.texels.len(), light_area, compression))
         .map_err(anyhow::Error::msg)?;
     let uncompressed_bytes = transfers.values.len() * 12;
     let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
@@ -255,7 +254,7 @@ impl Method for LightPathMaps {
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
         let map = obscurance::bake_stage(scene, &bvh, &atlas, &spectral, stages)?;
         let (transfer, facts) = bake_transfer(scene, &bvh, &atlas, values, spectral.l_max, work, stages)?;
-        let section = lpm::section(&transfer, atlas.layout(), facts.parameters.clone()).map_err(anyhow::Error::msg)?;
+        let section = light_path_maps::section(&transfer, atlas.layout(), facts.parameters.clone()).map_err(anyhow::Error::msg)?;
         let mut parameters = obscurance::parameters(&spectral);
         parameters["atlas"] = atlas::parameters(&atlas_settings, values);
         parameters["light_path_maps"] = facts.parameters;
@@ -272,7 +271,7 @@ impl Method for LightPathMaps {
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-path-maps renders from a bake: give --bake"))?;
         let on_atlas = OnAtlas::read(artifact, scene)?;
-        let transfer = lpm::read(artifact, scene, on_atlas.layout)?;
+        let transfer = light_path_maps::read(artifact, scene, on_atlas.layout)?;
         let composition = values.choice(&COMPOSITION).and_then(Composition::parse).unwrap_or_default();
         Ok(Box::new(Maps { on_atlas, transfer, composition }))
     }

@@ -3,13 +3,13 @@
 # uncompressed and at every C in 8 16 32 64 and D in 1 2 4 8, renders each at 128x128 with the
 # Vulkan renderer, and compares it with the reference path tracer (256 spp at pixel centres)
 # and with the uncompressed render. Prints one line per bake.
-#   bash tools/lpm-compression-grid.sh [OUT] [ENTRY_POINTS] [PATCHES]
+#   bash tools/light-path-maps-compression-grid.sh [OUT] [ENTRY_POINTS] [PATCHES]
 # The defaults (2048 entry points, a 2,700-patch atlas) keep the uncompressed transfer within
 # the 128 MiB one storage buffer may span on lavapipe. Needs a built relume (cargo build
 # --release -p relume-tools; RELUME=path picks another binary).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=${1:-out/lpm-grid}
+out=${1:-out/light-path-maps-grid}
 entry_points=${2:-2048}
 patches=${3:-2700}
 relume=${RELUME:-$PWD/target/release/relume}

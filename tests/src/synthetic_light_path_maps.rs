@@ -1,5 +1,5 @@
 //! Synthetic light path maps for the renderer's tests, made without the baker: an atlas of a
-//! scene, the scene with uv1 applied, an obscurance lightmap of one constant W (alpha the
+//! scene, the scene with uv1 applied, an obscurance of one constant W (alpha the
 //! coverage), and a clustered transfer whose entry points sit at covered texel centres and
 //! whose textures and weights come from a seeded hash. The values mean nothing physically;
 //! they are there so GPU and CPU evaluations of the same formulas can be compared.
@@ -20,7 +20,7 @@ pub fn atlas_scene(scene: &Scene, texel_density: f32) -> (Atlas, Scene) {
     (atlas, applied)
 }
 
-/// A lightmap of obscurance `w` on every covered texel, alpha the coverage (empty texels 0).
+/// The obscurance `w` on every covered texel, alpha the coverage (empty texels 0).
 pub fn constant_obscurance(atlas: &Atlas, w: Vec3) -> Vec<Vec4> {
     atlas.texels.iter().map(|t| if t.coverage > 0.0 { w.extend(t.coverage) } else { Vec4::ZERO }).collect()
 }

@@ -1,4 +1,4 @@
-//! A flat quad split across two lightmap charts shows no visible seam after padding.
+//! A flat quad split across two atlas charts shows no visible seam after padding.
 //!
 //! Scene A: a 2 m x 2 m white floor (albedo 1) made of two meshes, its halves x < 0 and
 //! x > 0, so the atlas gives each its own chart (triangles of different meshes never share
@@ -7,7 +7,7 @@
 //! chart, no seam. Both are baked (obscurance, tau 0.2 m, L_max 0.6 m, 1024 rays a texel,
 //! fixed seed) at 32 texels a metre and rendered from straight above with I_A = pi, beta = 0
 //! and a light of zero intensity, so every floor pixel's radiance is albedo / pi * I_A * W = W:
-//! the image is the lightmap as the renderer filters it.
+//! the image is the obscurance as the renderer filters it.
 //!
 //! Both floors' texel grids start at x = -1 m with whole texels per metre, so the two atlases
 //! put texel centres at the same floor points everywhere; the images differ only where A's
@@ -90,7 +90,7 @@ fn floor_and_box(name: &str, floor: Vec<Mesh>) -> Scene {
     testing::scene(name, meshes, vec![white], vec![light], camera)
 }
 
-/// A scene baked: its atlas, the scene with uv1 (atlas applied) and the lightmap as the
+/// A scene baked: its atlas, the scene with uv1 (atlas applied) and the obscurance as the
 /// renderer takes it (rgb W, alpha coverage).
 struct Baked {
     atlas: Atlas,

@@ -1,0 +1,218 @@
+//! The glTF writer: deterministic JSON and a little-endian `.bin`.
+
+use super::settings::Settings;
+use glam::{DMat3, DQuat, DVec3};
+use serde_json::{json, Value};
+
+/// An f32 as a JSON number in its shortest round-trip form (`0.5528`, not the f64 widening
+/// `0.5527999997138977`), so the text is readable and reads back to the exact f32 in the .bin.
+pub(super) fn num(x: f64) -> Value {
+    let x = x as f32;
+    let x = if x == 0.0 { 0.0 } else { x }; // no "-0.0"
+    let shortest: f64 = format!("{x}").parse().unwrap_or(0.0);
+    json!(shortest)
+}
+
+pub(super) fn vec_json(v: DVec3) -> Value {
+    json!([num(v.x), num(v.y), num(v.z)])
+}
+
+pub(super) fn quat_json(q: DQuat) -> Value {
+    json!([num(q.x), num(q.y), num(q.z), num(q.w)])
+}
+
+pub(super) struct Builder {
+    settings: Settings,
+    bin: Vec<u8>,
+    buffer_views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    materials: Vec<Value>,
+    nodes: Vec<Value>,
+    lights: Vec<Value>,
+    cameras: Vec<Value>,
+}
+
+pub(super) const ARRAY_BUFFER: u32 = 34962;
+pub(super) const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+pub(super) const FLOAT: u32 = 5126;
+pub(super) const UNSIGNED_INT: u32 = 5125;
+
+impl Builder {
+    /// An empty scene; its settings are required up front so that no scene can lack them.
+    pub(super) fn new(settings: Settings) -> Self {
+        Builder {
+            settings,
+            bin: Vec::new(),
+            buffer_views: Vec::new(),
+            accessors: Vec::new(),
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            nodes: Vec::new(),
+            lights: Vec::new(),
+            cameras: Vec::new(),
+        }
+    }
+
+    /// A diffuse material: metallic 0 and roughness 1, so that viewers other than relume
+    /// (whose surfaces are all Lambertian) show it the same way.
+    pub(super) fn material(&mut self, name: &str, rgb: [f64; 3]) -> usize {
+        self.materials.push(json!({
+            "name": name,
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [num(rgb[0]), num(rgb[1]), num(rgb[2]), num(1.0)],
+                "metallicFactor": num(0.0),
+                "roughnessFactor": num(1.0),
+            },
+        }));
+        self.materials.len() - 1
+    }
+
+    /// Appends bytes as a bufferView (4-byte aligned, as every accessor here needs).
+    pub(super) fn view(&mut self, bytes: &[u8], target: u32) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.buffer_views.push(json!({
+            "buffer": 0,
+            "byteOffset": self.bin.len(),
+            "byteLength": bytes.len(),
+            "target": target,
+        }));
+        self.bin.extend_from_slice(bytes);
+        self.buffer_views.len() - 1
+    }
+
+    pub(super) fn vec3_accessor(&mut self, values: &[[f32; 3]], with_bounds: bool) -> usize {
+        let bytes: Vec<u8> = values.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let view = self.view(&bytes, ARRAY_BUFFER);
+        let mut accessor = json!({ "bufferView": view, "componentType": FLOAT, "count": values.len(), "type": "VEC3" });
+        if with_bounds {
+            // POSITION accessors must carry min and max (glTF 2.0 §5.1.1).
+            let mut lo = [f32::INFINITY; 3];
+            let mut hi = [f32::NEG_INFINITY; 3];
+            for v in values {
+                for c in 0..3 {
+                    lo[c] = lo[c].min(v[c]);
+                    hi[c] = hi[c].max(v[c]);
+                }
+            }
+            accessor["min"] = json!(lo.map(|x| num(x as f64)));
+            accessor["max"] = json!(hi.map(|x| num(x as f64)));
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// A flat-shaded mesh: three vertices per triangle carrying the face normal.
+    pub(super) fn mesh(&mut self, name: &str, triangles: &[[DVec3; 3]], material: usize) -> usize {
+        let mut positions = Vec::with_capacity(triangles.len() * 3);
+        let mut normals = Vec::with_capacity(triangles.len() * 3);
+        for [a, b, c] in triangles {
+            let n = (*b - *a).cross(*c - *a).normalize();
+            for p in [a, b, c] {
+                positions.push(p.as_vec3().to_array());
+                normals.push(n.as_vec3().to_array());
+            }
+        }
+        let indices: Vec<u8> = (0..positions.len() as u32).flat_map(u32::to_le_bytes).collect();
+        let position = self.vec3_accessor(&positions, true);
+        let normal = self.vec3_accessor(&normals, false);
+        let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
+        self.accessors.push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": positions.len(), "type": "SCALAR" }));
+        let index_accessor = self.accessors.len() - 1;
+        self.meshes.push(json!({
+            "name": name,
+            "primitives": [{
+                "attributes": { "NORMAL": normal, "POSITION": position },
+                "indices": index_accessor,
+                "material": material,
+                "mode": 4,
+            }],
+        }));
+        self.meshes.len() - 1
+    }
+
+    pub(super) fn mesh_node(&mut self, name: &str, mesh: usize, translation: DVec3, scale: DVec3) {
+        let mut node = json!({ "name": name, "mesh": mesh });
+        if translation != DVec3::ZERO {
+            node["translation"] = vec_json(translation);
+        }
+        if scale != DVec3::ONE {
+            node["scale"] = vec_json(scale);
+        }
+        self.nodes.push(node);
+    }
+
+    /// A KHR_lights_punctual spot light, white, `intensity` candela, cone angles in degrees;
+    /// the node's rotation turns its -Z onto `direction`.
+    pub(super) fn spot_light(
+        &mut self,
+        name: &str,
+        position: DVec3,
+        direction: DVec3,
+        intensity: f64,
+        inner_degrees: f64,
+        outer_degrees: f64,
+    ) {
+        self.lights.push(json!({
+            "name": name,
+            "type": "spot",
+            "color": [num(1.0), num(1.0), num(1.0)],
+            "intensity": num(intensity),
+            "spot": { "innerConeAngle": num(inner_degrees.to_radians()), "outerConeAngle": num(outer_degrees.to_radians()) },
+        }));
+        let rotation = DQuat::from_rotation_arc(DVec3::NEG_Z, direction.normalize());
+        self.nodes.push(json!({
+            "name": name,
+            "translation": vec_json(position),
+            "rotation": quat_json(rotation),
+            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
+        }));
+    }
+
+    /// A perspective camera at `eye` looking at `target` with +Y up (glTF cameras look down
+    /// their -Z); no rotation is written when it looks straight down -Z.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn camera(&mut self, name: &str, eye: DVec3, target: DVec3, yfov: f64, aspect: Option<f64>, znear: f64, zfar: f64) {
+        let mut perspective = json!({ "yfov": num(yfov), "znear": num(znear), "zfar": num(zfar) });
+        if let Some(a) = aspect {
+            perspective["aspectRatio"] = num(a);
+        }
+        self.cameras.push(json!({ "name": name, "type": "perspective", "perspective": perspective }));
+        let forward = (target - eye).normalize();
+        let right = forward.cross(DVec3::Y).normalize();
+        let up = right.cross(forward);
+        let rotation = DQuat::from_mat3(&DMat3::from_cols(right, up, -forward)).normalize();
+        let mut node = json!({ "name": name, "camera": self.cameras.len() - 1, "translation": vec_json(eye) });
+        if rotation.angle_between(DQuat::IDENTITY) > 1e-9 {
+            node["rotation"] = quat_json(rotation);
+        }
+        self.nodes.push(node);
+    }
+
+    pub(super) fn finish(self, name: &str) -> (String, Vec<u8>) {
+        let root = json!({
+            "asset": { "version": "2.0", "generator": "relume scenes" },
+            "extensionsUsed": ["KHR_lights_punctual"],
+            "extensions": { "KHR_lights_punctual": { "lights": self.lights } },
+            "scene": 0,
+            "scenes": [{
+                "name": name,
+                "nodes": (0..self.nodes.len()).collect::<Vec<_>>(),
+                "extras": { "relume": self.settings.json() },
+            }],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "materials": self.materials,
+            "cameras": self.cameras,
+            "accessors": self.accessors,
+            "bufferViews": self.buffer_views,
+            "buffers": [{ "byteLength": self.bin.len(), "uri": format!("{name}.bin") }],
+        });
+        // Serialising a Value built from plain maps cannot fail; keep an empty string if it did.
+        let mut text = serde_json::to_string_pretty(&root).unwrap_or_default();
+        text.push('\n');
+        (text, self.bin)
+    }
+}
