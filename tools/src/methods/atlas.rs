@@ -2,7 +2,7 @@
 //! atlas's parameters, its bake stage and summary, and reading it back with the scene
 //! re-indexed by it.
 
-use super::params::{Default, Kind, Param, Stage, Values};
+use super::params::{Default, Param, Values};
 use super::Stages;
 use anyhow::{bail, Result};
 use relume_bake::artifact::{Artifact, Section};
@@ -10,41 +10,33 @@ use relume_bake::atlas::{Atlas, AtlasSection, AtlasSettings};
 use relume_bake::scene::Scene;
 use serde_json::{json, Value};
 
-pub(crate) const TEXEL_DENSITY: Param = Param {
-    name: "texel-density",
-    help: "lightmap texels per metre (001 §3's patch grid)",
-    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
-    default: Default::From("the scene's texel_density"),
-    stage: Stage::Bake,
-};
-pub(crate) const PATCHES: Param = Param {
-    name: "patches",
-    help: "aim for about this many covered texels instead of a texel density (bisects the density)",
-    kind: Kind::Count { min: 1, max: 1 << 28 },
-    default: Default::From("none: the texel density decides"),
-    stage: Stage::Bake,
-};
-pub(crate) const GUTTER: Param = Param {
-    name: "gutter",
-    help: "empty texels between charts",
-    kind: Kind::Count { min: 1, max: 64 },
-    default: Default::Value("2"),
-    stage: Stage::Bake,
-};
-pub(crate) const ATLAS_MAX: Param = Param {
-    name: "atlas-max",
-    help: "largest atlas page side in texels; more pages when the charts do not fit one",
-    kind: Kind::Count { min: 16, max: 16384 },
-    default: Default::Value("4096"),
-    stage: Stage::Bake,
-};
-pub(crate) const DISCONTINUITY_ANGLE: Param = Param {
-    name: "discontinuity-angle",
-    help: "largest angle between faces of one chart, degrees (001 §3)",
-    kind: Kind::Number { min: 0.0, max: 180.0, above: true },
-    default: Default::Value("60"),
-    stage: Stage::Bake,
-};
+pub(crate) const TEXEL_DENSITY: Param = Param::number(
+    "texel-density",
+    "lightmap texels per metre (001 §3's patch grid)",
+    (0.0, 1e6, true),
+    Default::From("the scene's texel_density"),
+);
+pub(crate) const PATCHES: Param = Param::count(
+    "patches",
+    "aim for about this many covered texels instead of a texel density (bisects the density)",
+    1,
+    1 << 28,
+    Default::From("none: the texel density decides"),
+);
+pub(crate) const GUTTER: Param = Param::count("gutter", "empty texels between charts", 1, 64, Default::Value("2"));
+pub(crate) const ATLAS_MAX: Param = Param::count(
+    "atlas-max",
+    "largest atlas page side in texels; more pages when the charts do not fit one",
+    16,
+    16384,
+    Default::Value("4096"),
+);
+pub(crate) const DISCONTINUITY_ANGLE: Param = Param::number(
+    "discontinuity-angle",
+    "largest angle between faces of one chart, degrees (001 §3)",
+    (0.0, 180.0, true),
+    Default::Value("60"),
+);
 
 pub(crate) const PARAMS: [&Param; 5] = [&TEXEL_DENSITY, &PATCHES, &GUTTER, &ATLAS_MAX, &DISCONTINUITY_ANGLE];
 

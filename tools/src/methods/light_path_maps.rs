@@ -6,7 +6,7 @@
 //! four passes, composed as `--composition` says (§3.4).
 
 use super::obscurance::{self, OnAtlas};
-use super::params::{Default, Kind, Param, Stage, Values};
+use super::params::{Default, Param, Values};
 use super::{atlas, Bake, Loaded, Method, Stages};
 use anyhow::{bail, Result};
 use relume_bake::artifact::Artifact;
@@ -21,69 +21,35 @@ use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::MakeTechnique;
 use serde_json::json;
 
-const ENTRY_POINTS: Param = Param {
-    name: "entry-points",
-    help: "entry points wanted, E (000 §3.2.1: whole rounds of one ray per test point until E hit)",
-    kind: Kind::Count { min: 1, max: 1 << 20 },
-    default: Default::Value("4096"),
-    stage: Stage::Bake,
-};
-const TEST_POINTS: Param = Param {
-    name: "test-points",
-    help: "test points re-sampling the scene's light region box, M",
-    kind: Kind::Count { min: 1, max: 65536 },
-    default: Default::From("the scene's region"),
-    stage: Stage::Bake,
-};
-const WALKS: Param = Param {
-    name: "walks",
-    help: "random walks per entry point (more entry points beat more walks)",
-    kind: Kind::Count { min: 1, max: 65536 },
-    default: Default::Value("1"),
-    stage: Stage::Bake,
-};
-const THRESHOLD: Param = Param {
-    name: "threshold",
-    help: "connections shorter than this are dropped, metres (000 §3.2.2; 0 keeps every one)",
-    kind: Kind::Number { min: 0.0, max: 1e6, above: false },
-    default: Default::From("L_max"),
-    stage: Stage::Bake,
-};
-const CLUSTERS: Param = Param {
-    name: "clusters",
-    help: "clusters C of the transfers' PCA (with --basis)",
-    kind: Kind::Count { min: 1, max: 1 << 20 },
-    default: Default::From("chosen by --error-budget"),
-    stage: Stage::Bake,
-};
-const BASIS: Param = Param {
-    name: "basis",
-    help: "eigen-textures per cluster D (with --clusters)",
-    kind: Kind::Count { min: 0, max: 1024 },
-    default: Default::From("chosen by --error-budget"),
-    stage: Stage::Bake,
-};
-const ERROR_BUDGET: Param = Param {
-    name: "error-budget",
-    help: "the smallest C in 1, 2, 4 .. 128 and D in 0..8 storing the fewest values within this relative error of the transfers",
-    kind: Kind::Number { min: 0.0, max: 1e6, above: false },
-    default: Default::Value("0.1"),
-    stage: Stage::Bake,
-};
-const UNCOMPRESSED: Param = Param {
-    name: "uncompressed",
-    help: "keep every transfer (one cluster per entry point, no PCA)",
-    kind: Kind::Flag,
-    default: Default::Value("false"),
-    stage: Stage::Bake,
-};
-const COMPOSITION: Param = Param {
-    name: "composition",
-    help: "how the indirect irradiance I is added (000 §3.4): plain (albedo/pi I), times-obscurance (albedo/pi W I), times-obscurance-with-direct (albedo/pi W (I + E_direct))",
-    kind: Kind::Choice(&["plain", "times-obscurance", "times-obscurance-with-direct"]),
-    default: Default::Value("times-obscurance"),
-    stage: Stage::Render,
-};
+const ENTRY_POINTS: Param = Param::count(
+    "entry-points",
+    "entry points wanted, E (000 §3.2.1: whole rounds of one ray per test point until E hit)",
+    1,
+    1 << 20,
+    Default::Value("4096"),
+);
+const TEST_POINTS: Param =
+    Param::count("test-points", "test points re-sampling the scene's light region box, M", 1, 65536, Default::From("the scene's region"));
+const WALKS: Param =
+    Param::count("walks", "random walks per entry point (more entry points beat more walks)", 1, 65536, Default::Value("1"));
+const THRESHOLD: Param = Param::number(
+    "threshold",
+    "connections shorter than this are dropped, metres (000 §3.2.2; 0 keeps every one)",
+    (0.0, 1e6, false),
+    Default::From("L_max"),
+);
+const CLUSTERS: Param =
+    Param::count("clusters", "clusters C of the transfers' PCA (with --basis)", 1, 1 << 20, Default::From("chosen by --error-budget"));
+const BASIS: Param =
+    Param::count("basis", "eigen-textures per cluster D (with --clusters)", 0, 1024, Default::From("chosen by --error-budget"));
+const ERROR_BUDGET: Param = Param::number(
+    "error-budget",
+    "the smallest C in 1, 2, 4 .. 128 and D in 0..8 storing the fewest values within this relative error of the transfers",
+    (0.0, 1e6, false),
+    Default::Value("0.1"),
+);
+const UNCOMPRESSED: Param = Param::flag("uncompressed", "keep every transfer (one cluster per entry point, no PCA)");
+const COMPOSITION: Param = Param::choice("composition", "how the indirect irradiance I is added (000 §3.4): plain (albedo/pi I), times-obscurance (albedo/pi W I), times-obscurance-with-direct (albedo/pi W (I + E_direct))", &["plain", "times-obscurance", "times-obscurance-with-direct"], Default::Value("times-obscurance")).at_render();
 
 const PARAMS: [&Param; 9] =
     [&ENTRY_POINTS, &TEST_POINTS, &WALKS, &THRESHOLD, &CLUSTERS, &BASIS, &ERROR_BUDGET, &UNCOMPRESSED, &COMPOSITION];

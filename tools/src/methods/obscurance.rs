@@ -4,7 +4,7 @@
 //! light, eq. (5)-(7). Its parameters and stages serve the light path maps too, whose
 //! small-scale term is the spectral obscurance.
 
-use super::params::{Default, Kind, Param, Stage, Values};
+use super::params::{Default, Param, Values};
 use super::{atlas, Bake, Loaded, Method, Stages};
 use anyhow::Result;
 use glam::{Vec3, Vec4};
@@ -18,34 +18,25 @@ use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{AtlasImage, MakeTechnique};
 use serde_json::{json, Value};
 
-pub(crate) const VARIANT: Param = Param {
-    name: "variant",
-    help: "obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3's colour bleeding)",
-    kind: Kind::Choice(&["obscurance", "ao", "spectral"]),
-    default: Default::From("obscurance; spectral for light-path-maps"),
-    stage: Stage::Bake,
-};
-pub(crate) const TAU: Param = Param {
-    name: "tau",
-    help: "tau of rho(L) = 1 - exp(-L / tau), metres (001 eq. 2)",
-    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
-    default: Default::From("the scene's obscurance.tau"),
-    stage: Stage::Bake,
-};
-pub(crate) const L_MAX: Param = Param {
-    name: "l-max",
-    help: "L_max, metres: rho is 1 from here on (001 §4.4)",
-    kind: Kind::Number { min: 0.0, max: 1e6, above: true },
-    default: Default::From("the scene's obscurance.l_max"),
-    stage: Stage::Bake,
-};
-pub(crate) const RAYS: Param = Param {
-    name: "rays",
-    help: "rays per texel, spread over the texel's patch",
-    kind: Kind::Count { min: 1, max: 1 << 20 },
-    default: Default::Value("256"),
-    stage: Stage::Bake,
-};
+pub(crate) const VARIANT: Param = Param::choice(
+    "variant",
+    "obscurance (001 eq. 2-3), ao (rho a step at L_max) or spectral (000 §3.3's colour bleeding)",
+    &["obscurance", "ao", "spectral"],
+    Default::From("obscurance; spectral for light-path-maps"),
+);
+pub(crate) const TAU: Param = Param::number(
+    "tau",
+    "tau of rho(L) = 1 - exp(-L / tau), metres (001 eq. 2)",
+    (0.0, 1e6, true),
+    Default::From("the scene's obscurance.tau"),
+);
+pub(crate) const L_MAX: Param = Param::number(
+    "l-max",
+    "L_max, metres: rho is 1 from here on (001 §4.4)",
+    (0.0, 1e6, true),
+    Default::From("the scene's obscurance.l_max"),
+);
+pub(crate) const RAYS: Param = Param::count("rays", "rays per texel, spread over the texel's patch", 1, 1 << 20, Default::Value("256"));
 
 pub(crate) const PARAMS: [&Param; 4] = [&VARIANT, &TAU, &L_MAX, &RAYS];
 

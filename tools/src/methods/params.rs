@@ -48,6 +48,31 @@ pub(crate) struct Param {
 }
 
 impl Param {
+    /// A bake parameter (the run time's: [`Param::at_render`]) taking a whole number.
+    pub const fn count(name: &'static str, help: &'static str, min: u64, max: u64, default: Default) -> Param {
+        Param { name, help, kind: Kind::Count { min, max }, default, stage: Stage::Bake }
+    }
+
+    /// A bake parameter taking a finite number in `min..=max` (above `min` when `above`).
+    pub const fn number(name: &'static str, help: &'static str, (min, max, above): (f64, f64, bool), default: Default) -> Param {
+        Param { name, help, kind: Kind::Number { min, max, above }, default, stage: Stage::Bake }
+    }
+
+    /// A bake parameter taking one of `choices`.
+    pub const fn choice(name: &'static str, help: &'static str, choices: &'static [&'static str], default: Default) -> Param {
+        Param { name, help, kind: Kind::Choice(choices), default, stage: Stage::Bake }
+    }
+
+    /// A bake flag.
+    pub const fn flag(name: &'static str, help: &'static str) -> Param {
+        Param { name, help, kind: Kind::Flag, default: Default::Value("false"), stage: Stage::Bake }
+    }
+
+    /// The same parameter, read at run time.
+    pub const fn at_render(self) -> Param {
+        Param { stage: Stage::Render, ..self }
+    }
+
     /// The range or choices, as `--help` and `relume methods` show them.
     pub fn range(&self) -> String {
         match self.kind {
