@@ -56,8 +56,11 @@ pub fn upload_buffers_blocking(ctx: &Arc<Context>, sources: &[(&str, &[u8])]) ->
         .collect::<VkResult<Vec<_>>>()?;
     let total: usize = sources.iter().map(|(_, bytes)| bytes.len()).sum();
     let staging = Buffer::new(ctx, "upload staging", total as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
-    let packed: Vec<u8> = sources.iter().flat_map(|(_, bytes)| bytes.iter().copied()).collect();
-    staging.write(&packed)?;
+    let mut offset = 0;
+    for (_, bytes) in sources {
+        staging.write_at(offset, bytes)?;
+        offset += bytes.len();
+    }
     submit_blocking(ctx, |rec, tracker| {
         let mut offset = 0u64;
         for (buffer, (_, bytes)) in buffers.iter().zip(sources) {
