@@ -2,7 +2,8 @@
 //! memory it reached.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use std::time::Duration;
+use std::ops::Range;
+use std::time::{Duration, Instant};
 
 /// What every long CPU job (a bake, the path tracer) takes from the command line: its seed,
 /// its worker threads, a time limit, and whether to draw a progress bar. The same inputs and
@@ -22,6 +23,25 @@ impl WorkOptions {
     /// Refuses zero threads, and more than any machine relume runs on has cores to give.
     pub fn validate(&self) -> Result<(), String> {
         crate::settings::first_failed_check(&[(self.threads.is_none_or(|n| (1..=1024).contains(&n)), "threads must be 1..=1024")])
+    }
+
+    /// Runs `pass` on the worker threads over 0..total (rays, walks) in ranges of `step`,
+    /// stopping at a whole pass once the time limit has passed (one pass at least); returns
+    /// how many were taken. The ranges do not depend on the thread count.
+    pub fn in_passes(&self, total: u32, step: u32, mut pass: impl FnMut(Range<u32>) + Send) -> u32 {
+        let start = Instant::now();
+        with_threads(self.threads, || {
+            let mut taken = 0;
+            while taken < total {
+                if self.time_limit.is_some_and(|limit| taken > 0 && start.elapsed() >= limit) {
+                    break;
+                }
+                let range = taken..(taken + step.max(1)).min(total);
+                taken = range.end;
+                pass(range);
+            }
+            taken
+        })
     }
 }
 
@@ -60,4 +80,21 @@ pub fn peak_memory_bytes() -> Option<u64> {
 /// the start of the process.
 pub fn reset_peak_memory() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn passes_cover_the_total_in_steps_and_a_spent_time_limit_leaves_one() {
+        let mut ranges = Vec::new();
+        let options = WorkOptions { threads: Some(2), ..WorkOptions::default() };
+        assert_eq!(options.in_passes(10, 4, |r| ranges.push(r)), 10);
+        assert_eq!(ranges, [0..4, 4..8, 8..10]);
+        let spent = WorkOptions { time_limit: Some(Duration::ZERO), ..options };
+        let mut count = 0;
+        assert_eq!(spent.in_passes(10, 4, |_| count += 1), 4);
+        assert_eq!(count, 1);
+    }
 }

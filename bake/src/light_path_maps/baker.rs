@@ -17,7 +17,7 @@ use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Scene};
 use crate::settings::first_failed_check;
-use crate::work::{progress_bar, with_threads, WorkOptions};
+use crate::work::{progress_bar, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -371,20 +371,13 @@ pub fn bake_transfers(
     let (lights_made, rays) = (AtomicU64::new(0), AtomicU64::new(0));
     let progress = progress_bar(entries.len() as u64 * settings.walks as u64, "light path maps", settings.work.progress);
     let start = Instant::now();
-    let mut walks = 0;
-    with_threads(settings.work.threads, || {
-        while walks < settings.walks {
-            if settings.work.time_limit.is_some_and(|limit| walks > 0 && start.elapsed() >= limit) {
-                break;
-            }
-            values.par_chunks_mut(n).zip(entries.par_iter()).enumerate().for_each_init(Vec::new, |lights, (e, (row, entry))| {
-                walker.walk(e as u32, entry, walks, lights);
-                lights_made.fetch_add(lights.len() as u64, Ordering::Relaxed);
-                rays.fetch_add(walker.connect(lights, row), Ordering::Relaxed);
-                progress.inc(1);
-            });
-            walks += 1;
-        }
+    let walks = settings.work.in_passes(settings.walks, 1, |walk| {
+        values.par_chunks_mut(n).zip(entries.par_iter()).enumerate().for_each_init(Vec::new, |lights, (e, (row, entry))| {
+            walker.walk(e as u32, entry, walk.start, lights);
+            lights_made.fetch_add(lights.len() as u64, Ordering::Relaxed);
+            rays.fetch_add(walker.connect(lights, row), Ordering::Relaxed);
+            progress.inc(1);
+        });
     });
     progress.finish_and_clear();
     let scale = 1.0 / walks as f32;

@@ -14,7 +14,7 @@ use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
 use crate::settings::first_failed_check;
-use crate::work::{progress_bar, with_threads, WorkOptions};
+use crate::work::{progress_bar, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -170,21 +170,13 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
     let mut sums = vec![Vec3::ZERO; covered.len()];
     let progress = progress_bar(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.work.progress);
     let start = Instant::now();
-    let mut taken = 0;
-    with_threads(settings.work.threads, || {
-        while taken < settings.rays_per_texel {
-            if settings.work.time_limit.is_some_and(|limit| taken > 0 && start.elapsed() >= limit) {
-                break;
+    let taken = settings.work.in_passes(settings.rays_per_texel, RAYS_PER_PASS, |rays| {
+        sums.par_chunks_mut(256).zip(covered.par_chunks(256)).for_each(|(sums, texels)| {
+            for (sum, &texel) in sums.iter_mut().zip(texels) {
+                *sum += texel_rays(&estimator, atlas, texel, rays.clone());
             }
-            let rays = taken..(taken + RAYS_PER_PASS).min(settings.rays_per_texel);
-            sums.par_chunks_mut(256).zip(covered.par_chunks(256)).for_each(|(sums, texels)| {
-                for (sum, &texel) in sums.iter_mut().zip(texels) {
-                    *sum += texel_rays(&estimator, atlas, texel, rays.clone());
-                }
-                progress.inc(texels.len() as u64 * rays.len() as u64);
-            });
-            taken = rays.end;
-        }
+            progress.inc(texels.len() as u64 * rays.len() as u64);
+        });
     });
     progress.finish_and_clear();
     let mut values = vec![Vec3::ZERO; atlas.texels.len()];
