@@ -1,7 +1,7 @@
 //! The settings a scene carries, in one place: the glTF scene's `extras.relume` block
 //! (documented in docs/FORMATS.md). Its top-level keys are what every method may read (the
 //! ambient light and the atlas's texel density); each method reads its own block under its
-//! key, checked when the scene loads by the reader the method registers in `crate::methods`.
+//! key, checked when the scene loads by the [`SceneBlock`] the method registers in `crate::methods`.
 //! Every key is optional; a scene without the block gets [`SceneSettings::defaults_for`],
 //! sized from its bounds. The command line overrides any of them.
 //!
@@ -34,6 +34,15 @@ pub struct SceneSettings {
 
 const SHARED_KEYS: [&str; 3] = ["ambient", "beta", "texel_density"];
 
+/// A method's block of scene settings.
+#[derive(Clone, Copy)]
+pub struct SceneBlock {
+    /// The key under `extras.relume`.
+    pub key: &'static str,
+    /// Checks the block of a scene with the given bounds, naming what is wrong.
+    pub check: fn(&Value, (Vec3, Vec3)) -> Result<(), String>,
+}
+
 impl SceneSettings {
     /// Settings for a scene that states none: no ambient, beta 0.3, 256 texels along the
     /// bounding-box diagonal, and no method block (each method's defaults).
@@ -53,11 +62,12 @@ impl SceneSettings {
 
     /// Reads a scene's `extras` value over `defaults`; `Ok(defaults)` when it has no `relume`
     /// key. Every method block present is checked by its method's reader. The error names the
-    /// key and what it should be.
-    pub fn from_extras(extras: &Value, defaults: SceneSettings) -> Result<Self, String> {
+    /// key and what it should be. `methods` are the blocks a scene may carry (the registry's
+    /// `crate::methods::SCENE_BLOCKS`).
+    pub fn from_extras(extras: &Value, defaults: SceneSettings, methods: &[SceneBlock]) -> Result<Self, String> {
         let Some(block) = extras.get("relume") else { return Ok(defaults) };
         let block = as_object(block, "extras.relume")?;
-        let method_keys = crate::methods::SCENE_BLOCKS.map(|b| b.key);
+        let method_keys: Vec<&str> = methods.iter().map(|b| b.key).collect();
         known_keys(block, "extras.relume", &[&SHARED_KEYS[..], &method_keys[..]].concat())?;
         let mut s = defaults;
         if let Some(v) = block.get("ambient") {
@@ -70,7 +80,7 @@ impl SceneSettings {
             s.texel_density = number(v, "extras.relume.texel_density")?;
         }
         s.validate().map_err(|e| format!("extras.relume: {e}"))?;
-        for method in crate::methods::SCENE_BLOCKS {
+        for method in methods {
             if let Some(v) = block.get(method.key) {
                 (method.check)(v, s.bounds)?;
                 s.blocks.insert(method.key.to_string(), v.clone());
@@ -124,6 +134,7 @@ pub fn vec3(value: &Value, key: &str) -> Result<Vec3, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::SCENE_BLOCKS;
     use serde_json::json;
 
     fn defaults() -> SceneSettings {
@@ -132,8 +143,9 @@ mod tests {
 
     #[test]
     fn missing_block_keeps_defaults_and_keys_override() {
-        assert_eq!(SceneSettings::from_extras(&json!({}), defaults()), Ok(defaults()));
-        let s = SceneSettings::from_extras(&json!({"relume": {"beta": 0.5, "obscurance": {"l_max": 2.0}}}), defaults()).unwrap();
+        assert_eq!(SceneSettings::from_extras(&json!({}), defaults(), &SCENE_BLOCKS), Ok(defaults()));
+        let s =
+            SceneSettings::from_extras(&json!({"relume": {"beta": 0.5, "obscurance": {"l_max": 2.0}}}), defaults(), &SCENE_BLOCKS).unwrap();
         assert_eq!(s.beta, 0.5);
         assert_eq!(s.block("obscurance"), Some(&json!({"l_max": 2.0})));
     }
@@ -152,7 +164,7 @@ mod tests {
             (json!({"relume": {"light_path_maps": {"light_area": -1}}}), "light_area"),
         ];
         for (extras, expected) in cases {
-            let error = SceneSettings::from_extras(&extras, defaults()).unwrap_err();
+            let error = SceneSettings::from_extras(&extras, defaults(), &SCENE_BLOCKS).unwrap_err();
             assert!(error.contains(expected), "{extras}: {error}");
         }
     }

@@ -315,7 +315,7 @@ impl<'a> Loader<'a> {
         self.scene.settings = match gltf_scene.extras() {
             Some(raw) => serde_json::from_str(raw.get())
                 .map_err(|e| e.to_string())
-                .and_then(|extras| SceneSettings::from_extras(&extras, defaults))
+                .and_then(|extras| SceneSettings::from_extras(&extras, defaults, &crate::methods::SCENE_BLOCKS))
                 .map_err(|problem| {
                     ctx.fail(ErrorKind::Invalid, scene_item.clone(), problem, "fix the scene's extras.relume block (docs/FORMATS.md)")
                 })?,

@@ -15,9 +15,8 @@ pub use transfer::*;
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};
 use crate::image::{encode_exr_layers, read_exr_layer, Image};
-use crate::methods::SceneBlock;
 use crate::scene::Scene;
-use crate::settings::{as_object, known_keys, number, vec3};
+use crate::settings::{as_object, known_keys, number, vec3, SceneBlock};
 use glam::Vec3;
 use serde_json::{Map, Value};
 

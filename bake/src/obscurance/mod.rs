@@ -10,9 +10,8 @@ pub use baker::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::image::{encode_exr_layers, read_exr_layer, Image};
-use crate::methods::SceneBlock;
 use crate::scene::Scene;
-use crate::settings::{as_object, diagonal, first_failed_check, known_keys, number};
+use crate::settings::{as_object, diagonal, first_failed_check, known_keys, number, SceneBlock};
 use glam::Vec3;
 use serde_json::Value;
 

@@ -200,7 +200,7 @@ impl Builder {
             "scenes": [{
                 "name": name,
                 "nodes": (0..self.nodes.len()).collect::<Vec<_>>(),
-                "extras": { "relume": self.settings.json() },
+                "extras": { "relume": settings_json(&self.settings) },
             }],
             "nodes": self.nodes,
             "meshes": self.meshes,
@@ -215,4 +215,22 @@ impl Builder {
         text.push('\n');
         (text, self.bin)
     }
+}
+
+/// The settings as `extras.relume` (the block `relume_bake::settings` reads).
+fn settings_json(s: &Settings) -> Value {
+    let light_path_maps = match s.light_region {
+        Some((min, max, test_points)) => json!({
+            "region": { "box": [min.map(num), max.map(num)], "test_points": test_points },
+            "light_area": num(s.light_area),
+        }),
+        None => json!({ "light_area": num(s.light_area) }),
+    };
+    json!({
+        "ambient": s.ambient.map(num),
+        "beta": num(s.beta),
+        "texel_density": num(s.texel_density),
+        "obscurance": { "tau": num(s.tau), "l_max": num(s.l_max) },
+        "light_path_maps": light_path_maps,
+    })
 }

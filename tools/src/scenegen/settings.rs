@@ -1,8 +1,5 @@
 //! Each scene's relume settings, written as `scenes[0].extras.relume`.
 
-use super::gltf_writer::num;
-use serde_json::{json, Value};
-
 /// A scene's relume settings, written as `scenes[0].extras.relume` (read by
 /// `relume_bake::settings`, documented in docs/FORMATS.md). Every scene states all of them,
 /// so that its bake does not move when the defaults (sized from the bounds) change.
@@ -28,28 +25,6 @@ pub(super) struct Settings {
     pub(super) light_region: Option<([f64; 3], [f64; 3], u32)>,
     /// Delta-l of 000 §3.4, square metres.
     pub(super) light_area: f64,
-}
-
-impl Settings {
-    pub(super) fn json(&self) -> Value {
-        json!({
-            "ambient": self.ambient.map(num),
-            "beta": num(self.beta),
-            "texel_density": num(self.texel_density),
-            "obscurance": { "tau": num(self.tau), "l_max": num(self.l_max) },
-            "light_path_maps": self.light_path_maps_json(),
-        })
-    }
-
-    pub(super) fn light_path_maps_json(&self) -> Value {
-        match self.light_region {
-            Some((min, max, test_points)) => json!({
-                "region": { "box": [min.map(num), max.map(num)], "test_points": test_points },
-                "light_area": num(self.light_area),
-            }),
-            None => json!({ "light_area": num(self.light_area) }),
-        }
-    }
 }
 
 /// Fitted against the path tracer (`relume run scenes/cornell.gltf --ambient 1 --beta 0`,
