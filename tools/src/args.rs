@@ -2,15 +2,16 @@
 //! an image size), the frame's settings (shadow maps, the ambient light, the device), and the
 //! reference path tracer's settings.
 
-use crate::bake::WorkArgs;
 use anyhow::{bail, Result};
 use clap::Args;
 use glam::Vec3;
 use relume_bake::gltf_load::{load_with_camera, CameraOverride};
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
 use relume_renderer::RenderSettings;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 #[derive(Args, Clone)]
 pub(crate) struct SceneArgs {
@@ -65,6 +66,32 @@ pub(crate) struct GpuArgs {
     pub direct_only: bool,
 }
 
+/// `--seed`, `--threads` and `--time-limit`: what every long job takes.
+#[derive(Args, Clone, Debug, Default)]
+pub(crate) struct WorkArgs {
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Stop after this many seconds, at a whole pass of the work (at least one is made).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
+}
+
+impl WorkArgs {
+    /// The options, refused by name when impossible; a progress bar on a terminal.
+    pub fn options(&self) -> Result<WorkOptions> {
+        let time_limit = match self.time_limit {
+            Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
+            s => s.map(Duration::from_secs_f64),
+        };
+        let options = WorkOptions { seed: self.seed, threads: self.threads, time_limit, progress: true };
+        options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
+        Ok(options)
+    }
+}
+
 #[derive(Args, Clone)]
 pub(crate) struct PathTracerArgs {
     /// Samples per pixel.
@@ -84,7 +111,12 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
         bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
-    let loaded = load_with_camera(&args.scene, camera.as_ref())?;
+    load(&args.scene, camera.as_ref())
+}
+
+/// The scene at `path`, its load warnings printed.
+pub(crate) fn load(path: &Path, camera: Option<&CameraOverride>) -> Result<Scene> {
+    let loaded = load_with_camera(path, camera)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
@@ -105,13 +137,12 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
     }
 }
 
-/// The frame's settings from the flags; `ambient` gives I_A and beta when no flag does (the
-/// method's defaults).
-pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, (default_ambient, default_beta): (Vec3, f32)) -> Result<RenderSettings> {
-    let (ambient, beta) = match gpu.direct_only {
-        true => (Vec3::ZERO, 0.0),
-        false => (gpu.ambient.as_deref().map(parse_ambient).transpose()?.unwrap_or(default_ambient), gpu.beta.unwrap_or(default_beta)),
-    };
+/// The frame's settings from the flags over the method's ambient light `defaults` (I_A and
+/// beta; None: the method models none, as with --direct-only).
+pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, defaults: Option<(Vec3, f32)>) -> Result<RenderSettings> {
+    let defaults = defaults.filter(|_| !gpu.direct_only);
+    let given = gpu.ambient.as_deref().map(parse_ambient).transpose()?;
+    let (ambient, beta) = crate::methods::frame_ambient(defaults, given, gpu.beta);
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,

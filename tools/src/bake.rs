@@ -2,17 +2,16 @@
 //! docs/FORMATS.md). The method comes from the registry (`methods`); this command only times,
 //! writes and reports.
 
+use crate::args::{load, WorkArgs};
 use crate::methods::params::{BakeParams, Stage};
 use crate::methods::{self, Method, Stages};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::BakeOutput;
-use relume_bake::gltf_load::load_with_camera;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 #[derive(Args)]
 pub(crate) struct BakeArgs {
@@ -28,32 +27,6 @@ pub(crate) struct BakeArgs {
     out: Option<PathBuf>,
     #[command(flatten)]
     params: BakeParams,
-}
-
-/// `--seed`, `--threads` and `--time-limit`: what every long job takes.
-#[derive(Args, Clone, Debug, Default)]
-pub(crate) struct WorkArgs {
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Stop after this many seconds, at a whole pass of the work (at least one is made).
-    #[arg(long)]
-    pub time_limit: Option<f64>,
-}
-
-impl WorkArgs {
-    /// The options, refused by name when impossible; a progress bar on a terminal.
-    pub fn options(&self) -> Result<WorkOptions> {
-        let time_limit = match self.time_limit {
-            Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
-            s => s.map(Duration::from_secs_f64),
-        };
-        let options = WorkOptions { seed: self.seed, threads: self.threads, time_limit, progress: true };
-        options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
-        Ok(options)
-    }
 }
 
 /// The artifact folder `relume bake` writes for a scene and method when no --out is given.
@@ -76,12 +49,9 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let method = baking_method(&args.method)?;
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Bake))?;
     let work = args.work.options()?;
-    let loaded = load_with_camera(&args.scene, None)?;
-    for warning in &loaded.warnings {
-        eprintln!("warning: {warning}");
-    }
+    let scene = load(&args.scene, None)?;
     let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
-    print!("{}", bake_scene(&loaded.scene, method, &values, work, &out)?);
+    print!("{}", bake_scene(&scene, method, &values, work, &out)?);
     Ok(())
 }
 
@@ -100,7 +70,7 @@ pub(crate) fn bake_scene(
     stats["stages"] = stages.json();
     stats["threads"] = json!(work.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())));
     let mut parameters = bake.parameters;
-    parameters["given"] = values.json();
+    parameters["given"] = values.json(&method.params(), Stage::Bake);
     let output = BakeOutput { method: method.name(), scene: Some(scene), parameters, sections: bake.sections, stats };
     output.write(out)?;
     Ok(format!("{}{}wrote {}\n", bake.summary, stages.summary(), out.display()))

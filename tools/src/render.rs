@@ -3,8 +3,8 @@
 
 use crate::args::{frame_count, load_scene, render_settings, GpuArgs, SceneArgs};
 use crate::gpu::{print_timings, render_on_gpu, write_render_outputs, GpuJob};
+use crate::methods;
 use crate::methods::params::{RenderParams, Stage};
-use crate::methods::{self, Loaded, Plain};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::Artifact;
@@ -35,22 +35,18 @@ pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let frames = frame_count(args.frames)?;
     let artifact = args.bake.as_deref().map(Artifact::read).transpose()?;
-    let (loaded, ambient): (Box<dyn Loaded>, _) = match &artifact {
-        Some(artifact) => {
-            let method = methods::find(artifact.method())?;
-            let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Render))?;
-            (method.load(Some(artifact), &scene, &values)?, method.ambient(&scene))
-        }
+    let method = match &artifact {
+        Some(artifact) => methods::find(artifact.method())?,
         None => {
             if let Some((name, _)) = args.params.pairs.first() {
-                let takers: Vec<&str> =
-                    methods::METHODS.iter().filter(|m| m.params().iter().any(|p| p.name == name)).map(|m| m.name()).collect();
-                bail!("--{name}: a run-time parameter of {}; render a bake of it (--bake)", takers.join(", "));
+                bail!("--{name}: a run-time parameter of {}; render a bake of it (--bake)", methods::takers(name).join(", "));
             }
-            (Box::new(Plain(scene.clone())), (scene.settings.ambient, scene.settings.beta))
+            methods::WITHOUT_BAKE
         }
     };
-    let settings = render_settings(&args.scene, &args.gpu, ambient)?;
+    let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Render))?;
+    let loaded = method.load(artifact.as_ref(), &scene, &values)?;
+    let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
     let (renders, device) = render_on_gpu(&[GpuJob { loaded: loaded.as_ref(), settings, frames }], &args.gpu)?;
     write_render_outputs(&args.out, &renders[0])?;
     println!("device: {device}");

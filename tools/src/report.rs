@@ -10,7 +10,6 @@ use crate::methods::{self, Loaded, Method, Plain};
 use crate::reference::{trace_reference, write_reference, ReferenceRun};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use glam::Vec3;
 use relume_bake::artifact::Artifact;
 use relume_bake::image::{self, Image};
 use relume_bake::metrics;
@@ -75,7 +74,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     println!("rendering with Vulkan: {} ({frames} timed frames each)", names.join(", "));
     // Direct light alone, with the same shadow maps: what each method's indirect part is measured against.
     let direct_only = Plain(scene.clone());
-    let direct_settings = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..render_settings(&args.scene, &args.gpu, (Vec3::ZERO, 0.0))? };
+    let direct_settings = render_settings(&args.scene, &args.gpu, None)?;
     let mut jobs = vec![GpuJob { loaded: &direct_only, settings: direct_settings, frames: 1 }];
     jobs.extend(models.iter().map(|m| GpuJob { loaded: m.loaded.as_ref(), settings: m.settings.clone(), frames }));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;

@@ -26,10 +26,10 @@ pub(crate) struct FrameParams {
 impl FrameParams {
     /// `base` (the sweep's size) with the method's ambient light for `scene` and these keys.
     pub fn settings(&self, method: &dyn Method, scene: &Scene, base: RenderSettings) -> RenderSettings {
-        let (ambient, beta) = method.ambient(scene);
+        let (ambient, beta) = methods::frame_ambient(method.ambient(scene), self.ambient, self.beta);
         RenderSettings {
-            ambient: self.ambient.unwrap_or(ambient),
-            beta: self.beta.unwrap_or(beta),
+            ambient,
+            beta,
             shadow_map_size: self.shadow_map_size.unwrap_or(base.shadow_map_size),
             blur_radius: self.blur_radius.unwrap_or(base.blur_radius),
             min_variance: self.min_variance.unwrap_or(base.min_variance),

@@ -84,6 +84,7 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
     if let Some(limit) = args.time_limit.filter(|s| !(s.is_finite() && *s > 0.0)) {
         bail!("--time-limit {limit}: give a positive number of seconds");
     }
+    WorkOptions { threads: args.threads, ..WorkOptions::default() }.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
     let sweep = Sweep::read(&args.sweep)?;
     let configs = configs(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
     check_scenes(&sweep).with_context(|| format!("{}", args.sweep.display()))?;

@@ -42,14 +42,14 @@ pub(crate) const PARAMS: [&Param; 5] = [&TEXEL_DENSITY, &PATCHES, &GUTTER, &ATLA
 
 /// The atlas's settings from `values` over the scene's.
 pub(crate) fn settings(scene: &Scene, values: &Values) -> Result<AtlasSettings> {
-    if values.given(TEXEL_DENSITY.name) && values.given(PATCHES.name) {
+    if values.given(&TEXEL_DENSITY) && values.given(&PATCHES) {
         bail!("--texel-density and --patches: give one of them");
     }
     let settings = AtlasSettings {
-        texel_density: values.number(&TEXEL_DENSITY).map_or(scene.settings.texel_density, |d| d as f32),
-        gutter: values.count(&GUTTER).unwrap_or(2) as u32,
-        max_size: values.count(&ATLAS_MAX).unwrap_or(4096) as u32,
-        discontinuity_angle: (values.number(&DISCONTINUITY_ANGLE).unwrap_or(60.0) as f32).to_radians(),
+        texel_density: values.given_number(&TEXEL_DENSITY).map_or(scene.settings.texel_density, |d| d as f32),
+        gutter: values.count(&GUTTER) as u32,
+        max_size: values.count(&ATLAS_MAX) as u32,
+        discontinuity_angle: (values.number(&DISCONTINUITY_ANGLE) as f32).to_radians(),
     };
     settings.validate().map_err(|e| anyhow::anyhow!("{e} (--texel-density, --gutter, --atlas-max, --discontinuity-angle)"))?;
     Ok(settings)
@@ -59,7 +59,7 @@ pub(crate) fn settings(scene: &Scene, values: &Values) -> Result<AtlasSettings> 
 /// covered texels).
 pub(crate) fn build(scene: &Scene, values: &Values, stages: &mut Stages) -> Result<(Atlas, AtlasSettings)> {
     let settings = settings(scene, values)?;
-    let atlas = stages.timed("atlas", || match values.count(&PATCHES) {
+    let atlas = stages.timed("atlas", || match values.given_count(&PATCHES) {
         Some(patches) => Atlas::build_for_patch_count(scene, &settings, patches as u32),
         None => Atlas::build(scene, &settings),
     })?;
@@ -84,7 +84,7 @@ pub(crate) fn section(atlas: &Atlas, settings: &AtlasSettings) -> Section {
 pub(crate) fn parameters(settings: &AtlasSettings, values: &Values) -> Value {
     json!({
         "texel_density": short(settings.texel_density),
-        "patches": values.count(&PATCHES),
+        "patches": values.given_count(&PATCHES),
         "gutter": settings.gutter,
         "atlas_max": settings.max_size,
         "discontinuity_angle_degrees": short(settings.discontinuity_angle.to_degrees()),

@@ -2,10 +2,8 @@
 //! realistic lighting for video games" (001), eq. (5)-(7), with W = 1 everywhere. No bake.
 
 use super::params::Param;
-use super::{Loaded, Method, Plain};
-use anyhow::Result;
+use super::{scene_ambient, Method};
 use glam::Vec3;
-use relume_bake::artifact::Artifact;
 use relume_bake::scene::Scene;
 
 pub(crate) struct Constant;
@@ -23,11 +21,7 @@ impl Method for Constant {
         Vec::new()
     }
 
-    fn ambient(&self, scene: &Scene) -> (Vec3, f32) {
-        (scene.settings.ambient, scene.settings.beta)
-    }
-
-    fn load(&self, _: Option<&Artifact>, scene: &Scene, _: &super::Values) -> Result<Box<dyn Loaded>> {
-        Ok(Box::new(Plain(scene.clone())))
+    fn ambient(&self, scene: &Scene) -> Option<(Vec3, f32)> {
+        scene_ambient(scene)
     }
 }

@@ -2,9 +2,8 @@
 //! no bake. The floor every other method adds to.
 
 use super::params::Param;
-use super::{Loaded, Method, Plain};
-use anyhow::Result;
-use relume_bake::artifact::Artifact;
+use super::Method;
+use glam::Vec3;
 use relume_bake::scene::Scene;
 
 pub(crate) struct Direct;
@@ -22,7 +21,7 @@ impl Method for Direct {
         Vec::new()
     }
 
-    fn load(&self, _: Option<&Artifact>, scene: &Scene, _: &super::Values) -> Result<Box<dyn Loaded>> {
-        Ok(Box::new(Plain(scene.clone())))
+    fn ambient(&self, _: &Scene) -> Option<(Vec3, f32)> {
+        None
     }
 }

@@ -58,55 +58,56 @@ pub(crate) struct LightPathMaps;
 
 /// The compression the flags ask for.
 fn compression(values: &Values) -> Result<Compression> {
-    let given = |p: &Param| values.given(p.name);
+    let given = |p: &Param| values.given(p);
     if given(&CLUSTERS) != given(&BASIS) {
         bail!("--clusters and --basis: give both, or neither (then --error-budget chooses them)");
     }
-    if values.flag(&UNCOMPRESSED) && (given(&CLUSTERS) || given(&ERROR_BUDGET)) {
+    if given(&UNCOMPRESSED) && (given(&CLUSTERS) || given(&ERROR_BUDGET)) {
         bail!("--uncompressed keeps every transfer: give it without --clusters, --basis or --error-budget");
     }
     if given(&CLUSTERS) && given(&ERROR_BUDGET) {
         bail!("--clusters with --basis fix the compression: give them without --error-budget");
     }
-    Ok(match (values.flag(&UNCOMPRESSED), values.count(&CLUSTERS), values.count(&BASIS)) {
+    Ok(match (given(&UNCOMPRESSED), values.given_count(&CLUSTERS), values.given_count(&BASIS)) {
         (true, _, _) => Compression::None,
         (false, Some(clusters), Some(basis)) => Compression::Fixed { clusters: clusters as usize, basis: basis as usize },
-        _ => Compression::Budget(values.number(&ERROR_BUDGET).unwrap_or(0.1)),
+        _ => Compression::Budget(values.number(&ERROR_BUDGET)),
     })
 }
 
-/// The scene's region, with its box re-sampled at `--test-points` when given.
-fn region(scene: &Scene, values: &Values) -> Result<Option<LightRegion>> {
-    let region = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?.region;
-    Ok(match (region, values.count(&TEST_POINTS)) {
-        (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min, max, test_points: m as u32 }),
-        (_, Some(_)) => bail!("--test-points needs a scene whose extras.relume.light_path_maps.region is a box"),
-        (region, None) => region,
-    })
+/// What the transfer stages are made with, from the flags over the scene's block: worked out
+/// and checked before any stage runs.
+struct Plan {
+    settings: LightPathMapSettings,
+    region: Option<LightRegion>,
+    compression: Compression,
+    light_area: f32,
 }
 
-/// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
-/// transfer and the facts for the manifest, stats.json and the summary.
-fn bake_transfer(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    atlas: &Atlas,
-    values: &Values,
-    l_max: f32,
-    work: WorkOptions,
-    stages: &mut Stages,
-) -> Result<(ClusteredTransfer, Bake)> {
+fn plan(scene: &Scene, values: &Values, l_max: f32, work: WorkOptions) -> Result<Plan> {
     let settings = LightPathMapSettings {
-        entry_points: values.count(&ENTRY_POINTS).unwrap_or(4096) as u32,
-        walks: values.count(&WALKS).unwrap_or(1) as u32,
-        threshold: values.number(&THRESHOLD).map_or(l_max, |t| t as f32),
+        entry_points: values.count(&ENTRY_POINTS) as u32,
+        walks: values.count(&WALKS) as u32,
+        threshold: values.given_number(&THRESHOLD).map_or(l_max, |t| t as f32),
         max_depth: 64,
         work,
     };
     settings.validate().map_err(|e| anyhow::anyhow!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
-    let region = region(scene, values)?;
-    let compression = compression(values)?;
-    let light_area = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?.light_area;
+    let block = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
+    // The scene's region, with its box re-sampled at `--test-points` when given.
+    let region = match (block.region, values.given_count(&TEST_POINTS)) {
+        (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min, max, test_points: m as u32 }),
+        (_, Some(_)) => bail!("--test-points needs a scene whose extras.relume.light_path_maps.region is a box"),
+        (region, None) => region,
+    };
+    Ok(Plan { settings, region, compression: compression(values)?, light_area: block.light_area })
+}
+
+/// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
+/// transfer and the facts for the manifest, stats.json and the summary.
+fn bake_transfer(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, plan: &Plan, stages: &mut Stages) -> Result<(ClusteredTransfer, Bake)> {
+    let Plan { settings, region, compression, light_area } = plan;
+    let (work, compression, light_area) = (settings.work, *compression, *light_area);
     let entries = stages
         .timed("entry_points", || {
             let tests = light_path_maps::test_points(scene, region.as_ref(), work.seed)?;
@@ -114,7 +115,7 @@ fn bake_transfer(
         })
         .map_err(anyhow::Error::msg)?;
     let transfers = stages
-        .timed("transfer", || light_path_maps::bake_transfers(scene, bvh, atlas, &entries.entries, &settings))
+        .timed("transfer", || light_path_maps::bake_transfers(scene, bvh, atlas, &entries.entries, settings))
         .map_err(anyhow::Error::msg)?;
     let compressed = stages
         .timed("cpca", || light_path_maps::compress(&transfers, &entries.entries, atlas.texels.len(), light_area, compression))
@@ -215,30 +216,23 @@ impl Method for LightPathMaps {
 
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
         let spectral = obscurance::settings(scene, values, Variant::Spectral, work)?;
-        compression(values)?;
-        let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
-        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-        let map = obscurance::bake_stage(scene, &bvh, &atlas, &spectral, stages)?;
-        let (transfer, facts) = bake_transfer(scene, &bvh, &atlas, values, spectral.l_max, work, stages)?;
-        let section = light_path_maps::section(&transfer, atlas.layout(), facts.parameters.clone()).map_err(anyhow::Error::msg)?;
-        let mut parameters = obscurance::parameters(&spectral);
-        parameters["atlas"] = atlas::parameters(&atlas_settings, values);
-        parameters["light_path_maps"] = facts.parameters;
-        let mut stats = obscurance::stats(&map, &spectral);
-        stats["light_path_maps"] = facts.stats;
-        Ok(Bake {
-            sections: vec![atlas::section(&atlas, &atlas_settings), obscurance::section(&map, &atlas, &spectral)?, section],
-            parameters,
-            stats,
-            summary: atlas::summary(&atlas) + &obscurance::summary(&map) + &facts.summary,
-        })
+        let plan = plan(scene, values, spectral.l_max, work)?;
+        let (mut bake, atlas, bvh) = obscurance::bake_on_atlas(scene, values, &spectral, stages)?;
+        let (transfer, facts) = bake_transfer(scene, &bvh, &atlas, &plan, stages)?;
+        let summary =
+            json!({ "entry_points": transfer.entry_points.len(), "clusters": transfer.cluster_count(), "basis": transfer.basis_count });
+        bake.sections.push(light_path_maps::section(&transfer, atlas.layout(), summary).map_err(anyhow::Error::msg)?);
+        bake.parameters["light_path_maps"] = facts.parameters;
+        bake.stats["light_path_maps"] = facts.stats;
+        bake.summary += &facts.summary;
+        Ok(bake)
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-path-maps renders from a bake: give --bake"))?;
         let on_atlas = OnAtlas::read(artifact, scene)?;
         let transfer = light_path_maps::read(artifact, scene, on_atlas.layout)?;
-        let composition = values.choice(&COMPOSITION).and_then(Composition::parse).unwrap_or_default();
+        let composition = Composition::parse(values.choice(&COMPOSITION)).unwrap_or_default();
         Ok(Box::new(Maps { on_atlas, transfer, composition }))
     }
 }

@@ -23,6 +23,9 @@ use std::time::Instant;
 pub(crate) const METHODS: [&dyn Method; 4] =
     [&direct::Direct, &constant::Constant, &obscurance::Obscurance, &light_path_maps::LightPathMaps];
 
+/// What `relume render` renders without a bake.
+pub(crate) const WITHOUT_BAKE: &dyn Method = &constant::Constant;
+
 pub(crate) trait Method: Sync {
     /// Its one name: the `--method` of `relume bake`, a sweep's `method`, an artifact's
     /// `method`, the main job's file names.
@@ -51,9 +54,10 @@ pub(crate) trait Method: Sync {
     }
 
     /// I_A and beta of the frame's ambient light when the user gives none: the scene's for
-    /// the methods of the obscurance illumination model, none for the others.
-    fn ambient(&self, _scene: &Scene) -> (Vec3, f32) {
-        (Vec3::ZERO, 0.0)
+    /// the methods of the obscurance illumination model, zero for the others. None for a
+    /// method that models no ambient light: then none is given to it either.
+    fn ambient(&self, _scene: &Scene) -> Option<(Vec3, f32)> {
+        Some((Vec3::ZERO, 0.0))
     }
 
     /// Bakes `scene` with `values` into sections, timing its stages in `stages`.
@@ -62,8 +66,25 @@ pub(crate) trait Method: Sync {
     }
 
     /// What its techniques are made from: read from `artifact` (its bake; None for a method
-    /// without one) for `scene`, with the run-time `values`.
-    fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>>;
+    /// without one) for `scene`, with the run-time `values`. Without a bake: the scene as it
+    /// is and no technique.
+    fn load(&self, _artifact: Option<&Artifact>, scene: &Scene, _values: &Values) -> Result<Box<dyn Loaded>> {
+        Ok(Box::new(Plain(scene.clone())))
+    }
+}
+
+/// The scene's I_A and beta: the ambient light of the obscurance illumination model (001 eq. 5-7).
+pub(crate) fn scene_ambient(scene: &Scene) -> Option<(Vec3, f32)> {
+    Some((scene.settings.ambient, scene.settings.beta))
+}
+
+/// The frame's I_A and beta: the given ones over the method's `defaults`; none where the
+/// method models no ambient light (`defaults` None).
+pub(crate) fn frame_ambient(defaults: Option<(Vec3, f32)>, ambient: Option<Vec3>, beta: Option<f32>) -> (Vec3, f32) {
+    match defaults {
+        Some((default_ambient, default_beta)) => (ambient.unwrap_or(default_ambient), beta.unwrap_or(default_beta)),
+        None => (Vec3::ZERO, 0.0),
+    }
 }
 
 /// A method's data for one scene, read and ready to become the renderer's techniques.
@@ -147,8 +168,41 @@ pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
     })
 }
 
+/// The methods that take the parameter `name`.
+pub(crate) fn takers(name: &str) -> Vec<&'static str> {
+    METHODS.iter().filter(|m| m.params().iter().any(|p| p.name == name)).map(|m| m.name()).collect()
+}
+
 /// `values` parsed for `method`, keeping only the parameters of `stage` (None: every one).
 pub(crate) fn parse_values(method: &dyn Method, pairs: &[(String, String)], stage: Option<Stage>) -> Result<Values> {
     let params: Vec<&'static Param> = method.params().into_iter().filter(|p| stage.is_none_or(|s| p.stage == s)).collect();
     Values::parse(method.name(), &params, pairs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use relume_bake::testing::{closed_box, look_at, scene, Facing};
+
+    #[test]
+    fn a_given_ambient_light_reaches_every_method_that_models_one_and_never_direct() {
+        let mut room = scene(
+            "room",
+            vec![closed_box(Vec3::ZERO, Vec3::ONE, 1, Facing::Inward, 0)],
+            vec![],
+            vec![],
+            look_at(Vec3::splat(0.5), Vec3::X, Vec3::Y, 1.0),
+        );
+        room.settings.ambient = Vec3::splat(0.25);
+        let given = (Some(Vec3::splat(2.0)), Some(0.5));
+        for method in METHODS {
+            let (ambient, beta) = frame_ambient(method.ambient(&room), given.0, given.1);
+            let (default_ambient, _) = frame_ambient(method.ambient(&room), None, None);
+            match method.name() {
+                "direct" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
+                "constant" | "obscurance" => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::splat(0.25))),
+                _ => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::ZERO)),
+            }
+        }
+    }
 }

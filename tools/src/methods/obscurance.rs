@@ -8,7 +8,7 @@ use super::params::{Default, Param, Values};
 use super::{atlas, Bake, Loaded, Method, Stages};
 use anyhow::Result;
 use glam::{Vec3, Vec4};
-use relume_bake::artifact::{Artifact, PageLayout, Section};
+use relume_bake::artifact::{Artifact, PageLayout};
 use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::obscurance::{self as bake_obscurance, ObscuranceMap, ObscuranceSceneSettings, ObscuranceSettings, Variant};
@@ -43,36 +43,44 @@ pub(crate) const PARAMS: [&Param; 4] = [&VARIANT, &TAU, &L_MAX, &RAYS];
 /// The obscurance bake's settings from `values` over the scene's, `variant` unless given.
 pub(crate) fn settings(scene: &Scene, values: &Values, variant: Variant, work: WorkOptions) -> Result<ObscuranceSettings> {
     let scene_settings = ObscuranceSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
-    let variant = values.choice(&VARIANT).and_then(Variant::parse).unwrap_or(variant);
+    let variant = values.given_choice(&VARIANT).and_then(Variant::parse).unwrap_or(variant);
     let settings = ObscuranceSettings {
         variant,
-        tau: values.number(&TAU).map_or(scene_settings.tau, |t| t as f32),
-        l_max: values.number(&L_MAX).map_or(scene_settings.l_max, |l| l as f32),
-        rays_per_texel: values.count(&RAYS).unwrap_or(256) as u32,
+        tau: values.given_number(&TAU).map_or(scene_settings.tau, |t| t as f32),
+        l_max: values.given_number(&L_MAX).map_or(scene_settings.l_max, |l| l as f32),
+        rays_per_texel: values.count(&RAYS) as u32,
         work,
     };
     settings.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --rays, --threads)"))?;
     Ok(settings)
 }
 
-/// The obscurance stage, timed.
-pub(crate) fn bake_stage(
+/// The atlas, the BVH and the obscurance on the atlas, each a timed stage: the obscurance
+/// method's whole bake, and the small scale of the light path maps'. Returns the bake with the
+/// atlas and BVH for the stages that follow.
+pub(crate) fn bake_on_atlas(
     scene: &Scene,
-    bvh: &SceneBvh,
-    atlas: &Atlas,
+    values: &Values,
     settings: &ObscuranceSettings,
     stages: &mut Stages,
-) -> Result<ObscuranceMap> {
-    stages.timed("obscurance", || bake_obscurance::bake_obscurance(scene, bvh, atlas, settings)).map_err(anyhow::Error::msg)
+) -> Result<(Bake, Atlas, SceneBvh)> {
+    let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
+    let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+    let map = stages.timed("obscurance", || bake_obscurance::bake_obscurance(scene, &bvh, &atlas, settings)).map_err(anyhow::Error::msg)?;
+    let facts = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
+    let section = bake_obscurance::section(&map.values, atlas.layout(), facts).map_err(anyhow::Error::msg)?;
+    let mut parameters = parameters(settings);
+    parameters["atlas"] = atlas::parameters(&atlas_settings, values);
+    let bake = Bake {
+        sections: vec![atlas::section(&atlas, &atlas_settings), section],
+        parameters,
+        stats: stats(&map, settings),
+        summary: atlas::summary(&atlas) + &summary(&map),
+    };
+    Ok((bake, atlas, bvh))
 }
 
-/// The obscurance's section, with what it was made with.
-pub(crate) fn section(map: &ObscuranceMap, atlas: &Atlas, settings: &ObscuranceSettings) -> Result<Section> {
-    let summary = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
-    bake_obscurance::section(&map.values, atlas.layout(), summary).map_err(anyhow::Error::msg)
-}
-
-pub(crate) fn parameters(settings: &ObscuranceSettings) -> Value {
+fn parameters(settings: &ObscuranceSettings) -> Value {
     json!({
         "variant": settings.variant.name(),
         "tau": atlas::short(settings.tau),
@@ -82,7 +90,7 @@ pub(crate) fn parameters(settings: &ObscuranceSettings) -> Value {
     })
 }
 
-pub(crate) fn stats(map: &ObscuranceMap, settings: &ObscuranceSettings) -> Value {
+fn stats(map: &ObscuranceMap, settings: &ObscuranceSettings) -> Value {
     json!({
         "rays_per_texel": map.rays_per_texel,
         "rays_per_texel_asked": settings.rays_per_texel,
@@ -91,7 +99,7 @@ pub(crate) fn stats(map: &ObscuranceMap, settings: &ObscuranceSettings) -> Value
     })
 }
 
-pub(crate) fn summary(map: &ObscuranceMap) -> String {
+fn summary(map: &ObscuranceMap) -> String {
     let rate = map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6;
     format!("{} rays per texel, {} rays in {:.3} s ({rate:.2} M rays/s)\n", map.rays_per_texel, map.rays_traced, map.seconds)
 }
@@ -149,23 +157,13 @@ impl Method for Obscurance {
         vec![(RAYS.name.into(), rays.to_string())]
     }
 
-    fn ambient(&self, scene: &Scene) -> (Vec3, f32) {
-        (scene.settings.ambient, scene.settings.beta)
+    fn ambient(&self, scene: &Scene) -> Option<(Vec3, f32)> {
+        super::scene_ambient(scene)
     }
 
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
         let obscurance = settings(scene, values, Variant::Obscurance, work)?;
-        let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
-        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-        let map = bake_stage(scene, &bvh, &atlas, &obscurance, stages)?;
-        let mut parameters = parameters(&obscurance);
-        parameters["atlas"] = atlas::parameters(&atlas_settings, values);
-        Ok(Bake {
-            sections: vec![atlas::section(&atlas, &atlas_settings), section(&map, &atlas, &obscurance)?],
-            parameters,
-            stats: stats(&map, &obscurance),
-            summary: atlas::summary(&atlas) + &summary(&map),
-        })
+        Ok(bake_on_atlas(scene, values, &obscurance, stages)?.0)
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, _: &Values) -> Result<Box<dyn Loaded>> {

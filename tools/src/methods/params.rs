@@ -153,44 +153,59 @@ impl Values {
         Ok(values)
     }
 
-    pub fn given(&self, name: &str) -> bool {
-        self.given.contains_key(name)
-    }
-
-    /// A count, given or its default (None when the default comes from elsewhere).
-    pub fn count(&self, param: &Param) -> Option<u64> {
-        match self.value(param)? {
-            Value::Count(v) => Some(v),
-            _ => None,
-        }
-    }
-
-    pub fn number(&self, param: &Param) -> Option<f64> {
-        match self.value(param)? {
-            Value::Number(v) => Some(v),
-            Value::Count(v) => Some(v as f64),
-            _ => None,
-        }
-    }
-
-    pub fn choice(&self, param: &Param) -> Option<&'static str> {
-        match self.value(param)? {
-            Value::Choice(v) => Some(v),
-            _ => None,
-        }
-    }
-
-    pub fn flag(&self, param: &Param) -> bool {
+    /// Whether `param` was given (a flag: whether it is set).
+    pub fn given(&self, param: &Param) -> bool {
         self.given.contains_key(param.name)
     }
 
-    fn value(&self, param: &Param) -> Option<Value> {
+    /// A count, given or its declared default.
+    pub fn count(&self, param: &Param) -> u64 {
+        match self.value(param) {
+            Value::Count(v) => v,
+            _ => wrong_kind(param),
+        }
+    }
+
+    /// A number, given or its declared default.
+    pub fn number(&self, param: &Param) -> f64 {
+        match self.value(param) {
+            Value::Number(v) => v,
+            _ => wrong_kind(param),
+        }
+    }
+
+    /// A choice, given or its declared default.
+    pub fn choice(&self, param: &Param) -> &'static str {
+        match self.value(param) {
+            Value::Choice(v) => v,
+            _ => wrong_kind(param),
+        }
+    }
+
+    /// A count if given: for a parameter whose default comes from elsewhere.
+    pub fn given_count(&self, param: &Param) -> Option<u64> {
+        self.given(param).then(|| self.count(param))
+    }
+
+    /// A number if given: for a parameter whose default comes from elsewhere.
+    pub fn given_number(&self, param: &Param) -> Option<f64> {
+        self.given(param).then(|| self.number(param))
+    }
+
+    /// A choice if given: for a parameter whose default comes from elsewhere.
+    pub fn given_choice(&self, param: &Param) -> Option<&'static str> {
+        self.given(param).then(|| self.choice(param))
+    }
+
+    /// Its given value, or its declared default; a parameter whose default comes from
+    /// elsewhere is read with the `given_` accessors (a slip in relume, not in the input).
+    fn value(&self, param: &Param) -> Value {
         if let Some(v) = self.given.get(param.name) {
-            return Some(v.clone());
+            return v.clone();
         }
         match param.default {
-            Default::Value(text) => Some(param.parse(text).expect("a parameter's default is in its range")),
-            Default::From(_) => None,
+            Default::Value(text) => param.parse(text).expect("a parameter's default is in its range"),
+            Default::From(_) => panic!("--{} has no declared default: read it with a given_ accessor", param.name),
         }
     }
 
@@ -200,9 +215,10 @@ impl Values {
         self.texts.iter().filter(|(name, _)| staged(name)).map(|(name, text)| format!("{name}={text}")).collect()
     }
 
-    /// The given values as JSON (numbers as numbers), for the artifact's manifest.
-    pub fn json(&self) -> serde_json::Value {
-        let entries = self.given.iter().map(|(name, value)| {
+    /// The given values of one stage as JSON (numbers as numbers), for the artifact's manifest.
+    pub fn json(&self, params: &[&'static Param], stage: Stage) -> serde_json::Value {
+        let staged = |name: &str| params.iter().any(|p| p.name == name && p.stage == stage);
+        let entries = self.given.iter().filter(|(name, _)| staged(name)).map(|(name, value)| {
             let v = match value {
                 Value::Count(v) => serde_json::json!(v),
                 Value::Number(v) => serde_json::json!(v),
@@ -213,6 +229,10 @@ impl Values {
         });
         serde_json::Value::Object(entries.collect())
     }
+}
+
+fn wrong_kind(param: &Param) -> ! {
+    panic!("--{} read as another kind than it declares", param.name)
 }
 
 /// Every parameter of `methods`, each once, in order of first appearance.
@@ -293,9 +313,8 @@ impl<const BAKE: bool> clap::FromArgMatches for ParamArgs<BAKE> {
 impl<const BAKE: bool> clap::Args for ParamArgs<BAKE> {
     fn augment_args(cmd: clap::Command) -> clap::Command {
         Self::params().into_iter().fold(cmd, |cmd, param| {
-            let takers: Vec<&str> =
-                super::METHODS.iter().filter(|m| m.params().iter().any(|p| p.name == param.name)).map(|m| m.name()).collect();
-            let help = format!("{} [{}; {}; default {}]", param.help, takers.join(", "), param.range(), param.default_text());
+            let help =
+                format!("{} [{}; {}; default {}]", param.help, super::takers(param.name).join(", "), param.range(), param.default_text());
             let arg = clap::Arg::new(param.name).long(param.name).help(help).help_heading("Method parameters (relume methods NAME)");
             cmd.arg(match param.kind {
                 Kind::Flag => arg.action(clap::ArgAction::SetTrue),
