@@ -9,8 +9,10 @@
 //! artifact is refused with the file and the fix named, and a section is handed out only
 //! after its version and its key (against the scene or mesh it is read for) are checked.
 
+use crate::image::{read_exr_layer, Image};
 use crate::scene::{Mesh, Scene};
 use serde_json::{json, Map, Value};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 pub const FORMAT: &str = "relume-bake";
@@ -83,59 +85,91 @@ pub(crate) fn fail(path: &Path, problem: impl Into<String>, fix: &str) -> Artifa
     ArtifactError { path: path.to_path_buf(), problem: problem.into(), fix: fix.to_string() }
 }
 
-/// FNV-1a, 64 bits: enough to catch corruption and mismatched files (not an adversary).
+/// FNV-1a, 64 bits, fed piece by piece: enough to catch corruption and mismatched files (not
+/// an adversary).
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        self.0 = bytes.iter().fold(self.0, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
+    }
+
+    fn floats<'a>(&mut self, values: impl IntoIterator<Item = &'a f32>) {
+        values.into_iter().for_each(|f| self.write(&f.to_le_bytes()));
+    }
+
+    fn mesh(&mut self, mesh: &Mesh) {
+        self.floats(mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.as_ref()));
+        self.floats(mesh.uv0.iter().flatten().flat_map(|v| v.as_ref()));
+        mesh.indices.iter().for_each(|i| self.write(&i.to_le_bytes()));
+        self.write(&(mesh.material as u64).to_le_bytes());
+    }
+
+    fn finish(&self) -> String {
+        format!("fnv1a64:{:016x}", self.0)
+    }
+}
+
 pub fn checksum(bytes: &[u8]) -> String {
-    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
-    format!("fnv1a64:{hash:016x}")
+    let mut hash = Fnv::new();
+    hash.write(bytes);
+    hash.finish()
 }
 
-fn floats<'a>(bytes: &mut Vec<u8>, values: impl IntoIterator<Item = &'a f32>) {
-    bytes.extend(values.into_iter().flat_map(|f| f.to_le_bytes()));
-}
-
-fn mesh_bytes(bytes: &mut Vec<u8>, mesh: &Mesh) {
-    floats(bytes, mesh.positions.iter().chain(&mesh.normals).flat_map(|v| v.as_ref()));
-    floats(bytes, mesh.uv0.iter().flatten().flat_map(|v| v.as_ref()));
-    bytes.extend(mesh.indices.iter().flat_map(|i| i.to_le_bytes()));
-    bytes.extend((mesh.material as u64).to_le_bytes());
+/// The checksum of the file at `path`, read in pieces (no file is held whole to check it).
+fn file_checksum(path: &Path) -> std::io::Result<String> {
+    let mut file = std::fs::File::open(path)?;
+    let (mut hash, mut buffer) = (Fnv::new(), vec![0u8; 1 << 16]);
+    loop {
+        match file.read(&mut buffer)? {
+            0 => return Ok(hash.finish()),
+            n => hash.write(&buffer[..n]),
+        }
+    }
 }
 
 /// A checksum of everything a bake or the path tracer reads of the scene's surfaces: meshes
 /// (positions, normals, uv0, triangles, material), materials (base colour, its texture,
 /// emission) and textures. Lights and camera are not in it: a bake does not depend on them.
 pub fn scene_checksum(scene: &Scene) -> String {
-    let mut bytes = Vec::new();
-    for mesh in &scene.meshes {
-        mesh_bytes(&mut bytes, mesh);
-    }
+    let mut hash = Fnv::new();
+    scene.meshes.iter().for_each(|mesh| hash.mesh(mesh));
     for material in &scene.materials {
-        floats(&mut bytes, material.base_color.as_ref().iter().chain(material.emission.as_ref()));
-        bytes.extend(material.base_color_texture.map_or(u64::MAX, |t| t as u64).to_le_bytes());
+        hash.floats(material.base_color.as_ref().iter().chain(material.emission.as_ref()));
+        hash.write(&material.base_color_texture.map_or(u64::MAX, |t| t as u64).to_le_bytes());
     }
     for texture in &scene.textures {
-        bytes.extend([texture.width, texture.height].iter().flat_map(|v| v.to_le_bytes()));
-        floats(&mut bytes, texture.texels.iter().flat_map(|t| t.as_ref()));
+        [texture.width, texture.height].iter().for_each(|v| hash.write(&v.to_le_bytes()));
+        hash.floats(texture.texels.iter().flat_map(|t| t.as_ref()));
     }
-    checksum(&bytes)
+    hash.finish()
 }
 
 /// A checksum of one mesh's shape: positions, normals, uv0, triangles and material index.
 pub fn mesh_checksum(mesh: &Mesh) -> String {
-    let mut bytes = Vec::new();
-    mesh_bytes(&mut bytes, mesh);
-    checksum(&bytes)
+    let mut hash = Fnv::new();
+    hash.mesh(mesh);
+    hash.finish()
 }
 
 impl Key {
-    /// The manifest's record of the key, with the checksum of what it names.
-    fn record(&self, scene: Option<&Scene>, section: &str, dir: &Path) -> Result<Value, ArtifactError> {
+    /// The manifest's record of the key, with the checksum of what it names (`scene_sum`: the
+    /// scene's, taken once for every section).
+    fn record(&self, scene: Option<&Scene>, scene_sum: Option<&str>, section: &str, dir: &Path) -> Result<Value, ArtifactError> {
         let need_scene = || {
             scene.ok_or_else(|| {
                 fail(dir, format!("section {section} is keyed to the scene, but no scene was given"), "report this as a bug")
             })
         };
         Ok(match self {
-            Key::Scene => json!({ "kind": "scene", "checksum": scene_checksum(need_scene()?) }),
+            Key::Scene => {
+                need_scene()?;
+                json!({ "kind": "scene", "checksum": scene_sum })
+            }
             Key::Mesh(name) => {
                 let mesh = need_scene()?.meshes.iter().find(|m| &m.name == name);
                 let mesh = mesh.ok_or_else(|| {
@@ -169,7 +203,11 @@ impl BakeOutput<'_> {
     fn manifest(&self, dir: &Path) -> Result<Value, ArtifactError> {
         let mut sections = Vec::with_capacity(self.sections.len());
         let mut names: Vec<&str> = Vec::new();
-        for section in &self.sections {
+        let scene_sum = self.scene.map(scene_checksum);
+        for (k, section) in self.sections.iter().enumerate() {
+            if self.sections[..k].iter().any(|s| s.name == section.name) {
+                return Err(fail(dir, format!("two sections named {}", section.name), "report this as a bug"));
+            }
             let mut files = Map::new();
             for (name, bytes) in &section.files {
                 if names.contains(&name.as_str()) || name == "manifest.json" || name == "stats.json" {
@@ -181,7 +219,7 @@ impl BakeOutput<'_> {
             sections.push(json!({
                 "name": section.name,
                 "version": section.version,
-                "key": section.key.record(self.scene, &section.name, dir)?,
+                "key": section.key.record(self.scene, scene_sum.as_deref(), &section.name, dir)?,
                 "summary": section.summary,
                 "files": files,
             }));
@@ -237,8 +275,8 @@ fn replace_folder(staging: &Path, dir: &Path) -> Result<(), ArtifactError> {
 
 // --- reading ------------------------------------------------------------------------------------
 
-/// An artifact read back: its manifest checked, every file checked against it (and read
-/// again when a section is read, so that no file's bytes are held longer than its decoding).
+/// An artifact read back: its manifest checked and every file's checksum with it (each file
+/// read in pieces; it is read again when its section is decoded, so no bytes are held).
 #[derive(Debug)]
 pub struct Artifact {
     dir: PathBuf,
@@ -251,53 +289,51 @@ struct StoredSection {
     name: String,
     version: u32,
     key: Value,
-    /// Each file's name and checksum, as the manifest lists them (every one checked by `read`).
-    files: Vec<(String, String)>,
+    /// Each file's name (its checksum checked by `read`).
+    files: Vec<String>,
 }
 
 /// One section's files, once its version and key have been checked.
 pub struct SectionData<'a> {
     dir: &'a Path,
     pub name: &'a str,
-    files: &'a [(String, String)],
+    files: &'a [String],
 }
 
 impl SectionData<'_> {
-    /// The path of `file` (checked when the artifact was read); refused when the section
-    /// lacks it. For files a reader streams (images).
-    pub fn path(&self, file: &str) -> Result<PathBuf, ArtifactError> {
+    /// The path of `file`; refused when the section lacks it.
+    fn path(&self, file: &str) -> Result<PathBuf, ArtifactError> {
         let path = self.dir.join(file);
-        match self.files.iter().any(|(name, _)| name == file) {
+        match self.files.iter().any(|name| name == file) {
             true => Ok(path),
             false => Err(fail(&path, format!("section {} has no file {file}", self.name), REBAKE)),
         }
     }
 
-    /// The bytes of `file` and its path, checked against the manifest's checksum again (the
-    /// folder may have changed since it was read).
+    /// The bytes of `file` and its path.
     pub fn file(&self, file: &str) -> Result<(Vec<u8>, PathBuf), ArtifactError> {
         let path = self.path(file)?;
-        let expected = self.files.iter().find(|(name, _)| name == file).map(|(_, c)| c.as_str()).unwrap_or_default();
-        Ok((checked_bytes(&path, expected)?, path))
+        let bytes = std::fs::read(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?;
+        Ok((bytes, path))
     }
-}
 
-/// The bytes of the file at `path`, refused unless their checksum is `expected`.
-fn checked_bytes(path: &Path, expected: &str) -> Result<Vec<u8>, ArtifactError> {
-    let bytes = std::fs::read(path).map_err(|e| fail(path, format!("cannot read ({e})"), REBAKE))?;
-    if checksum(&bytes) != expected {
-        let problem =
-            format!("checksum {} differs from the manifest's {expected}: the file is corrupt or from another bake", checksum(&bytes));
-        return Err(fail(path, problem, REBAKE));
+    /// Layer `layer` of the EXR `file`, streamed, refused unless it is `width` x `height`;
+    /// with its path.
+    pub fn exr_layer(&self, file: &str, layer: &str, (width, height): (u32, u32)) -> Result<(Image, PathBuf), ArtifactError> {
+        let path = self.path(file)?;
+        let image = read_exr_layer(&path, Some(layer)).map_err(|e| fail(&path, e.to_string(), REBAKE))?;
+        if (image.width, image.height) != (width, height) {
+            return Err(fail(&path, format!("is {} x {}, where {width} x {height} belong", image.width, image.height), REBAKE));
+        }
+        Ok((image, path))
     }
-    Ok(bytes)
 }
 
 const GIVE_ARTIFACT: &str = "give the folder `relume bake --out` wrote";
 
 impl Artifact {
     /// Reads and checks the artifact in `dir`: the manifest's format and version, its
-    /// sections' shape, and every file's size and checksum.
+    /// sections' shape, and every file's checksum.
     pub fn read(dir: &Path) -> Result<Artifact, ArtifactError> {
         let manifest_path = dir.join("manifest.json");
         let text =
@@ -316,23 +352,14 @@ impl Artifact {
         }
         let listed = manifest["sections"].as_array().ok_or_else(|| fail(&manifest_path, "has no list of sections", REBAKE))?;
         let sections = listed.iter().map(|s| read_section(dir, &manifest_path, s)).collect::<Result<Vec<_>, _>>()?;
+        if let Some((_, twice)) = sections.iter().enumerate().find(|(k, s)| sections[..*k].iter().any(|t| t.name == s.name)) {
+            return Err(fail(&manifest_path, format!("lists section {} twice", twice.name), REBAKE));
+        }
         Ok(Artifact { dir: dir.to_path_buf(), manifest, sections })
     }
 
     pub fn method(&self) -> &str {
         self.manifest["method"].as_str().unwrap_or("")
-    }
-
-    pub fn parameters(&self) -> &Value {
-        &self.manifest["parameters"]
-    }
-
-    pub fn manifest(&self) -> &Value {
-        &self.manifest
-    }
-
-    pub fn dir(&self) -> &Path {
-        &self.dir
     }
 
     /// Section `name` at `version`, after checking its key against `scene` (needed for a
@@ -358,16 +385,19 @@ fn read_section(dir: &Path, manifest_path: &Path, entry: &Value) -> Result<Store
     let name = entry["name"].as_str().ok_or_else(|| bad("has no name"))?.to_string();
     let version = entry["version"].as_u64().and_then(|v| u32::try_from(v).ok()).ok_or_else(|| bad("has no version"))?;
     let files = entry["files"].as_object().ok_or_else(|| bad("lists no files"))?;
-    let mut read = Vec::with_capacity(files.len());
     for (file, facts) in files {
         if file.contains(['/', '\\']) || file.starts_with('.') {
             return Err(fail(manifest_path, format!("section {name} names a file outside the folder: {file}"), REBAKE));
         }
+        let path = dir.join(file);
         let expected = facts["checksum"].as_str().unwrap_or("(none)");
-        checked_bytes(&dir.join(file), expected)?;
-        read.push((file.clone(), expected.to_string()));
+        let actual = file_checksum(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?;
+        if actual != expected {
+            let problem = format!("checksum {actual} differs from the manifest's {expected}: the file is corrupt or from another bake");
+            return Err(fail(&path, problem, REBAKE));
+        }
     }
-    Ok(StoredSection { name, version, key: entry["key"].clone(), files: read })
+    Ok(StoredSection { name, version, key: entry["key"].clone(), files: files.keys().cloned().collect() })
 }
 
 fn check_key(manifest_path: &Path, section: &str, key: &Value, scene: Option<&Scene>) -> Result<(), ArtifactError> {

@@ -1,12 +1,11 @@
 //! Little-endian binary files of the bake artifact: a writer of u32 and f32 values, and a
-//! reader that refuses to read past the end (naming the file, what it was reading and where)
-//! and checks every count against a limit before allocating for it.
+//! reader that refuses to read past the end (naming the file, what it was reading and where),
+//! so a count read from a file never allocates more than the file holds.
 
 use crate::artifact::{fail, ArtifactError, REBAKE};
 use std::path::Path;
 
 /// Appends little-endian values.
-#[derive(Default)]
 pub struct Writer {
     pub bytes: Vec<u8>,
 }

@@ -58,32 +58,44 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), Str
     })
 }
 
-struct LayerPixels<'a>(&'a Image);
+/// Pixels, row by row, `width` to a row: an image's or a slice's, written without a copy.
+#[derive(Clone, Copy)]
+struct LayerPixels<'a> {
+    width: usize,
+    pixels: &'a [Vec3],
+}
 
 impl exr::prelude::GetPixel for LayerPixels<'_> {
     type Pixel = (f32, f32, f32);
     fn get_pixel(&self, position: exr::prelude::Vec2<usize>) -> Self::Pixel {
-        let p = self.0.get(position.x() as u32, position.y() as u32);
+        let p = self.pixels[position.y() * self.width + position.x()];
         (p.x, p.y, p.z)
     }
 }
 
 /// Writes named RGB float layers (all the same size) into one EXR file, losslessly.
 pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
-    let bytes = encode_exr_layers(layers).map_err(|e| io_error(path, e))?;
+    let Some((_, first)) = layers.first() else { return Err(io_error(path, "no layers to write")) };
+    let views: Vec<_> =
+        layers.iter().map(|(name, image)| (*name, LayerPixels { width: image.width as usize, pixels: &image.pixels })).collect();
+    let bytes = encode(&views, (first.width as usize, first.height as usize)).map_err(|e| io_error(path, e))?;
     write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| e.to_string()))
 }
 
-/// The bytes of an EXR file holding named RGB float layers (all the same size), losslessly.
-pub fn encode_exr_layers(layers: &[(&str, &Image)]) -> Result<Vec<u8>, String> {
+/// The bytes of an EXR file of one named RGB float layer, `width` pixels wide, losslessly.
+pub fn encode_exr_layer(name: &str, width: u32, pixels: &[Vec3]) -> Result<Vec<u8>, String> {
+    if width == 0 || !pixels.len().is_multiple_of(width as usize) {
+        return Err(format!("{} pixels do not fill rows of {width}", pixels.len()));
+    }
+    let width = width as usize;
+    encode(&[(name, LayerPixels { width, pixels })], (width, pixels.len() / width))
+}
+
+fn encode(layers: &[(&str, LayerPixels)], size: (usize, usize)) -> Result<Vec<u8>, String> {
     use exr::prelude::*;
-    let Some((_, first)) = layers.first() else { return Err("no layers to write".into()) };
-    let size = (first.width as usize, first.height as usize);
     let exr_layers: Vec<_> = layers
         .iter()
-        .map(|(name, image)| {
-            Layer::new(size, LayerAttributes::named(*name), Encoding::SMALL_LOSSLESS, SpecificChannels::rgb(LayerPixels(image)))
-        })
+        .map(|(name, pixels)| Layer::new(size, LayerAttributes::named(*name), Encoding::SMALL_LOSSLESS, SpecificChannels::rgb(*pixels)))
         .collect();
     let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(size));
     let exr_image = exr::image::Image::from_layers(attributes, Layers::from_vec(exr_layers));

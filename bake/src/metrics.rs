@@ -78,9 +78,7 @@ pub fn best_scale(base: &Image, unit: &Image, reference: &Image) -> Result<f64, 
 
 /// `a - b`, pixel by pixel: a method's indirect part is its image minus its direct light.
 pub fn difference(a: &Image, b: &Image) -> Result<Image, ImageError> {
-    check_sizes(a, b)?;
-    let pixels = a.pixels.iter().zip(&b.pixels).map(|(x, y)| *x - *y).collect();
-    Ok(Image { width: a.width, height: a.height, pixels })
+    add_scaled(a, b, -1.0)
 }
 
 /// `base + scale * unit`, pixel by pixel.

@@ -160,7 +160,7 @@ pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSetti
 
 /// The image mean of the radiance that reaches the camera after exactly k bounces, for
 /// k = 0..=`last_bounce` (element k). Traced exactly as [`render_reference`] traces (same
-/// paths, same seed); `max_time` and `progress` are ignored, every sample is taken. For a
+/// paths, same seed); `work.time_limit` and `work.progress` are ignored, every sample is taken. For a
 /// closed scene with albedo a and no emitters in view, element k + 1 is about a times
 /// element k: what the energy test checks.
 pub fn radiance_by_bounce(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSettings, last_bounce: u32) -> Vec<Vec3> {

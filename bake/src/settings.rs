@@ -162,6 +162,7 @@ mod tests {
             (json!({"relume": {"light_path_maps": {"region": {"box": [[0, 0, 0], [1, 1, 1]], "test_points": 0}}}}), "test_points"),
             (json!({"relume": {"light_path_maps": {"region": {}}}}), "exactly one"),
             (json!({"relume": {"light_path_maps": {"light_area": -1}}}), "light_area"),
+            (json!({"relume": {"light_path_maps": {"region": {"points": [[0, 0, 0]], "test_points": 8}}}}), "goes with a"),
         ];
         for (extras, expected) in cases {
             let error = SceneSettings::from_extras(&extras, defaults(), &SCENE_BLOCKS).unwrap_err();

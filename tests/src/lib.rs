@@ -95,7 +95,7 @@ pub fn render_validated(scene: &Scene, settings: &RenderSettings) -> Image {
 
 /// `texels` (rgb a value, alpha the coverage) laid out as `atlas`.
 pub fn atlas_image<'d>(atlas: &Atlas, texels: &'d [Vec4]) -> AtlasImage<'d> {
-    AtlasImage { width: atlas.width, height: atlas.height, pages: atlas.pages, texels }
+    AtlasImage::new(atlas.layout(), texels)
 }
 
 /// A resource of vec4s (see `Renderer::resource`) as the last frame left it.

@@ -14,9 +14,7 @@ use relume_bake::scene::Scene;
 pub fn atlas_scene(scene: &Scene, texel_density: f32) -> (Atlas, Scene) {
     let atlas = Atlas::build(scene, &AtlasSettings { texel_density, ..AtlasSettings::default() }).expect("atlas");
     let mut applied = scene.clone();
-    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut applied);
     (atlas, applied)
 }
 

@@ -45,9 +45,8 @@
 //! texels' worth, jump 0.142 and |A - B| 0.086, and both bounds fail.
 
 use glam::{Vec3, Vec4};
-use relume_bake::artifact::PageLayout;
 use relume_bake::atlas::{Atlas, AtlasSettings};
-use relume_bake::bvh::{Hit, SceneBvh};
+use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
 use relume_bake::obscurance::{bake_obscurance, ObscuranceSettings, Variant};
 use relume_bake::scene::{Mesh, Scene};
@@ -108,16 +107,10 @@ fn bake(scene: &Scene) -> Baked {
         work: WorkOptions { seed: 17, ..WorkOptions::default() },
     };
     let map = bake_obscurance(scene, &SceneBvh::new(scene), &atlas, &settings).expect("bake");
-    let texels = map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect();
+    let texels = atlas.with_coverage(&map.values);
     let mut applied = scene.clone();
-    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut applied);
     Baked { atlas, applied, texels }
-}
-
-fn layout(atlas: &Atlas) -> PageLayout {
-    PageLayout { width: atlas.width, height: atlas.height, pages: atlas.pages }
 }
 
 /// The frame's linear radiance with I_A = pi, beta = 0, no shadows: albedo * W.
@@ -129,15 +122,7 @@ fn render_w(ctx: &Arc<Context>, scene: &Scene, obscurance: AtlasImage) -> Image 
 
 /// The mesh every pixel's centre sees (CPU primary rays), None for the background.
 fn pixel_meshes(scene: &Scene) -> Vec<Option<u32>> {
-    let bvh = SceneBvh::new(scene);
-    let eye = scene.camera.position();
-    (0..SIZE)
-        .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let dir = scene.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
-            bvh.closest_hit(eye, dir, f32::INFINITY).map(|h: Hit| h.mesh)
-        })
-        .collect()
+    primary_hits(scene, &SceneBvh::new(scene), SIZE, SIZE).iter().map(|h| h.map(|h| h.mesh)).collect()
 }
 
 fn at(image: &Image, x: u32, y: u32) -> f32 {
@@ -202,12 +187,12 @@ fn a_flat_quad_split_across_two_charts_shows_no_visible_seam_after_padding() {
     assert_eq!(charts_of(&b, 0), 1, "B's floor is one chart");
 
     let ctx = validated_context();
-    let image_a = render_w(&ctx, &a.applied, AtlasImage::new(layout(&a.atlas), &a.texels));
-    let image_b = render_w(&ctx, &b.applied, AtlasImage::new(layout(&b.atlas), &b.texels));
+    let image_a = render_w(&ctx, &a.applied, AtlasImage::new(a.atlas.layout(), &a.texels));
+    let image_b = render_w(&ctx, &b.applied, AtlasImage::new(b.atlas.layout(), &b.texels));
     // A's gutters left black: empty texels handed over as covered (alpha 1) with W = 0, so
     // the padding pass, which fills only texels of alpha <= 0, leaves them as they are.
     let unpadded: Vec<Vec4> = a.texels.iter().map(|t| if t.w > 0.0 { *t } else { Vec4::new(0.0, 0.0, 0.0, 1.0) }).collect();
-    let image_unpadded = render_w(&ctx, &a.applied, AtlasImage::new(layout(&a.atlas), &unpadded));
+    let image_unpadded = render_w(&ctx, &a.applied, AtlasImage::new(a.atlas.layout(), &unpadded));
     assert_clean(ctx);
 
     let meshes_a = pixel_meshes(&split);

@@ -104,9 +104,7 @@ fn frames_with_a_moving_occluder_allocate_nothing() {
 fn frames_with_obscurance_and_changing_ambient_allocate_nothing() {
     let mut scene = load_scene("cornell");
     let atlas = Atlas::build(&scene, &AtlasSettings { texel_density: 8.0, ..AtlasSettings::default() }).expect("atlas");
-    for (mesh, atlas_mesh) in scene.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut scene);
     let texels: Vec<Vec4> = atlas.texels.iter().map(|t| Vec4::new(0.7, 0.6, 0.5, t.coverage)).collect();
     let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let ctx = validated_context();

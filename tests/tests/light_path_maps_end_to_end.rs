@@ -52,7 +52,7 @@ fn bake_obscurance_texels(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, variant:
         work: WorkOptions { ..WorkOptions::default() },
     };
     let map = bake_obscurance(scene, bvh, atlas, &settings).unwrap();
-    map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect()
+    atlas.with_coverage(&map.values)
 }
 
 /// The bake of docs/BENCHMARKS.md's light path maps table: a 128-texel atlas of about 7,000
@@ -81,9 +81,7 @@ fn bake(scene: &Scene) -> Bake {
         compressed.relative_error
     );
     let mut applied = scene.clone();
-    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut applied);
     Bake {
         spectral: bake_obscurance_texels(scene, &bvh, &atlas, Variant::Spectral),
         obscurance: bake_obscurance_texels(scene, &bvh, &atlas, Variant::Obscurance),

@@ -1,5 +1,5 @@
 //! The run-time side of the light path maps (000 §3.4 steps 2-5) on the GPU against the CPU
-//! formulas of relume_bake::clustered_transfer: entry-point irradiance (shadows off: exactly
+//! formulas of relume_bake::light_path_maps: entry-point irradiance (shadows off: exactly
 //! `entry_irradiance_unshadowed` summed over the lights; shadows on: never more, and close to
 //! the baker's ray-traced `entry_irradiance` for most entry points), cluster
 //! sums and reconstruction (`cluster_sums` + `reconstruct` of the GPU's own I_e), the padding
@@ -13,6 +13,7 @@ use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
 use relume_bake::light_path_maps::entry_irradiance;
 use relume_bake::light_path_maps::{entry_irradiance_unshadowed, ClusteredTransfer};
+use relume_bake::metrics::add_scaled;
 use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::testing;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMaps, LightPathMapsData};
@@ -67,7 +68,7 @@ fn scaled(a: &Image, s: f32) -> Image {
 }
 
 fn sum(a: &Image, b: &Image) -> Image {
-    difference(a, &scaled(b, -1.0))
+    add_scaled(a, b, 1.0).expect("same size")
 }
 
 fn max_value(image: &Image) -> f32 {

@@ -46,13 +46,11 @@ fn transfer_indirect(scene: &Scene, entries_wanted: u32, walks: u32) -> Image {
     let irradiance: Vec<Vec3> =
         entries.entries.iter().map(|e| scene.lights.iter().map(|l| entry_irradiance(&bvh, l, &e.point, 0.0)).sum()).collect();
     let indirect = transfers.irradiance(&irradiance, atlas.texels.len());
-    let texels: Vec<_> = indirect.iter().zip(&atlas.texels).map(|(i, t)| i.extend(t.coverage)).collect();
+    let texels: Vec<_> = atlas.with_coverage(&indirect);
     let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let mut unlit = scene.clone();
     unlit.lights.clear();
-    for (mesh, atlas_mesh) in unlit.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut unlit);
     let settings = RenderSettings { width: SIZE, height: SIZE, ambient: Vec3::ONE, beta: 0.0, ..RenderSettings::default() };
     let ctx = validated_context();
     let image = render(&mut new_renderer(&ctx, &unlit, &settings, &[&obscurance]));

@@ -37,10 +37,8 @@ fn renders(scene: &Scene) -> [Image; 3] {
     };
     let map = bake_obscurance(scene, &SceneBvh::new(scene), &atlas, &obscurance).unwrap();
     let mut lit = scene.clone();
-    for (mesh, atlas_mesh) in lit.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
-    let texels: Vec<_> = map.values.iter().zip(&atlas.texels).map(|(w, t)| w.extend(t.coverage)).collect();
+    atlas.apply_to(&mut lit);
+    let texels: Vec<_> = atlas.with_coverage(&map.values);
     let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
 
     let with_ambient = RenderSettings {

@@ -1,4 +1,4 @@
-//! The obscurance illumination model in the forward pass (001 eq. (5)-(7)), GPU against CPU:
+//! The obscurance illumination model in the lighting pass (001 eq. (5)-(7)), GPU against CPU:
 //! with I_A = beta = 0 the frame is bit for bit the direct-only frame; the ambient term
 //! albedo / pi * I_A * W with W read from the obscurance through uv1 matches a CPU evaluation at
 //! pixel centres (primary rays through the BVH, uv1 interpolated with the hit's barycentrics,
@@ -54,9 +54,7 @@ fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
     let atlas_settings = AtlasSettings { texel_density: 12.0, gutter: 2, max_size: 64, ..AtlasSettings::default() };
     let atlas = Atlas::build(scene, &atlas_settings).expect("atlas");
     let mut applied = scene.clone();
-    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&atlas.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    atlas.apply_to(&mut applied);
     let texels =
         atlas.texels.iter().map(|t| if t.coverage > 0.0 { synthetic_w(t.centre).extend(t.coverage) } else { Vec4::ZERO }).collect();
     (atlas, applied, texels)

@@ -6,10 +6,11 @@
 //! baker can spread its samples over the whole patch).
 
 use super::{AtlasMesh, AtlasSection, Texel, EMPTY};
-use crate::artifact::PageLayout;
+use crate::artifact::{PageLayout, Section};
 use crate::scene::{Mesh, Scene};
 use crate::settings::first_failed_check;
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3, Vec4};
+use serde_json::Value;
 use std::collections::HashMap;
 
 /// How the atlas is cut and packed.
@@ -183,6 +184,21 @@ impl Atlas {
     /// What a bake artifact keeps of the atlas.
     pub fn to_section(&self) -> AtlasSection {
         AtlasSection { meshes: self.meshes.clone(), layout: self.layout(), texels: self.texels.clone() }
+    }
+
+    /// Its section, written from its parts (as [`AtlasSection::section`]).
+    pub fn section(&self, summary: Value) -> Section {
+        super::section(&self.meshes, self.layout(), &self.texels, summary)
+    }
+
+    /// The scene with every mesh re-indexed and given its uv1 (as [`AtlasSection::apply_to`]).
+    pub fn apply_to(&self, scene: &mut Scene) {
+        super::apply_meshes(&self.meshes, scene);
+    }
+
+    /// Per-texel `values` with the coverage as alpha (as [`AtlasSection::with_coverage`]).
+    pub fn with_coverage(&self, values: &[Vec3]) -> Vec<Vec4> {
+        super::with_coverage(&self.texels, values)
     }
 
     pub fn covered_texels(&self) -> usize {

@@ -76,34 +76,49 @@ pub const SECTION_VERSION: u32 = 1;
 const FILE: &str = "atlas.bin";
 const MAGIC: &[u8; 8] = b"RLATLAS\0";
 
+/// `scene` with every mesh re-indexed by `meshes` and given its uv1.
+pub(crate) fn apply_meshes(meshes: &[AtlasMesh], scene: &mut Scene) {
+    for (mesh, atlas_mesh) in scene.meshes.iter_mut().zip(meshes) {
+        *mesh = atlas_mesh.apply(mesh);
+    }
+}
+
+/// Per-texel `values` as the renderer uploads them: rgb the value, alpha the texel's coverage.
+pub(crate) fn with_coverage(texels: &[Texel], values: &[Vec3]) -> Vec<Vec4> {
+    values.iter().zip(texels).map(|(v, t)| v.extend(t.coverage)).collect()
+}
+
+/// The section (`atlas.bin`, keyed to the scene) of an atlas's parts, with `summary` for the manifest.
+pub(crate) fn section(meshes: &[AtlasMesh], layout: PageLayout, texels: &[Texel], summary: Value) -> Section {
+    let mut w = Writer::new(MAGIC);
+    w.u32s(&[meshes.len() as u32]);
+    for mesh in meshes {
+        w.u32s(&[mesh.source_vertex.len() as u32, mesh.indices.len() as u32]);
+        w.u32s(&mesh.source_vertex);
+        w.f32s(&mesh.uv1.iter().flat_map(|uv| uv.to_array()).collect::<Vec<_>>());
+        w.u32s(&mesh.indices);
+    }
+    w.u32s(&[layout.width, layout.height, layout.pages]);
+    for t in texels {
+        w.f32s(&[t.coverage, t.centre.x, t.centre.y, t.centre.z, t.normal.x, t.normal.y, t.normal.z, f32::from_bits(t.triangle)]);
+    }
+    Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(FILE.into(), w.bytes)] }
+}
+
 impl AtlasSection {
     /// The scene with every mesh re-indexed and given its uv1.
     pub fn apply_to(&self, scene: &mut Scene) {
-        for (mesh, atlas_mesh) in scene.meshes.iter_mut().zip(&self.meshes) {
-            *mesh = atlas_mesh.apply(mesh);
-        }
+        apply_meshes(&self.meshes, scene);
     }
 
     /// Per-texel `values` as the renderer uploads them: rgb the value, alpha the coverage.
     pub fn with_coverage(&self, values: &[Vec3]) -> Vec<Vec4> {
-        values.iter().zip(&self.texels).map(|(v, t)| v.extend(t.coverage)).collect()
+        with_coverage(&self.texels, values)
     }
 
     /// The section (`atlas.bin`, keyed to the scene), with `summary` for the manifest.
     pub fn section(&self, summary: Value) -> Section {
-        let mut w = Writer::new(MAGIC);
-        w.u32s(&[self.meshes.len() as u32]);
-        for mesh in &self.meshes {
-            w.u32s(&[mesh.source_vertex.len() as u32, mesh.indices.len() as u32]);
-            w.u32s(&mesh.source_vertex);
-            w.f32s(&mesh.uv1.iter().flat_map(|uv| uv.to_array()).collect::<Vec<_>>());
-            w.u32s(&mesh.indices);
-        }
-        w.u32s(&[self.layout.width, self.layout.height, self.layout.pages]);
-        for t in &self.texels {
-            w.f32s(&[t.coverage, t.centre.x, t.centre.y, t.centre.z, t.normal.x, t.normal.y, t.normal.z, f32::from_bits(t.triangle)]);
-        }
-        Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(FILE.into(), w.bytes)] }
+        section(&self.meshes, self.layout, &self.texels, summary)
     }
 
     /// The atlas of `artifact`, checked against `scene` (as loaded, before any atlas was

@@ -64,7 +64,8 @@ pub enum ErrorKind {
     NonFinite,
     /// An index refers past the vertex count.
     IndexOutOfRange,
-    /// A primitive is not a triangle list (wrong mode, or an index count not a multiple of 3).
+    /// A primitive is not triangles (points or lines), or its index count makes no triangle list,
+    /// strip or fan.
     NotTriangles,
     /// A glTF feature relume does not read (JPEG, sparse accessors, texCoord 1 for base colour).
     Unsupported,

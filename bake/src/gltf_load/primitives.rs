@@ -26,6 +26,7 @@ impl Loader<'_> {
             1 => base,
             _ => format!("{base} primitive {}", primitive.index()),
         };
+        triangle_mode(primitive.mode()).map_err(|(problem, fix)| ctx.fail(ErrorKind::NotTriangles, item.clone(), problem, fix))?;
         let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
             return Err(ctx.fail(ErrorKind::Accessor, item, "has no POSITION attribute", "add a POSITION accessor"));
         };
@@ -69,10 +70,7 @@ impl Loader<'_> {
                 (0..n).collect()
             }
         };
-        let what = if primitive.indices().is_some() { "index" } else { "vertex (no indices)" };
-        let mut indices = triangle_list(primitive.mode(), sequence)
-            .map_err(|(problem, fix)| ctx.fail(ErrorKind::NotTriangles, item.clone(), problem.replace("{what}", what), fix))?;
-        if let Some((at, &bad)) = indices.iter().enumerate().find(|(_, &i)| i as usize >= vertex_count) {
+        if let Some((at, &bad)) = sequence.iter().enumerate().find(|(_, &i)| i as usize >= vertex_count) {
             return Err(ctx.fail(
                 ErrorKind::IndexOutOfRange,
                 item,
@@ -80,6 +78,12 @@ impl Loader<'_> {
                 "fix the indices accessor",
             ));
         }
+        let counted = match primitive.indices() {
+            Some(_) => Counted { what: "index", accessor: "indices" },
+            None => Counted { what: "vertex (no indices)", accessor: "POSITION" },
+        };
+        let mut indices = triangle_list(primitive.mode(), sequence, counted)
+            .map_err(|(problem, fix)| ctx.fail(ErrorKind::NotTriangles, item.clone(), problem, fix))?;
 
         // World space. Normals go through the inverse-transpose, computed as the cofactor
         // matrix (columns b×c, c×a, a×b) so that singular scales do not divide by zero; the
@@ -346,42 +350,64 @@ pub(super) fn check_finite<const N: usize>(
     Ok(())
 }
 
-/// The triangles of a primitive of `mode` whose vertices come in `sequence` (its indices, or
-/// 0..n), as a triangle list (glTF 2.0 §3.7.2.1): a strip's triangle i is (i, i+1, i+2) for
-/// even i and (i, i+2, i+1) for odd i, so every triangle keeps the strip's winding; a fan's
-/// is (i+1, i+2, 0). Points and lines are refused, as is a list whose count is not a multiple
-/// of 3 or a strip or fan of fewer than 3. The error is (problem, fix), "{what}" standing for
-/// what the sequence counts.
-pub(super) fn triangle_list(mode: gltf::mesh::Mode, sequence: Vec<u32>) -> Result<Vec<u32>, (String, String)> {
+/// What a primitive's vertex sequence counts, for the refusals: its indices, or its vertices
+/// when it has none.
+#[derive(Clone, Copy)]
+pub(super) struct Counted {
+    pub what: &'static str,
+    pub accessor: &'static str,
+}
+
+/// Refuses points and lines; the error is (problem, fix).
+pub(super) fn triangle_mode(mode: gltf::mesh::Mode) -> Result<(), (String, String)> {
     use gltf::mesh::Mode;
-    let n = sequence.len();
-    let too_short = || {
-        (
-            format!("a triangle {} of {{what}} count {n}", if mode == Mode::TriangleStrip { "strip" } else { "fan" }),
-            "a strip or fan needs at least 3 vertices; fix the indices accessor count".to_string(),
-        )
-    };
     match mode {
-        Mode::Triangles if n.is_multiple_of(3) => Ok(sequence),
-        Mode::Triangles => Err((
-            format!("{{what}} count {n} is not a multiple of 3"),
-            "a triangle list needs three indices per triangle; fix the indices accessor count".into(),
-        )),
-        Mode::TriangleStrip | Mode::TriangleFan if n < 3 => Err(too_short()),
-        Mode::TriangleStrip => {
-            Ok((0..n - 2).flat_map(|i| if i % 2 == 0 { [i, i + 1, i + 2] } else { [i, i + 2, i + 1] }).map(|i| sequence[i]).collect())
-        }
-        Mode::TriangleFan => Ok((0..n - 2).flat_map(|i| [i + 1, i + 2, 0]).map(|i| sequence[i]).collect()),
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => Ok(()),
         other => {
             Err((format!("mode {other:?} is not triangles"), "export the mesh as triangles (a list, strip or fan: mode 4, 5 or 6)".into()))
         }
     }
 }
 
+/// The triangles of a primitive of `mode` whose vertices come in `sequence` (its indices, or
+/// 0..n), as a triangle list (glTF 2.0 §3.7.2.1): a strip's triangle i is (i, i+1, i+2) for
+/// even i and (i, i+2, i+1) for odd i, so every triangle keeps the strip's winding, and the
+/// triangles that repeat a vertex (a strip's stitches) are left out; a fan's is (i+1, i+2, 0).
+/// Points and lines are refused, as is a list whose count is not a multiple of 3 or a strip or
+/// fan of fewer than 3. The error is (problem, fix).
+pub(super) fn triangle_list(mode: gltf::mesh::Mode, sequence: Vec<u32>, counted: Counted) -> Result<Vec<u32>, (String, String)> {
+    use gltf::mesh::Mode;
+    triangle_mode(mode)?;
+    let (n, Counted { what, accessor }) = (sequence.len(), counted);
+    match mode {
+        Mode::Triangles if n.is_multiple_of(3) => Ok(sequence),
+        Mode::Triangles => Err((
+            format!("{what} count {n} is not a multiple of 3"),
+            format!("a triangle list needs three indices per triangle; fix the {accessor} accessor count"),
+        )),
+        Mode::TriangleStrip | Mode::TriangleFan if n < 3 => Err((
+            format!("a triangle {} of {what} count {n}", if mode == Mode::TriangleStrip { "strip" } else { "fan" }),
+            format!("a strip or fan needs at least 3 vertices; fix the {accessor} accessor count"),
+        )),
+        Mode::TriangleStrip => Ok((0..n - 2)
+            .map(|i| if i % 2 == 0 { [i, i + 1, i + 2] } else { [i, i + 2, i + 1] }.map(|k| sequence[k]))
+            .filter(|[a, b, c]| a != b && b != c && a != c)
+            .flatten()
+            .collect()),
+        _ => Ok((0..n - 2).flat_map(|i| [i + 1, i + 2, 0]).map(|i| sequence[i]).collect()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::triangle_list;
+    use super::{Counted, Counted as C};
     use gltf::mesh::Mode;
+
+    const INDICES: Counted = C { what: "index", accessor: "indices" };
+
+    fn triangle_list(mode: Mode, sequence: Vec<u32>) -> Result<Vec<u32>, (String, String)> {
+        super::triangle_list(mode, sequence, INDICES)
+    }
 
     #[test]
     fn strips_and_fans_become_lists_with_the_winding_kept() {
@@ -394,5 +420,8 @@ mod tests {
         assert!(triangle_list(Mode::TriangleStrip, vec![0, 1]).unwrap_err().0.contains("strip"));
         assert!(triangle_list(Mode::Triangles, vec![0, 1, 2, 3]).unwrap_err().0.contains("not a multiple of 3"));
         assert!(triangle_list(Mode::Lines, vec![0, 1]).unwrap_err().0.contains("Lines"));
+        // A stitched strip (0 1 2 2 3 3 4 5: two strips joined by repeated indices) keeps only
+        // the real triangles: 012, then 354 (position 5 is odd, so turned).
+        assert_eq!(triangle_list(Mode::TriangleStrip, vec![0, 1, 2, 2, 3, 3, 4, 5]), Ok(vec![0, 1, 2, 3, 5, 4]));
     }
 }

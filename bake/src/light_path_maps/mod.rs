@@ -14,7 +14,7 @@ pub use transfer::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};
-use crate::image::{encode_exr_layers, read_exr_layer, Image};
+use crate::image::encode_exr_layer;
 use crate::scene::Scene;
 use crate::settings::{as_object, known_keys, number, vec3, SceneBlock};
 use glam::Vec3;
@@ -82,49 +82,48 @@ pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| fro
 fn from_block(block: Option<&Value>) -> Result<LightPathMapsSceneSettings, String> {
     let mut s = LightPathMapsSceneSettings::default();
     let Some(block) = block else { return Ok(s) };
-    read_light_path_maps(as_object(block, "extras.relume.light_path_maps")?, &mut s)?;
-    if !(s.light_area.is_finite() && s.light_area >= 0.0) {
-        return Err("extras.relume.light_path_maps.light_area must be finite and >= 0 (square metres)".into());
-    }
-    if let Some(region) = &s.region {
-        region.validate().map_err(|e| format!("extras.relume.{e}"))?;
-    }
-    Ok(s)
-}
-
-fn read_light_path_maps(block: &Map<String, Value>, s: &mut LightPathMapsSceneSettings) -> Result<(), String> {
     let key = "extras.relume.light_path_maps";
+    let block = as_object(block, key)?;
     known_keys(block, key, &["region", "light_area"])?;
     if let Some(v) = block.get("light_area") {
         s.light_area = number(v, &format!("{key}.light_area"))?;
     }
-    if let Some(r) = block.get("region") {
-        let r = as_object(r, &format!("{key}.region"))?;
-        known_keys(r, &format!("{key}.region"), &["box", "test_points", "points"])?;
-        s.region = Some(match (r.get("box"), r.get("points")) {
-            (Some(b), None) => {
-                let corners = b
-                    .as_array()
-                    .filter(|a| a.len() == 2)
-                    .ok_or_else(|| format!("{key}.region.box must be [[min x, y, z], [max x, y, z]]"))?;
-                let test_points = r
-                    .get("test_points")
-                    .map_or(Some(64), Value::as_u64)
-                    .ok_or_else(|| format!("{key}.region.test_points must be a whole number"))?;
-                LightRegion::Box {
-                    min: vec3(&corners[0], &format!("{key}.region.box[0]"))?,
-                    max: vec3(&corners[1], &format!("{key}.region.box[1]"))?,
-                    test_points: test_points.min(u32::MAX as u64) as u32,
-                }
-            }
-            (None, Some(p)) => {
-                let points = p.as_array().ok_or_else(|| format!("{key}.region.points must be an array of [x, y, z]"))?;
-                LightRegion::Points(points.iter().map(|q| vec3(q, &format!("{key}.region.points[]"))).collect::<Result<_, _>>()?)
-            }
-            _ => return Err(format!("{key}.region needs exactly one of \"box\" (with \"test_points\") or \"points\"")),
-        });
+    if !(s.light_area.is_finite() && s.light_area >= 0.0) {
+        return Err(format!("{key}.light_area must be finite and >= 0 (square metres)"));
     }
-    Ok(())
+    if let Some(r) = block.get("region") {
+        let region = read_region(as_object(r, &format!("{key}.region"))?, key)?;
+        region.validate().map_err(|e| format!("extras.relume.{e}"))?;
+        s.region = Some(region);
+    }
+    Ok(s)
+}
+
+fn read_region(r: &Map<String, Value>, key: &str) -> Result<LightRegion, String> {
+    known_keys(r, &format!("{key}.region"), &["box", "test_points", "points"])?;
+    Ok(match (r.get("box"), r.get("points")) {
+        (Some(b), None) => {
+            let corners =
+                b.as_array().filter(|a| a.len() == 2).ok_or_else(|| format!("{key}.region.box must be [[min x, y, z], [max x, y, z]]"))?;
+            let test_points = r
+                .get("test_points")
+                .map_or(Some(64), Value::as_u64)
+                .ok_or_else(|| format!("{key}.region.test_points must be a whole number"))?;
+            LightRegion::Box {
+                min: vec3(&corners[0], &format!("{key}.region.box[0]"))?,
+                max: vec3(&corners[1], &format!("{key}.region.box[1]"))?,
+                test_points: test_points.min(u32::MAX as u64) as u32,
+            }
+        }
+        (None, Some(_)) if r.contains_key("test_points") => {
+            return Err(format!("{key}.region.test_points goes with a \"box\"; \"points\" are the test points themselves"))
+        }
+        (None, Some(p)) => {
+            let points = p.as_array().ok_or_else(|| format!("{key}.region.points must be an array of [x, y, z]"))?;
+            LightRegion::Points(points.iter().map(|q| vec3(q, &format!("{key}.region.points[]"))).collect::<Result<_, _>>()?)
+        }
+        _ => return Err(format!("{key}.region needs exactly one of \"box\" (with \"test_points\") or \"points\"")),
+    })
 }
 
 pub const SECTION: &str = "light-path-maps";
@@ -145,9 +144,7 @@ pub fn section(transfer: &ClusteredTransfer, layout: PageLayout, summary: Value)
         w.f32s(&[e.position.x, e.position.y, e.position.z, e.normal.x, e.normal.y, e.normal.z]);
     }
     w.f32s(&transfer.weights);
-    let rows = (transfer.textures.len() / layout.width as usize) as u32;
-    let image = Image { width: layout.width, height: rows, pixels: transfer.textures.clone() };
-    let exr = encode_exr_layers(&[(LAYER, &image)])?;
+    let exr = encode_exr_layer(LAYER, layout.width, &transfer.textures)?;
     Ok(Section {
         name: SECTION.into(),
         version: SECTION_VERSION,
@@ -181,8 +178,10 @@ pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<Cl
         .collect();
     let weights = r.f32s(entries as usize * basis_count as usize, "the weights")?;
     r.finish("the weights")?;
-    let exr_path = data.path(EXR)?;
-    let image = read_exr_layer(&exr_path, Some(LAYER)).map_err(|e| fail(&exr_path, e.to_string(), REBAKE))?;
+    let textures_per_page = clusters as u64 * (1 + basis_count as u64);
+    let height = u32::try_from(layout.height as u64 * layout.pages as u64 * textures_per_page)
+        .map_err(|_| fail(&path, format!("{clusters} clusters of D = {basis_count} make textures too tall for one image"), REBAKE))?;
+    let (image, _) = data.exr_layer(EXR, LAYER, (layout.width, height))?;
     let transfer = ClusteredTransfer {
         entry_points,
         cluster_starts,

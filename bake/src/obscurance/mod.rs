@@ -9,7 +9,7 @@ mod baker;
 pub use baker::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
-use crate::image::{encode_exr_layers, read_exr_layer, Image};
+use crate::image::encode_exr_layer;
 use crate::scene::Scene;
 use crate::settings::{as_object, diagonal, first_failed_check, known_keys, number, SceneBlock};
 use glam::Vec3;
@@ -69,8 +69,10 @@ const LAYER: &str = "W";
 
 /// The section: W (rgb) per atlas texel, page after page, each row by row from the top.
 pub fn section(values: &[Vec3], layout: PageLayout, summary: Value) -> Result<Section, String> {
-    let image = Image { width: layout.width, height: layout.height * layout.pages, pixels: values.to_vec() };
-    let bytes = encode_exr_layers(&[(LAYER, &image)])?;
+    if values.len() != layout.texel_count() {
+        return Err(format!("{} values for an atlas of {} texels", values.len(), layout.texel_count()));
+    }
+    let bytes = encode_exr_layer(LAYER, layout.width, values)?;
     Ok(Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(FILE.into(), bytes)] })
 }
 
@@ -78,13 +80,7 @@ pub fn section(values: &[Vec3], layout: PageLayout, summary: Value) -> Result<Se
 /// the atlas's or a value is not finite and >= 0.
 pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<Vec<Vec3>, ArtifactError> {
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
-    let path = data.path(FILE)?;
-    let image = read_exr_layer(&path, Some(LAYER)).map_err(|e| fail(&path, e.to_string(), REBAKE))?;
-    if (image.width, image.height) != (layout.width, layout.height * layout.pages) {
-        let problem =
-            format!("is {} x {}, the atlas {} x {} x {} pages", image.width, image.height, layout.width, layout.height, layout.pages);
-        return Err(fail(&path, problem, REBAKE));
-    }
+    let (image, path) = data.exr_layer(FILE, LAYER, (layout.width, layout.height * layout.pages))?;
     if let Some(t) = image.pixels.iter().position(|w| !(w.is_finite() && w.min_element() >= 0.0)) {
         return Err(fail(&path, format!("texel {t} holds {}, not a finite value >= 0", image.pixels[t]), REBAKE));
     }

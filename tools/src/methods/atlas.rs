@@ -68,7 +68,7 @@ pub(crate) fn build(scene: &Scene, values: &Values, stages: &mut Stages) -> Resu
 
 /// The atlas's section, with its facts for the manifest.
 pub(crate) fn section(atlas: &Atlas, settings: &AtlasSettings) -> Section {
-    atlas.to_section().section(json!({
+    atlas.section(json!({
         "width": atlas.width,
         "height": atlas.height,
         "pages": atlas.pages,
