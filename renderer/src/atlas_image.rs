@@ -64,7 +64,6 @@ pub fn check_uv1(scene: &Scene, pages: u32) -> VkResult<()> {
 /// An atlas image uploaded and padded.
 pub struct GpuAtlasImage {
     ctx: Arc<Context>,
-    _padding: PaddingPass,
     pub image: Image,
     padding_ms: Option<f64>,
 }
@@ -89,8 +88,9 @@ impl GpuAtlasImage {
         let image = Image::new(ctx, name, desc)?;
         let padding = PaddingPass::new(ctx, &image)?;
         let queries = TimestampQueries::new(ctx)?;
-        let extents = vec![image.desc.extent(); data.pages as usize];
-        upload_array_layers_blocking(ctx, &image, data.texels, &extents, |rec, tracker| {
+        let extent = image.desc.extent();
+        let layers: Vec<_> = data.texels.chunks_exact(data.width as usize * data.height as usize).map(|page| (page, extent)).collect();
+        upload_array_layers_blocking(ctx, &image, &layers, |rec, tracker| {
             if let Some(q) = &queries {
                 q.reset(rec);
                 q.write(rec, 0);
@@ -108,7 +108,7 @@ impl GpuAtlasImage {
             }
             None => None,
         };
-        Ok(GpuAtlasImage { ctx: Arc::clone(ctx), _padding: padding, image, padding_ms })
+        Ok(GpuAtlasImage { ctx: Arc::clone(ctx), image, padding_ms })
     }
 
     /// Tells a frame's tracker that the image is ready for FragmentSampled reads, as the

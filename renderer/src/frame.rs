@@ -6,6 +6,7 @@
 //! allocates, submits or waits. The headless driver relume's own tools use (command buffer,
 //! fence, read-back) is `crate::headless`, apart from this library type.
 
+use crate::atlas_image::check_uv1;
 use crate::gpu_scene::{FrameUniforms, GpuScene};
 use crate::passes::lighting::{LightingPass, Terms, DEPTH_FORMAT, RADIANCE_FORMAT};
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
@@ -88,6 +89,9 @@ impl RenderSettings {
 /// The most passes a frame can time (one timestamp before the first and one after each).
 pub const MAX_PASSES: usize = TimestampQueries::CAPACITY - 1;
 
+/// The frame's own passes at most: vsm_moments, vsm_blur, lighting, tonemap, output_copy.
+const FRAME_PASSES: usize = 5;
+
 /// The passes a frame recorded, in order, with their GPU times in milliseconds once read
 /// ([`Renderer::timings`]). A fixed-size list: reading it allocates nothing.
 #[derive(Clone, Copy, Debug)]
@@ -155,7 +159,8 @@ impl Renderer {
     /// lighting pass for the terms they hand over. Blocking: uploads go through one-time
     /// submissions on the context's queue, each waited for by its own fence (never the
     /// device); nothing here runs per frame. Refused, by name: invalid settings, what a
-    /// technique refuses, and two techniques handing over a term of the same role.
+    /// technique refuses, two techniques handing over a term of the same role, and a texel
+    /// term on a scene without uv1 on the atlas's pages.
     pub fn new_blocking(
         ctx: &Arc<Context>,
         scene: &Scene,
@@ -173,7 +178,17 @@ impl Renderer {
         let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
         let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings };
         let techniques = techniques.iter().map(|t| t.make_blocking(&shared)).collect::<VkResult<Vec<_>>>()?;
+        let technique_passes: usize = techniques.iter().map(|t| t.passes().len()).sum();
+        if technique_passes > MAX_PASSES - FRAME_PASSES {
+            return Err(VkError::Invalid(format!(
+                "the techniques record {technique_passes} passes a frame; at most {} fit beside the frame's own",
+                MAX_PASSES - FRAME_PASSES
+            )));
+        }
         let terms = Terms::gather(techniques.iter().map(|t| (t.name(), t.term())))?;
+        for atlas in terms.atlas_images() {
+            check_uv1(scene, atlas.desc.layers)?;
+        }
         let lighting = LightingPass::new(ctx, &gpu_scene, &vsm.moments, &terms)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
@@ -211,11 +226,6 @@ impl Renderer {
     /// The technique of type `T`, if the renderer has one (to change its own settings).
     pub fn technique_mut<T: Technique>(&mut self) -> Option<&mut T> {
         self.techniques.iter_mut().find_map(|t| (t.as_mut() as &mut dyn Any).downcast_mut::<T>())
-    }
-
-    /// The names of the techniques, in frame order.
-    pub fn technique_names(&self) -> Vec<&'static str> {
-        self.techniques.iter().map(|t| t.name()).collect()
     }
 
     /// GPU work the techniques timed at creation (`<technique>.<work>`, milliseconds).
@@ -434,7 +444,7 @@ impl<'q> PassTimer<'q> {
 
     fn stamp(&mut self, rec: &CommandRecorder, pass: &'static str) {
         let n = self.recorded.len;
-        assert!(n < MAX_PASSES, "a frame times at most {MAX_PASSES} passes");
+        debug_assert!(n < MAX_PASSES, "refused at creation: a frame times at most {MAX_PASSES} passes");
         if let Some(q) = self.queries {
             q.write(rec, n as u32 + 1);
         }

@@ -41,7 +41,7 @@ struct GpuMaterial {
     texture: Vec4,
 }
 
-/// One mesh's index range and material: a draw of the forward pass.
+/// One mesh's index range and material: a draw of the lighting pass.
 #[derive(Clone, Copy, Debug)]
 pub struct Draw {
     pub first_index: u32,
@@ -106,7 +106,7 @@ pub struct GpuScene {
     pub indices: Buffer,
     pub index_count: u32,
     pub materials: Buffer,
-    /// Device-local; every frame records its update from `light_data` (see `record_light_update`).
+    /// Device-local; every frame records its update from `light_data` (see `record_updates`).
     pub lights: Buffer,
     pub layers: Buffer,
     /// Device-local, [`FrameUniforms`]; every frame records its update.
@@ -252,10 +252,14 @@ impl GpuScene {
     /// buffers, with the barriers that order them against the previous frame's reads and
     /// this frame's passes.
     pub fn record_updates(&self, rec: &CommandRecorder, frame: &FrameUniforms) {
-        rec.update_buffer(self.frame.raw, bytemuck::bytes_of(frame));
-        if !self.light_data.is_empty() {
-            rec.update_buffer(self.lights.raw, bytemuck::cast_slice(&self.light_data));
-            rec.update_buffer(self.layers.raw, bytemuck::cast_slice(&self.layer_data));
+        let frame = (self.frame.raw, bytemuck::bytes_of(frame));
+        match self.light_data.is_empty() {
+            true => rec.update_buffers([frame]),
+            false => rec.update_buffers([
+                frame,
+                (self.lights.raw, bytemuck::cast_slice(&self.light_data)),
+                (self.layers.raw, bytemuck::cast_slice(&self.layer_data)),
+            ]),
         }
     }
 
@@ -298,8 +302,7 @@ fn flatten_meshes(scene: &Scene) -> (Vec<GpuVertex>, Vec<u32>, Vec<Draw>) {
 fn upload_textures(ctx: &Arc<Context>, textures: &[Texture]) -> VkResult<Image> {
     let white = Texture { name: "white".into(), width: 1, height: 1, texels: vec![Vec4::ONE] };
     let textures = if textures.is_empty() { std::slice::from_ref(&white) } else { textures };
-    let all_texels: Vec<Vec4> = textures.iter().flat_map(|t| t.texels.iter().copied()).collect();
-    let extents: Vec<_> = textures.iter().map(|t| vk::Extent2D { width: t.width, height: t.height }).collect();
+    let layers: Vec<_> = textures.iter().map(|t| (&t.texels[..], vk::Extent2D { width: t.width, height: t.height })).collect();
     let array = Image::new(
         ctx,
         "base colour textures",
@@ -312,7 +315,7 @@ fn upload_textures(ctx: &Arc<Context>, textures: &[Texture]) -> VkResult<Image> 
             view_type: vk::ImageViewType::TYPE_2D_ARRAY,
         },
     )?;
-    upload_array_layers_blocking(ctx, &array, &all_texels, &extents, |_, _| {})?;
+    upload_array_layers_blocking(ctx, &array, &layers, |_, _| {})?;
     Ok(array)
 }
 

@@ -17,27 +17,31 @@ pub fn submit_blocking(ctx: &Arc<Context>, work: impl FnOnce(&CommandRecorder, &
     ctx.submit_and_wait(rec, &fence)
 }
 
-/// Fills the top-left `extents[i]` of layer i of an RGBA32F array image from `texels` (the
-/// layers one after another, each tightly packed) through one staging buffer, records
-/// `then` (with the image in TransferDestination), and leaves the image ready for
-/// FragmentSampled reads; one submission, waited for.
+/// Fills the top-left extent of layer i of an RGBA32F array image from `layers[i]` (its
+/// texels, tightly packed, and its extent) through one staging buffer, records `then` (with
+/// the image in TransferDestination), and leaves the image ready for FragmentSampled reads;
+/// one submission, waited for.
 pub fn upload_array_layers_blocking(
     ctx: &Arc<Context>,
     image: &Image,
-    texels: &[Vec4],
-    extents: &[vk::Extent2D],
+    layers: &[(&[Vec4], vk::Extent2D)],
     then: impl FnOnce(&CommandRecorder, &mut Tracker),
 ) -> VkResult<()> {
     let area = |e: &vk::Extent2D| e.width as u64 * e.height as u64;
-    let expected: u64 = extents.iter().map(area).sum();
-    if expected != texels.len() as u64 {
-        return Err(VkError::Invalid(format!("{} texels given for layers that hold {expected}", texels.len())));
+    if let Some((layer, (texels, extent))) = layers.iter().enumerate().find(|(_, (t, e))| t.len() as u64 != area(e)) {
+        return Err(VkError::Invalid(format!("{} texels given for layer {layer} of {}x{}", texels.len(), extent.width, extent.height)));
     }
-    let staging = Buffer::with_data(ctx, "upload staging", vk::BufferUsageFlags::TRANSFER_SRC, texels)?;
+    let total: usize = layers.iter().map(|(texels, _)| std::mem::size_of_val(*texels)).sum();
+    let staging = Buffer::new(ctx, "upload staging", total as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+    let mut offset = 0;
+    for (texels, _) in layers {
+        staging.write_at(offset, texels)?;
+        offset += std::mem::size_of_val(*texels);
+    }
     submit_blocking(ctx, |rec, tracker| {
         tracker.use_image(rec, image, Access::TransferDestination);
         let mut offset = 0;
-        for (layer, extent) in extents.iter().enumerate() {
+        for (layer, (_, extent)) in layers.iter().enumerate() {
             rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
             offset += area(extent) * 16;
         }
@@ -48,12 +52,13 @@ pub fn upload_array_layers_blocking(
 
 /// Device-local storage buffers holding `sources` (name, bytes), filled through one staging
 /// buffer and one submission, waited for; they are then ready for compute-shader reads.
-pub fn upload_buffers_blocking(ctx: &Arc<Context>, sources: &[(&str, &[u8])]) -> VkResult<Vec<Buffer>> {
+pub fn upload_buffers_blocking<const N: usize>(ctx: &Arc<Context>, sources: [(&str, &[u8]); N]) -> VkResult<[Buffer; N]> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let buffers = sources
+    let made = sources
         .iter()
         .map(|(name, bytes)| Buffer::new(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly))
         .collect::<VkResult<Vec<_>>>()?;
+    let Ok(buffers) = <[Buffer; N]>::try_from(made) else { unreachable!("one buffer per source") };
     let total: usize = sources.iter().map(|(_, bytes)| bytes.len()).sum();
     let staging = Buffer::new(ctx, "upload staging", total as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
     let mut offset = 0;

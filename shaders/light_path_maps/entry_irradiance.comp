@@ -7,7 +7,7 @@
 // E_j(e) the light's irradiance on a surface facing it (lights.glsl's incident_light: glTF
 // falloff, range window, spot cone), the squared distance widened by the light area delta-l
 // (directional lights ignore it), V_j the same Chebyshev visibility the lighting pass uses.
-// relume_bake::clustered_transfer::entry_irradiance_unshadowed is this without V_j.
+// relume_bake::light_path_maps::entry_irradiance_unshadowed is this without V_j.
 #extension GL_GOOGLE_include_directive : require
 #include "lights.glsl"
 

@@ -3,8 +3,8 @@
 //! tracker (which records the barriers), binds, pushes the constants and dispatches. A pass
 //! with several descriptor sets of one layout (ping-pong passes) picks one per dispatch.
 
-use crate::vk::{vk, Access, Binding, BufferRef, CommandRecorder, Context, DescriptorSet, Image, ImageRef, Pipeline, Sampler, Tracker};
-use crate::vk::{Buffer, VkResult};
+use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, Pipeline, Sampler, Tracker};
+use crate::vk::{Buffer, Use, VkResult};
 use bytemuck::NoUninit;
 use std::sync::Arc;
 
@@ -21,13 +21,6 @@ pub enum Slot<'r> {
     StorageImage(&'r Image, Access),
     /// An image sampled through `sampler`.
     Sampled(&'r Image, &'r Sampler),
-}
-
-/// A use the tracker hears of at every dispatch.
-#[derive(Clone, Copy)]
-enum Use {
-    Buffer(BufferRef, Access),
-    Image(ImageRef, Access),
 }
 
 impl Slot<'_> {
@@ -77,12 +70,7 @@ impl ComputePass {
     /// the push constants (none for a zero-sized type). Allocates nothing.
     pub fn dispatch<P: NoUninit>(&self, rec: &CommandRecorder, tracker: &mut Tracker, set: usize, push: &P, groups: [u32; 3]) {
         let (descriptors, uses) = &self.sets[set];
-        for used in uses {
-            match *used {
-                Use::Buffer(buffer, access) => tracker.use_buffer(rec, buffer, access),
-                Use::Image(image, access) => tracker.use_image(rec, image, access),
-            }
-        }
+        tracker.declare(rec, uses);
         rec.bind_compute(self.pipeline.raw, self.pipeline.layout, descriptors.set);
         if std::mem::size_of::<P>() > 0 {
             rec.push_constants(self.pipeline.layout, push);

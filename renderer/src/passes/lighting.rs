@@ -18,7 +18,7 @@ use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
 use crate::technique::{Source, Term};
 use crate::vk::{vk, Access, Binding, Buffer, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, Pipeline};
-use crate::vk::{Sampler, Tracker, VkError, VkResult};
+use crate::vk::{Sampler, Tracker, Use, VkError, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -65,6 +65,15 @@ impl<'t> Terms<'t> {
         Ok(gathered)
     }
 
+    /// The atlas images the terms are read from through uv1.
+    pub fn atlas_images(&self) -> impl Iterator<Item = &'t Image> {
+        let texel = match self.irradiance {
+            Some(Source::Texel(image)) => Some(image),
+            _ => None,
+        };
+        self.occlusion.into_iter().chain(texel)
+    }
+
     fn irradiance_kind(&self) -> u32 {
         match self.irradiance {
             None => TERM_NONE,
@@ -75,16 +84,11 @@ impl<'t> Terms<'t> {
     }
 }
 
-/// One image or buffer the pass declares every frame, and how it reads it.
-enum Read {
-    Image(crate::vk::ImageRef),
-    Buffer(crate::vk::BufferRef),
-}
-
 pub struct LightingPass {
     pipeline: Pipeline,
     descriptors: DescriptorSet,
-    reads: Vec<Read>,
+    /// What the pass reads every frame (the terms' stand-ins where absent).
+    reads: Vec<Use>,
     // Held so the samplers and stand-ins live as long as the descriptor set that names them.
     _shadow_sampler: Sampler,
     _texture_sampler: Sampler,
@@ -141,9 +145,10 @@ impl LightingPass {
                 Binding::UniformBuffer(scene.frame.raw),
             ],
         )?;
-        let mut reads = vec![Read::Image(moments.into()), Read::Image((&scene.textures).into())];
-        reads.extend([terms.occlusion, texels, pixels].into_iter().map(|image| Read::Image(image.unwrap_or(&stand_in_image).into())));
-        reads.push(Read::Buffer(vertices.into()));
+        let sampled = |image: &Image| Use::Image(image.into(), Access::FragmentSampled);
+        let mut reads = vec![sampled(moments), sampled(&scene.textures)];
+        reads.extend([terms.occlusion, texels, pixels].into_iter().map(|image| sampled(image.unwrap_or(&stand_in_image))));
+        reads.push(Use::Buffer(vertices.into(), Access::GraphicsStorageRead));
         let pipeline = Pipeline::graphics(
             ctx,
             &GraphicsPipelineDesc {
@@ -174,12 +179,7 @@ impl LightingPass {
     /// Writes `radiance` and `depth`. One draw per mesh, so the material (and its texture) is
     /// uniform across each draw; its index is the push block.
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, scene: &GpuScene, radiance: &Image, depth: &Image) {
-        for read in &self.reads {
-            match *read {
-                Read::Image(image) => tracker.use_image(rec, image, Access::FragmentSampled),
-                Read::Buffer(buffer) => tracker.use_buffer(rec, buffer, Access::GraphicsStorageRead),
-            }
-        }
+        tracker.declare(rec, &self.reads);
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);

@@ -23,7 +23,7 @@ pub struct VsmPass {
     pipeline: Pipeline,
     descriptors: DescriptorSet,
     layer_views: Vec<ImageView>,
-    /// The moments of every layer; the blur pass and the lighting passes read it.
+    /// The moments of every layer; the blur pass, the lighting pass and techniques' passes (light path maps' entry irradiance) read it.
     pub moments: Image,
     depth: Image,
 }

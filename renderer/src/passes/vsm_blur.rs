@@ -23,7 +23,7 @@ pub struct VsmBlurPass {
 }
 
 impl VsmBlurPass {
-    /// `radius` in texels; 0 makes the pass record nothing. Reads and writes `moments`
+    /// `radius` in texels (the frame records no blur for 0). Reads and writes `moments`
     /// (storage image), through a scratch image of its size.
     pub fn new(ctx: &Arc<Context>, moments: &Image, radius: u32) -> VkResult<VsmBlurPass> {
         let scratch = Image::new(ctx, "vsm blur scratch", ImageDesc { usage: vk::ImageUsageFlags::STORAGE, ..moments.desc })?;
@@ -35,9 +35,6 @@ impl VsmBlurPass {
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
-        if self.radius == 0 {
-            return;
-        }
         for (set, step) in [[1, 0], [0, 1]].into_iter().enumerate() {
             self.pass.dispatch(rec, tracker, set, &BlurPush { step, radius: self.radius as i32 }, self.groups);
         }

@@ -116,6 +116,14 @@ impl From<&Buffer> for BufferRef {
 }
 
 /// The last known use of every image and buffer a frame touches.
+/// A resource a pass reads or writes and how: what the pass declares to the tracker before
+/// it runs.
+#[derive(Clone, Copy, Debug)]
+pub enum Use {
+    Buffer(BufferRef, Access),
+    Image(ImageRef, Access),
+}
+
 #[derive(Default)]
 pub struct Tracker {
     last: HashMap<vk::Image, Access>,
@@ -135,9 +143,14 @@ impl Tracker {
         self.set(image.into().raw, access);
     }
 
-    /// How `buffer` was last used (Undefined: not yet, as far as this tracker knows).
-    pub fn buffer_state(&self, buffer: impl Into<BufferRef>) -> Access {
-        self.last_buffers.get(&buffer.into().raw).copied().unwrap_or(Access::Undefined)
+    /// Brings every resource of `uses` into its access.
+    pub fn declare(&mut self, rec: &CommandRecorder, uses: &[Use]) {
+        for used in uses {
+            match *used {
+                Use::Buffer(buffer, access) => self.use_buffer(rec, buffer, access),
+                Use::Image(image, access) => self.use_image(rec, image, access),
+            }
+        }
     }
 
     /// Records the barrier that makes `buffer` ready for `next` (a storage or transfer use):

@@ -58,8 +58,8 @@ impl Context {
     /// what relume needs (checked here: Vulkan 1.3, dynamicRendering, synchronization2,
     /// shaderStorageImageExtendedFormats) and the caller must have enabled those features.
     /// relume never waits on, nor destroys, the caller's device or instance. It submits to
-    /// `queue` only in functions that say so (their names end in `_blocking` or start with
-    /// `read_`, and the headless driver), never while recording a frame; the caller must not
+    /// `queue` only in functions that say so (their names end in `_blocking`, and the headless
+    /// driver), never while recording a frame; the caller must not
     /// use the queue from another thread during those calls.
     pub fn from_existing(
         entry: ash::Entry,
@@ -332,14 +332,14 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_copy_buffer_to_image(self.cmd, buffer, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]) };
     }
 
-    /// Writes `data` into a device-local buffer inside the command stream (vkCmdUpdateBuffer:
-    /// at most 65536 bytes, a multiple of 4), between two barriers: earlier shader reads of the
-    /// buffer finish first, and the vertex, fragment and compute stages that follow see the
-    /// new data.
-    pub fn update_buffer(&self, buffer: vk::Buffer, data: &[u8]) {
+    /// Writes each update's data into its device-local buffer inside the command stream
+    /// (vkCmdUpdateBuffer: at most 65536 bytes, a multiple of 4), between two barriers for all
+    /// of them: earlier shader reads of the buffers finish first, and the vertex, fragment and
+    /// compute stages that follow see the new data.
+    pub fn update_buffers<const N: usize>(&self, updates: [(vk::Buffer, &[u8]); N]) {
         let shader_stages =
             vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let barrier = |src_stage, src_access, dst_stage, dst_access| {
+        let barrier = |buffer, src_stage, src_access, dst_stage, dst_access| {
             vk::BufferMemoryBarrier2::default()
                 .src_stage_mask(src_stage)
                 .src_access_mask(src_access)
@@ -352,12 +352,14 @@ impl<'a> CommandRecorder<'a> {
         // reading of synchronization2 (older validation layers call it COPY, newer CLEAR).
         let transfer = vk::PipelineStageFlags2::ALL_TRANSFER;
         let reads = vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::UNIFORM_READ;
-        let before = [barrier(shader_stages, reads, transfer, vk::AccessFlags2::TRANSFER_WRITE)];
-        let after = [barrier(transfer, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, reads)];
+        let before = updates.map(|(buffer, _)| barrier(buffer, shader_stages, reads, transfer, vk::AccessFlags2::TRANSFER_WRITE));
+        let after = updates.map(|(buffer, _)| barrier(buffer, transfer, vk::AccessFlags2::TRANSFER_WRITE, shader_stages, reads));
         // SAFETY: recording state outside rendering; the caller keeps `data` within the limits.
         unsafe {
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&before));
-            self.device.cmd_update_buffer(self.cmd, buffer, 0, data);
+            for (buffer, data) in updates {
+                self.device.cmd_update_buffer(self.cmd, buffer, 0, data);
+            }
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&after));
         }
     }

@@ -164,9 +164,9 @@ impl MakeTechnique for LightPathMapsData<'_> {
         let entries: Vec<Vec4> = transfer.entry_points.iter().flat_map(|e| [e.position.extend(1.0), e.normal.extend(0.0)]).collect();
         let coverage: Vec<f32> = self.atlas.texels.iter().map(|t| t.w.max(0.0)).collect();
         let textures: &[Vec3] = &transfer.textures;
-        let uploaded = upload_buffers_blocking(
+        let [entry_points, weights, cluster_starts, textures, coverage] = upload_buffers_blocking(
             ctx,
-            &[
+            [
                 ("light path maps entry points", bytemuck::cast_slice(&entries)),
                 ("light path maps weights", bytemuck::cast_slice(&transfer.weights)),
                 ("light path maps cluster starts", bytemuck::cast_slice(&transfer.cluster_starts)),
@@ -174,8 +174,6 @@ impl MakeTechnique for LightPathMapsData<'_> {
                 ("light path maps coverage", bytemuck::cast_slice(&coverage)),
             ],
         )?;
-        let [entry_points, weights, cluster_starts, textures, coverage]: [Buffer; 5] =
-            uploaded.try_into().map_err(|_| VkError::Invalid("five buffers".into()))?;
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let terms = transfer.cluster_count() * transfer.terms_per_cluster();
         let buffers = Buffers {

@@ -3,7 +3,7 @@
 //! obscurance of 000 §3.3) uploaded and padded once, and handed to the lighting pass as the
 //! occlusion term that scales its ambient light, 001 eq. (5). No pass runs per frame.
 
-use crate::atlas_image::{check_uv1, AtlasImage, GpuAtlasImage};
+use crate::atlas_image::{AtlasImage, GpuAtlasImage};
 use crate::technique::{MakeTechnique, Resource, Shared, Technique, Term};
 use crate::vk::{CommandRecorder, Tracker, VkResult};
 
@@ -47,11 +47,9 @@ impl Technique for Obscurance {
 }
 
 impl MakeTechnique for ObscuranceData<'_> {
-    /// Uploads and pads W in one submission that is waited for. Refused, by name: a scene
-    /// whose meshes lack uv1 on the atlas's pages, and an image whose texel count is not
-    /// width x height x pages.
+    /// Uploads and pads W in one submission that is waited for. Refused, by name: an image
+    /// whose texel count is not width x height x pages.
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
-        check_uv1(shared.scene, self.obscurance.pages)?;
         let image = GpuAtlasImage::upload_blocking(shared.ctx, "obscurance", &self.obscurance)?;
         Ok(Box::new(Obscurance { image }))
     }
