@@ -8,6 +8,7 @@
 pub mod artifact;
 pub mod atlas;
 pub mod binary;
+pub mod environment;
 pub mod gltf_load;
 pub mod image;
 pub mod methods;

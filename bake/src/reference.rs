@@ -18,7 +18,12 @@
 //! - Russian roulette on every continuation from the fourth path vertex on (light with up to
 //!   four bounces is never cut), survival probability min(max throughput channel, 0.95),
 //!   throughput divided by it: unbiased, which the furnace test checks to 0.5 %.
-//! - A ray that hits nothing sees black.
+//! - A distant environment (`Scene::environment`, a working cube of constant-radiance texels)
+//!   is reached by next-event estimation (a texel picked in proportion to luminance times
+//!   solid angle, a uniform point on its square of the cube face) and by BSDF sampling (a
+//!   continuation ray that hits nothing sees the environment), combined by MIS with the power
+//!   heuristic like the emissive triangles. A camera ray that hits nothing sees black: the
+//!   background is not scored. Without an environment every ray that hits nothing sees black.
 //!
 //! "Bounces" counts scattering events between the light and the camera: emission seen
 //! directly has 0, light reflected once has 1. The `direct` layer holds bounces 0 and 1, the
@@ -30,6 +35,7 @@
 //! split into passes.
 
 use crate::bvh::{Hit, SceneBvh};
+use crate::environment::{face_point, face_rectangle_solid_angle, luminance};
 use crate::image::Image;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
@@ -42,6 +48,10 @@ use std::time::Instant;
 /// The first path vertex (0 = where the camera ray lands) whose continuation Russian roulette
 /// may cut.
 const ROULETTE_FROM_VERTEX: u32 = 3;
+/// The first random dimension of the environment's light samples (three per path vertex):
+/// far above the two per vertex that emitter choice and Russian roulette take, so scenes
+/// without an environment draw exactly the numbers they drew before it existed.
+const ENVIRONMENT_DIMENSIONS: u32 = 1 << 30;
 /// The largest number of samples per pixel one pass over the image takes: small enough that
 /// a time limit is not overshot by much and the progress bar moves.
 const MAX_PASS_SAMPLES: u32 = 16;
@@ -208,6 +218,34 @@ pub fn direct_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal: Vec
     scene.lights.iter().filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true)).sum()
 }
 
+/// Irradiance from the scene's environment at `point` on a surface with unit `normal`, with
+/// visibility, by deterministic quadrature: each cube texel is split into k x k cells
+/// (k = ceil(sqrt(`rays_per_texel`))), one shadow ray through each cell's centre, weighted by
+/// the cell's exact solid angle and the cosine. Zero without an environment.
+pub fn environment_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal: Vec3, rays_per_texel: u32) -> Vec3 {
+    let Some(environment) = &scene.environment else { return Vec3::ZERO };
+    let (n, k) = (environment.face, (rays_per_texel.max(1) as f64).sqrt().ceil() as u32);
+    let cells = n * k;
+    let edge = |i: u32| 2.0 * i as f64 / cells as f64 - 1.0;
+    let mut sum = [0.0f64; 3];
+    for (texel, radiance) in environment.radiance.iter().enumerate() {
+        let (face, t, s) = (texel / (n * n) as usize, (texel as u32 / n) % n, texel as u32 % n);
+        for j in t * k..(t + 1) * k {
+            for i in s * k..(s + 1) * k {
+                let centre = |c: u32| ((edge(c) + edge(c + 1)) * 0.5) as f32;
+                let wi = face_point(face, centre(i), centre(j)).normalize();
+                let cos = normal.dot(wi);
+                if cos <= 0.0 || bvh.occluded(bvh.offset_origin(point, normal, wi), wi, f32::INFINITY) {
+                    continue;
+                }
+                let weight = face_rectangle_solid_angle(edge(i), edge(j), edge(i + 1), edge(j + 1)) * cos as f64;
+                (0..3).for_each(|c| sum[c] += radiance[c] as f64 * weight);
+            }
+        }
+    }
+    Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32)
+}
+
 /// Irradiance on the shading normal `ns` from one punctual light, or None when the light is
 /// behind the surface (either normal), outside its cone or range, or blocked.
 #[inline]
@@ -304,11 +342,6 @@ impl Emitters {
     }
 }
 
-/// Rec. 709 luminance, the weight of an emitter's colour in its selection power.
-fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
 struct Integrator<'a> {
     scene: &'a Scene,
     bvh: &'a SceneBvh,
@@ -385,6 +418,10 @@ impl<'a> Integrator<'a> {
         let mut previous = origin;
         for bounce in 0.. {
             let Some(hit) = self.bvh.closest_hit(origin, dir, f32::INFINITY) else {
+                if let (Some(environment), true) = (&scene.environment, bounce > 0) {
+                    let weight = power_heuristic(bsdf_pdf, environment.pdf(dir));
+                    sink(bounce, throughput * environment.radiance_towards(dir) * weight);
+                }
                 break;
             };
             let material: &Material = &scene.materials[hit.material as usize];
@@ -429,6 +466,10 @@ impl<'a> Integrator<'a> {
                 }
             }
 
+            if let Some(l) = self.sample_environment(sampler, bounce, p, ns, ng) {
+                sink(bounce + 1, throughput * f * l);
+            }
+
             // Cosine-weighted continuation: f cos / pdf = albedo.
             let (t, b) = orthonormal_basis(ns);
             let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
@@ -449,6 +490,21 @@ impl<'a> Integrator<'a> {
             origin = self.bvh.offset_origin(p, ng, wi);
             dir = wi;
         }
+    }
+
+    /// Next-event estimate from the environment at `p`, MIS-weighted against BSDF sampling:
+    /// L cos / pdf times the weight, still to be multiplied by f and the throughput.
+    fn sample_environment(&self, sampler: &PathSampler, bounce: u32, p: Vec3, ns: Vec3, ng: Vec3) -> Option<Vec3> {
+        let environment = self.scene.environment.as_ref()?;
+        let dims = ENVIRONMENT_DIMENSIONS + 3 * bounce;
+        let u = Vec2::new(sampler.uniform(dims + 1), sampler.uniform(dims + 2));
+        let (wi, radiance, pdf) = environment.sample(sampler.uniform_f64(dims), u)?;
+        let cos_surface = ns.dot(wi);
+        if cos_surface <= 0.0 || ng.dot(wi) <= 0.0 || self.bvh.occluded(self.bvh.offset_origin(p, ng, wi), wi, f32::INFINITY) {
+            return None;
+        }
+        let weight = power_heuristic(pdf, cos_surface * (1.0 / PI));
+        Some(radiance * (cos_surface * weight / pdf))
     }
 
     /// Next-event estimate from the emissive triangles at `p`, MIS-weighted against BSDF

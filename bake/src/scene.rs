@@ -6,6 +6,7 @@
 //! relume treats photometric units as radiometric ones one to one (1 cd is 1 W/sr of
 //! linear radiance units), so the path tracer and the renderer agree by construction.
 
+use crate::environment::Environment;
 use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
@@ -18,6 +19,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
+    /// The distant environment light (`extras.relume.environment`), if declared.
+    pub environment: Option<Environment>,
     pub camera: Camera,
     /// The scene's relume settings (glTF `extras.relume`), defaults where it states none.
     pub settings: SceneSettings,

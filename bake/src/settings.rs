@@ -8,9 +8,11 @@
 //! ```json
 //! "scenes": [{ "nodes": [0, 1], "extras": { "relume": {
 //!     "ambient": [0.0, 0.0, 0.0], "beta": 0.3, "texel_density": 64.0,
+//!     "environment": { "image": "envs/sky.exr", "intensity": 1.0, "cube_face": 32 },
 //!     "<a method's key>": { ... } } } }]
 //! ```
 
+use crate::environment::EnvironmentSettings;
 use glam::Vec3;
 use serde_json::{Map, Value};
 
@@ -30,9 +32,11 @@ pub struct SceneSettings {
     pub blocks: Map<String, Value>,
     /// The scene's bounds, which size the defaults of the methods' settings.
     pub bounds: (Vec3, Vec3),
+    /// The distant environment light, if the scene declares one.
+    pub environment: Option<EnvironmentSettings>,
 }
 
-const SHARED_KEYS: [&str; 3] = ["ambient", "beta", "texel_density"];
+const SHARED_KEYS: [&str; 4] = ["ambient", "beta", "texel_density", "environment"];
 
 /// A method's block of scene settings.
 #[derive(Clone, Copy)]
@@ -47,7 +51,14 @@ impl SceneSettings {
     /// Settings for a scene that states none: no ambient, beta 0.3, 256 texels along the
     /// bounding-box diagonal, and no method block (each method's defaults).
     pub fn defaults_for(bounds: (Vec3, Vec3)) -> Self {
-        SceneSettings { ambient: Vec3::ZERO, beta: 0.3, texel_density: 256.0 / diagonal(bounds), blocks: Map::new(), bounds }
+        SceneSettings {
+            ambient: Vec3::ZERO,
+            beta: 0.3,
+            texel_density: 256.0 / diagonal(bounds),
+            blocks: Map::new(),
+            bounds,
+            environment: None,
+        }
     }
 
     /// Refuses values the model has no meaning for, naming the setting and what is allowed.
@@ -78,6 +89,9 @@ impl SceneSettings {
         }
         if let Some(v) = block.get("texel_density") {
             s.texel_density = number(v, "extras.relume.texel_density")?;
+        }
+        if let Some(v) = block.get("environment") {
+            s.environment = Some(EnvironmentSettings::from_json(v)?);
         }
         s.validate().map_err(|e| format!("extras.relume: {e}"))?;
         for method in methods {
@@ -163,6 +177,12 @@ mod tests {
             (json!({"relume": {"light_path_maps": {"region": {}}}}), "exactly one"),
             (json!({"relume": {"light_path_maps": {"light_area": -1}}}), "light_area"),
             (json!({"relume": {"light_path_maps": {"region": {"points": [[0, 0, 0]], "test_points": 8}}}}), "goes with a"),
+            (json!({"relume": {"environment": {}}}), "environment.image"),
+            (json!({"relume": {"environment": {"image": "a.exr", "cube_face": 4}}}), "cube_face"),
+            (json!({"relume": {"environment": {"image": "a.exr", "cube_face": 4096}}}), "cube_face"),
+            (json!({"relume": {"environment": {"image": "a.exr", "intensity": -1}}}), "intensity"),
+            (json!({"relume": {"environment": {"image": "a.exr", "layer": 3}}}), "layer"),
+            (json!({"relume": {"environment": {"image": "a.exr", "sun": 3}}}), "environment.sun"),
         ];
         for (extras, expected) in cases {
             let error = SceneSettings::from_extras(&extras, defaults(), &SCENE_BLOCKS).unwrap_err();

@@ -32,6 +32,7 @@ pub fn scene(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, lights: Ve
         materials,
         textures: Vec::new(),
         lights,
+        environment: None,
         camera,
         settings: SceneSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
     };
@@ -172,4 +173,37 @@ pub fn closed_box(min: Vec3, max: Vec3, n: u32, facing: Facing, material: usize)
         n[k] = d[k].signum() * sign;
         n
     })
+}
+
+/// Procedural environments (radiance by direction) for analytic tests and the generated
+/// scenes: a sky brightening towards the zenith over a dim ground, with a small sun.
+pub fn sky(sun_direction: Vec3, sun_radiance: Vec3, sun_radius_degrees: f32) -> impl Fn(Vec3) -> Vec3 {
+    let sun = sun_direction.normalize();
+    let cos_sun = sun_radius_degrees.to_radians().cos();
+    move |d: Vec3| {
+        let sky = if d.y >= 0.0 { Vec3::new(0.35, 0.5, 0.9).lerp(Vec3::new(0.9, 0.95, 1.0), 1.0 - d.y) } else { Vec3::splat(0.1) };
+        if d.dot(sun) >= cos_sun {
+            sun_radiance
+        } else {
+            sky
+        }
+    }
+}
+
+/// Two coloured area lights (a red one and a green one, 30 degrees square, 45 degrees up on
+/// opposite sides) in a black environment: the paper's Fig. 14 lighting.
+pub fn two_area_lights(radiance: f32) -> impl Fn(Vec3) -> Vec3 {
+    move |d: Vec3| {
+        let elevation = d.y.clamp(-1.0, 1.0).asin().to_degrees();
+        let azimuth = d.x.atan2(-d.z).to_degrees();
+        if !(30.0..=60.0).contains(&elevation) {
+            Vec3::ZERO
+        } else if (-15.0..=15.0).contains(&azimuth) {
+            Vec3::new(radiance, 0.0, 0.0)
+        } else if azimuth.abs() >= 165.0 {
+            Vec3::new(0.0, radiance, 0.0)
+        } else {
+            Vec3::ZERO
+        }
+    }
 }

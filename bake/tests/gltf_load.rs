@@ -2,7 +2,9 @@
 //! `relume scenes`) and against broken copies of them made here, one defect each.
 
 use glam::{Mat3, Mat4, Quat, Vec3};
+use relume_bake::environment::lat_long_image;
 use relume_bake::gltf_load::{self, CameraOverride, ErrorKind, Loaded, SceneError};
+use relume_bake::image::{self, Image};
 use relume_bake::scene::{LightKind, Scene};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -501,7 +503,7 @@ fn no_light() {
     }
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::NoLight);
-    assert!(e.to_string().ends_with("scene \"occluder-plane\": has no light; add a KHR_lights_punctual light, an emissive material or an ambient light (extras.relume.ambient)"), "{e}");
+    assert!(e.to_string().ends_with("scene \"occluder-plane\": has no light; add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient)"), "{e}");
     // An emissive material is light enough.
     json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
     json["materials"][1]["emissiveFactor"] = json!([1.0, 0.5, 0.25]);
@@ -509,6 +511,38 @@ fn no_light() {
     let s = load_ok(&write_scene(&dir, "y", &json, Some(&bin))).scene;
     assert!(s.lights.is_empty());
     assert_eq!(s.materials[mesh(&s, "Box").material].emission, Vec3::new(4.0, 2.0, 1.0));
+}
+
+#[test]
+fn an_environment_is_light_enough_and_a_bad_one_is_refused_by_name() {
+    let dir = temp_dir("environment");
+    let (mut json, bin) = read_scene("occluder-plane");
+    for n in json["nodes"].as_array_mut().unwrap() {
+        n.as_object_mut().unwrap().remove("extensions");
+    }
+    std::fs::create_dir_all(dir.join("envs")).unwrap();
+    let write = |name: &str, image: &Image| image::write_exr_layers(&dir.join("envs").join(name), &[("rgb", image)]).unwrap();
+    write("sky.exr", &lat_long_image(64, |d| Vec3::splat(d.y.max(0.0))));
+    json["scenes"][0]["extras"]["relume"]["environment"] = json!({ "image": "envs/sky.exr", "intensity": 2.0, "cube_face": 8 });
+    let s = load_ok(&write_scene(&dir, "lit", &json, Some(&bin))).scene;
+    let environment = s.environment.expect("the environment is loaded");
+    assert_eq!(environment.face, 8);
+    assert!((environment.radiance_towards(Vec3::Y).y - 2.0).abs() < 0.1);
+
+    let mut refused = |image: &str, expected: &str| {
+        json["scenes"][0]["extras"]["relume"]["environment"]["image"] = json!(image);
+        let e = load_err(&write_scene(&dir, "bad", &json, Some(&bin))).to_string();
+        assert!(e.contains("extras.relume.environment") && e.contains(expected), "{e}");
+    };
+    refused("envs/missing.exr", "missing.exr: file not found");
+    write("square.exr", &Image::new(16, 16));
+    refused("envs/square.exr", "16x16, not a lat-long image");
+    let mut nan = Image::new(16, 8);
+    nan.set(5, 2, Vec3::splat(f32::NAN));
+    write("nan.exr", &nan);
+    refused("envs/nan.exr", "texel (5, 2)");
+    std::fs::write(dir.join("envs/text.exr"), b"not an exr").unwrap();
+    refused("envs/text.exr", "not a readable RGB EXR");
 }
 
 #[test]

@@ -25,6 +25,7 @@ mod primitives;
 
 pub use camera::{CameraOverride, CameraOverrideError};
 
+use crate::environment::{Environment, EnvironmentError, EnvironmentSettings};
 use crate::scene::{Camera, Material, Scene};
 use crate::settings::SceneSettings;
 use camera::{framing_camera, perspective_camera, Perspective};
@@ -229,6 +230,7 @@ impl<'a> Loader<'a> {
                 materials: Vec::new(),
                 textures: Vec::new(),
                 lights: Vec::new(),
+                environment: None,
                 camera: placeholder_camera,
                 settings: SceneSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
             },
@@ -322,13 +324,17 @@ impl<'a> Loader<'a> {
                 })?,
             None => defaults,
         };
+        if let Some(settings) = &self.scene.settings.environment {
+            self.scene.environment = Some(load_environment(ctx, &scene_item, settings)?);
+        }
         let emissive = self.scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
-        if self.scene.lights.is_empty() && !emissive && self.scene.settings.ambient.max_element() <= 0.0 {
+        let environment = self.scene.environment.as_ref().is_some_and(Environment::is_lit);
+        if self.scene.lights.is_empty() && !emissive && !environment && self.scene.settings.ambient.max_element() <= 0.0 {
             return Err(ctx.fail(
                 ErrorKind::NoLight,
                 scene_item,
                 "has no light",
-                "add a KHR_lights_punctual light, an emissive material or an ambient light (extras.relume.ambient)",
+                "add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient)",
             ));
         }
 
@@ -342,4 +348,18 @@ impl<'a> Loader<'a> {
         };
         Ok(Loaded { scene: self.scene, warnings: self.warnings })
     }
+}
+
+/// The scene's environment, or the refusal naming its file and the fix.
+fn load_environment(ctx: Ctx, scene_item: &str, settings: &EnvironmentSettings) -> Result<Environment, SceneError> {
+    let item = format!("{scene_item} extras.relume.environment");
+    Environment::load(settings, ctx.path).map_err(|e| match &e {
+        EnvironmentError::NotFound(_) => {
+            ctx.fail(ErrorKind::NotFound, item, e.to_string(), "fix environment.image (a lat-long EXR, relative to the glTF file)")
+        }
+        EnvironmentError::Unreadable(_) => ctx.fail(ErrorKind::Image, item, e.to_string(), "write the environment as an RGB EXR file"),
+        EnvironmentError::Invalid { .. } => {
+            ctx.fail(ErrorKind::Invalid, item, e.to_string(), "give a lat-long RGB EXR of finite radiance >= 0 (width twice the height)")
+        }
+    })
 }
