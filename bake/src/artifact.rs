@@ -9,6 +9,7 @@
 //! artifact is refused with the file and the fix named, and a section is handed out only
 //! after its version and its key (against the scene or mesh it is read for) are checked.
 
+use crate::environment::Environment;
 use crate::image::{read_exr_layer, Image};
 use crate::scene::{Mesh, Scene};
 use serde_json::{json, Map, Value};
@@ -42,6 +43,9 @@ pub enum Key {
     /// One mesh of the scene, by name ([`mesh_checksum`] of it as loaded): data that goes
     /// with that mesh alone, whatever else the scene holds.
     Mesh(String),
+    /// The scene's environment light ([`environment_checksum`] of its working cube): data
+    /// that goes with the lighting whatever surfaces the scene holds.
+    Environment,
     /// Nothing: data made once for every scene (a dictionary).
     Nothing,
 }
@@ -149,6 +153,14 @@ pub fn scene_checksum(scene: &Scene) -> String {
     hash.finish()
 }
 
+/// A checksum of an environment's working cube: its size and every texel's radiance.
+pub fn environment_checksum(environment: &Environment) -> String {
+    let mut hash = Fnv::new();
+    hash.write(&environment.face.to_le_bytes());
+    hash.floats(environment.radiance.iter().flat_map(|l| l.as_ref()));
+    hash.finish()
+}
+
 /// A checksum of one mesh's shape: positions, normals, uv0, triangles and material index.
 pub fn mesh_checksum(mesh: &Mesh) -> String {
     let mut hash = Fnv::new();
@@ -176,6 +188,12 @@ impl Key {
                     fail(dir, format!("section {section} is keyed to mesh \"{name}\", which the scene lacks"), "report this as a bug")
                 })?;
                 json!({ "kind": "mesh", "mesh": name, "checksum": mesh_checksum(mesh) })
+            }
+            Key::Environment => {
+                let environment = need_scene()?.environment.as_ref().ok_or_else(|| {
+                    fail(dir, format!("section {section} is keyed to the environment, which the scene lacks"), "report this as a bug")
+                })?;
+                json!({ "kind": "environment", "checksum": environment_checksum(environment) })
             }
             Key::Nothing => json!({ "kind": "none" }),
         })
@@ -436,6 +454,24 @@ fn check_key(manifest_path: &Path, section: &str, key: &Value, scene: Option<&Sc
                     "section {section} was baked for a mesh \"{name}\" with checksum {recorded}, but this scene's has checksum {actual}"
                 );
                 return Err(fail(manifest_path, problem, "bake this scene, or give the scene this bake was made for"));
+            }
+        }
+        "environment" => {
+            let Some(environment) = &scene.environment else {
+                let problem = format!("section {section} was baked for an environment, which {} does not declare", scene.source.display());
+                return Err(fail(manifest_path, problem, "give the scene this bake was made for"));
+            };
+            let actual = environment_checksum(environment);
+            if recorded != actual {
+                let problem = format!(
+                    "section {section} was baked for an environment with checksum {recorded}, but {}'s has checksum {actual}",
+                    scene.source.display()
+                );
+                return Err(fail(
+                    manifest_path,
+                    problem,
+                    "bake again for this environment (its image, intensity, rotation or cube face changed)",
+                ));
             }
         }
         other => return Err(fail(manifest_path, format!("section {section} has a key of unknown kind \"{other}\""), REBAKE)),

@@ -17,6 +17,7 @@ pub mod scene;
 pub mod settings;
 pub mod testing;
 
+pub mod fiv;
 pub mod light_path_maps;
 pub mod obscurance;
 

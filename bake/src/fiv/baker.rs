@@ -1,0 +1,147 @@
+//! The FIV bake (003 §4): DifMap and FIV(Env) from the environment's working cube, and per
+//! occluder type its table: at every grid sample the type is placed with its centre there,
+//! relative to a receiver at the origin, and the environment's texels it hides (its mask,
+//! traced against the type alone) are summed as L_s dw_s w_s.
+
+use super::{bounding_sphere, occluder_types, EnvironmentTerms, FivBake, FivSceneSettings, Grid, OccluderTable, OccluderType};
+use crate::bvh::SceneBvh;
+use crate::environment::{face_point, lat_long_direction, Environment};
+use crate::scene::{Camera, Mesh, Scene};
+use crate::settings::SceneSettings;
+use crate::work::{progress_bar, with_threads, WorkOptions};
+use glam::{Mat4, Vec3};
+use rayon::prelude::*;
+
+/// The bake's parameters (spec fiv.md C6).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FivBakeSettings {
+    pub grid: Grid,
+    /// The nearest and farthest table distance, in bounding radii (spec fiv.md B4: 0.1 and 16).
+    pub distance_min: f32,
+    pub distance_max: f32,
+    /// Rays per texel side for the mask: k x k rays, the texel counting by the share that hits
+    /// (the paper: 1).
+    pub mask_supersample: u32,
+    /// DifMap's width (height half of it).
+    pub difmap_width: u32,
+}
+
+impl FivBakeSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        crate::settings::first_failed_check(&[
+            (self.distance_min.is_finite() && self.distance_min > 0.0, "distance_min must be finite and > 0 (bounding radii)"),
+            (self.distance_max.is_finite() && self.distance_max > self.distance_min, "distance_max must be finite and > distance_min"),
+            ((1..=16).contains(&self.mask_supersample), "mask_supersample must be 1..=16"),
+            ((8..=1024).contains(&self.difmap_width) && self.difmap_width.is_multiple_of(2), "difmap_width must be even, 8..=1024"),
+        ])
+    }
+}
+
+/// Bakes `scene`'s environment and occluder tables; refused when the scene declares no
+/// environment or its occluders cannot be typed (named in [`occluder_types`]).
+pub fn bake(scene: &Scene, settings: &FivBakeSettings, work: &WorkOptions) -> Result<(FivBake, Vec<OccluderType>), String> {
+    settings.validate()?;
+    let Some(environment) = &scene.environment else {
+        return Err("the scene declares no environment (extras.relume.environment), and FIV is lit by one".into());
+    };
+    let types = occluder_types(scene, &FivSceneSettings::of(scene)?)?;
+    with_threads(work.threads, || {
+        let terms = environment_terms(environment, settings.difmap_width);
+        let tables = types.iter().map(|t| occluder_table(&scene.meshes[t.meshes[0]], environment, settings, work)).collect();
+        Ok((FivBake { environment: terms, tables }, types))
+    })
+}
+
+/// DifMap (eq. 5, the hemispherical sum over the cube's texels per normal) and FIV(Env)
+/// (eq. 9); each source is a texel of radiance L_s and solid angle dw_s (spec fiv.md B5).
+pub fn environment_terms(environment: &Environment, difmap_width: u32) -> EnvironmentTerms {
+    let height = difmap_width / 2;
+    let sources: Vec<(Vec3, Vec3)> =
+        environment.radiance.iter().zip(&environment.solid_angle).zip(&environment.direction).map(|((l, w), d)| (*l * *w, *d)).collect();
+    let difmap = (0..difmap_width * height)
+        .into_par_iter()
+        .map(|t| {
+            let n = lat_long_direction(
+                ((t % difmap_width) as f32 + 0.5) / difmap_width as f32,
+                ((t / difmap_width) as f32 + 0.5) / height as f32,
+            );
+            sources.iter().map(|(power, w)| *power * n.dot(*w).max(0.0)).sum()
+        })
+        .collect();
+    let fiv = [0, 1, 2].map(|c| sources.iter().map(|(power, w)| *w * power[c]).sum());
+    EnvironmentTerms { difmap_width, difmap, fiv }
+}
+
+/// The table of the type whose shape `mesh` has.
+pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBakeSettings, work: &WorkOptions) -> OccluderTable {
+    let (centre, radius) = bounding_sphere(&mesh.positions);
+    let bvh = SceneBvh::new(&alone(mesh, centre));
+    let table = OccluderTable {
+        grid: settings.grid,
+        radius,
+        distance_min: settings.distance_min * radius,
+        distance_max: settings.distance_max * radius,
+        fiv: Vec::new(),
+    };
+    let g = settings.grid;
+    let progress = progress_bar(g.samples() as u64, &format!("fiv table of {}", mesh.name), work.progress);
+    let fiv = (0..g.samples() as u32)
+        .into_par_iter()
+        .map(|s| {
+            let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
+            progress.inc(1);
+            masked_sum(&bvh, environment, table.distance(k) * g.direction(i, j), radius, settings.mask_supersample)
+        })
+        .collect();
+    progress.finish_and_clear();
+    OccluderTable { fiv, ..table }
+}
+
+/// FIV(EnvOcc) for the occluder centred at `v` from the receiver: sum over texels of the
+/// share of its k x k rays that hit, times L_s dw_s w_s. Only rays inside the bounding
+/// sphere's cone can hit, so only they are traced.
+fn masked_sum(bvh: &SceneBvh, environment: &Environment, v: Vec3, radius: f32, k: u32) -> [Vec3; 3] {
+    let distance = v.length();
+    let axis = v / distance.max(1e-20);
+    // Inside the bounding sphere every direction may hit.
+    let cos_cone = if distance > radius { (1.0 - (radius / distance).powi(2)).sqrt() } else { -1.0 };
+    let n = environment.face;
+    let mut sum = [Vec3::ZERO; 3];
+    for (texel, radiance) in environment.radiance.iter().enumerate() {
+        let (face, t, s) = (texel / (n * n) as usize, (texel as u32 / n) % n, texel as u32 % n);
+        let mut hits = 0;
+        for (a, b) in (0..k).flat_map(|y| (0..k).map(move |x| (x, y))) {
+            let sub = |texel: u32, i: u32| 2.0 * (texel as f32 + (i as f32 + 0.5) / k as f32) / n as f32 - 1.0;
+            let w = face_point(face, sub(s, a), sub(t, b)).normalize();
+            if w.dot(axis) >= cos_cone && bvh.occluded(-v, w, f32::INFINITY) {
+                hits += 1;
+            }
+        }
+        if hits > 0 {
+            let weight = environment.solid_angle[texel] * hits as f32 / (k * k) as f32;
+            (0..3).for_each(|c| sum[c] += environment.direction[texel] * (radiance[c] * weight));
+        }
+    }
+    sum
+}
+
+/// A scene of `mesh` alone, moved so that its bounding-sphere centre is the origin.
+fn alone(mesh: &Mesh, centre: Vec3) -> Scene {
+    let positions = mesh.positions.iter().map(|p| *p - centre).collect();
+    let camera = Camera { world_from_camera: Mat4::IDENTITY, yfov: 1.0, znear: 0.1, zfar: 10.0 };
+    Scene {
+        source: format!("<occluder {}>", mesh.name).into(),
+        meshes: vec![Mesh { positions, material: 0, ..mesh.clone() }],
+        materials: vec![crate::scene::Material {
+            name: "occluder".into(),
+            base_color: glam::Vec4::ZERO,
+            base_color_texture: None,
+            emission: Vec3::ZERO,
+        }],
+        textures: Vec::new(),
+        lights: Vec::new(),
+        environment: None,
+        camera,
+        settings: SceneSettings::defaults_for((Vec3::ZERO, Vec3::ONE)),
+    }
+}

@@ -1,0 +1,125 @@
+//! Fullsphere irradiance vectors of Michael & Chrysanthou, "Fullsphere Irradiance
+//! Factorization" (003): the scene's settings (`extras.relume.fiv`: which meshes are
+//! occluders), the occluder types, the artifact sections (`fiv_environment`: DifMap and
+//! FIV(Env); `fiv_occluder_<k>`: one FIV table per occluder type) and the run-time formula
+//! on the CPU (`occluder_sums.rs`, the oracle of the GPU pass). Behind the `baking` feature,
+//! the baker (`baker.rs`).
+//!
+//! Names: the paper's rho is a distance here (`distance`), its rho_dif the albedo over pi;
+//! theta is the azimuth, phi the polar angle, as in its Table 1 grids (spec fiv.md B1-B2).
+
+#[cfg(feature = "baking")]
+mod baker;
+mod occluder_sums;
+mod sections;
+
+#[cfg(feature = "baking")]
+pub use baker::*;
+pub use occluder_sums::*;
+pub use sections::*;
+
+use crate::scene::{Mesh, Scene};
+use crate::settings::{as_object, known_keys, SceneBlock};
+use glam::Vec3;
+use serde_json::Value;
+
+const KEY: &str = "fiv";
+
+/// The scene's `extras.relume.fiv` block: the names of the meshes that occlude.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FivSceneSettings {
+    pub occluders: Vec<String>,
+}
+
+pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| from_block(block).map(|_| ()) };
+
+impl FivSceneSettings {
+    /// The scene's block; refused when the scene has none (the method needs its occluders).
+    pub fn of(scene: &Scene) -> Result<Self, String> {
+        match scene.settings.block(KEY) {
+            Some(block) => from_block(block),
+            None => Err("the scene names no occluders (extras.relume.fiv.occluders: the meshes that move over receivers)".into()),
+        }
+    }
+}
+
+fn from_block(block: &Value) -> Result<FivSceneSettings, String> {
+    let o = as_object(block, "extras.relume.fiv")?;
+    known_keys(o, "extras.relume.fiv", &["occluders"])?;
+    let names = o.get("occluders").and_then(Value::as_array).filter(|a| !a.is_empty());
+    let names = names.ok_or("extras.relume.fiv.occluders must be a non-empty array of mesh names")?;
+    let occluders: Vec<String> = names
+        .iter()
+        .map(|n| n.as_str().map(str::to_string).ok_or("extras.relume.fiv.occluders must hold mesh names (strings)"))
+        .collect::<Result<_, _>>()?;
+    Ok(FivSceneSettings { occluders })
+}
+
+/// Occluders of one shape (equal up to a translation) share a type and its table (003 §4:
+/// memory grows with types, not instances).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OccluderType {
+    /// The scene's meshes of this shape, the first one the type's representative.
+    pub meshes: Vec<usize>,
+    /// The bounding radius R.
+    pub radius: f32,
+}
+
+/// The bounding sphere every FIV formula uses: the centre of the bounds and the largest
+/// distance from it (spec fiv.md B3 takes the minimal sphere; this one is exact for the
+/// symmetric stand-ins and never smaller than the shape).
+pub fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+    let (lo, hi) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let centre = (lo + hi) * 0.5;
+    (centre, positions.iter().map(|p| p.distance(centre)).fold(0.0, f32::max))
+}
+
+/// The scene's occluders grouped into types, in the order the scene block names them;
+/// refused, by mesh, when a name matches no mesh, is named twice, or its mesh is not closed
+/// (an open mesh has no inside, and the table's mask would leak through it).
+pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<OccluderType>, String> {
+    let mut types: Vec<OccluderType> = Vec::new();
+    for (k, name) in settings.occluders.iter().enumerate() {
+        if settings.occluders[..k].contains(name) {
+            return Err(format!("extras.relume.fiv.occluders names \"{name}\" twice"));
+        }
+        let Some(index) = scene.meshes.iter().position(|m| &m.name == name) else {
+            return Err(format!("extras.relume.fiv.occluders names \"{name}\", which is no mesh of the scene"));
+        };
+        let mesh = &scene.meshes[index];
+        if let Some(edges) = open_edges(mesh) {
+            return Err(format!(
+                "occluder \"{name}\" is not a closed mesh ({edges} edges do not join exactly two triangles); close it or leave it out of extras.relume.fiv.occluders"
+            ));
+        }
+        match types.iter_mut().find(|t| same_shape(&scene.meshes[t.meshes[0]], mesh)) {
+            Some(t) => t.meshes.push(index),
+            None => types.push(OccluderType { meshes: vec![index], radius: bounding_sphere(&mesh.positions).1 }),
+        }
+    }
+    Ok(types)
+}
+
+/// Whether two meshes have the same triangles and the same positions about their centres.
+fn same_shape(a: &Mesh, b: &Mesh) -> bool {
+    let ((ca, ra), (cb, _)) = (bounding_sphere(&a.positions), bounding_sphere(&b.positions));
+    let tolerance = 1e-5 * (1.0 + ra);
+    a.indices == b.indices
+        && a.positions.len() == b.positions.len()
+        && a.positions.iter().zip(&b.positions).all(|(p, q)| ((*p - ca) - (*q - cb)).abs().max_element() <= tolerance)
+}
+
+/// The number of edges not shared by exactly two triangles (vertices welded by position), or
+/// None for a closed mesh.
+fn open_edges(mesh: &Mesh) -> Option<usize> {
+    let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
+    let mut edges = std::collections::BTreeMap::new();
+    for t in mesh.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            let (ka, kb) = (key(a), key(b));
+            *edges.entry(if ka < kb { (ka, kb) } else { (kb, ka) }).or_insert(0u32) += 1;
+        }
+    }
+    let open = edges.values().filter(|&&n| n != 2).count();
+    (open > 0).then_some(open)
+}

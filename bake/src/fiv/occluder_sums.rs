@@ -1,0 +1,151 @@
+//! The run-time formula of 003 §4-5 per receiver point, on the CPU: the oracle of the GPU's
+//! occluder-sum pass (shaders/fiv/occluder_sums.comp computes the same, step for step).
+
+use super::{EnvironmentTerms, FivBake, OccluderTable};
+use glam::Vec3;
+use std::f32::consts::{PI, TAU};
+
+/// What an occluder beyond the table's last distance contributes (spec fiv.md B4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Beyond {
+    /// The outer shell's value times (distance_max / distance)^2: a far occluder's solid angle.
+    Scale,
+    /// Nothing.
+    Drop,
+}
+
+/// The run-time choices the paper leaves open or offers (spec fiv.md B6-B8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SumOptions {
+    /// Case B scaled by (d + R) / 2R (the paper's partial correction); off, case B counts whole.
+    pub partial: bool,
+    /// The pairwise overlap correction of eq. (13)-(14).
+    pub overlap: bool,
+    pub beyond: Beyond,
+}
+
+impl Default for SumOptions {
+    fn default() -> Self {
+        SumOptions { partial: true, overlap: true, beyond: Beyond::Scale }
+    }
+}
+
+/// An occluder at run time: its type's table and where its bounding-sphere centre is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Occluder {
+    pub table: usize,
+    pub centre: Vec3,
+}
+
+impl EnvironmentTerms {
+    /// DifMap at normal `n`, eq. (5): bilinear, repeating in azimuth, clamped at the poles.
+    pub fn difmap_lookup(&self, n: Vec3) -> Vec3 {
+        let (w, h) = (self.difmap_width as i32, (self.difmap_width / 2) as i32);
+        let u = 0.5 + n.x.atan2(-n.z) / TAU;
+        let v = n.y.clamp(-1.0, 1.0).acos() / PI;
+        let (x, y) = (u * w as f32 - 0.5, v * h as f32 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let texel = |i: i32, j: i32| self.difmap[(j.clamp(0, h - 1) * w + i.rem_euclid(w)) as usize];
+        let (i, j) = (x0 as i32, y0 as i32);
+        let top = texel(i, j).lerp(texel(i + 1, j), fx);
+        top.lerp(texel(i, j + 1).lerp(texel(i + 1, j + 1), fx), fy)
+    }
+}
+
+impl OccluderTable {
+    /// FIV(EnvOcc) of the type with its centre at offset `v` from the receiver: trilinear over
+    /// the 8 nearest samples (003 §5), distances interpolated in log space and clamped below.
+    pub fn lookup(&self, v: Vec3, beyond: Beyond) -> [Vec3; 3] {
+        let g = self.grid;
+        let distance = v.length().max(1e-20);
+        let d = v / distance;
+        let theta = (-d.z).atan2(d.x);
+        let fi = (if theta < 0.0 { theta + TAU } else { theta }) / TAU * g.azimuths as f32;
+        let fj = (d.y.clamp(-1.0, 1.0).acos() / PI * (g.polar - 1) as f32).min((g.polar - 1) as f32);
+        let steps = (g.distances - 1) as f32;
+        let fk = ((distance / self.distance_min).ln() / (self.distance_max / self.distance_min).ln() * steps).clamp(0.0, steps);
+        let (i0, j0, k0) = (fi.floor(), fj.floor().min((g.polar - 2) as f32), fk.floor().min(steps - 1.0));
+        let (ti, tj, tk) = (fi - i0, fj - j0, fk - k0);
+        let (i0, j0, k0) = (i0 as u32 % g.azimuths, j0 as u32, k0 as u32);
+        let i1 = (i0 + 1) % g.azimuths;
+        let mut out = [Vec3::ZERO; 3];
+        for (k, wk) in [(k0, 1.0 - tk), (k0 + 1, tk)] {
+            for (j, wj) in [(j0, 1.0 - tj), (j0 + 1, tj)] {
+                for (i, wi) in [(i0, 1.0 - ti), (i1, ti)] {
+                    let sample = &self.fiv[g.index(i, j, k)];
+                    (0..3).for_each(|c| out[c] += sample[c] * (wi * wj * wk));
+                }
+            }
+        }
+        let scale = match (distance > self.distance_max, beyond) {
+            (false, _) => 1.0,
+            (true, Beyond::Scale) => (self.distance_max / distance).powi(2),
+            (true, Beyond::Drop) => 0.0,
+        };
+        out.map(|f| f * scale)
+    }
+}
+
+/// The occluder's disc on the plane at unit height along `n` (spec fiv.md B7): centre offset
+/// (v - d n) / d', radius R / d', d' = max(d, R).
+fn disc(v: Vec3, d: f32, radius: f32, n: Vec3) -> (Vec3, f32) {
+    let height = d.max(radius);
+    ((v - d * n) / height, radius / height)
+}
+
+/// The area two discs share (a lens; nested and disjoint discs included).
+pub fn lens_area(distance: f32, r1: f32, r2: f32) -> f32 {
+    if distance >= r1 + r2 {
+        return 0.0;
+    }
+    if distance <= (r1 - r2).abs() {
+        return PI * r1.min(r2).powi(2);
+    }
+    let a1 = ((distance * distance + r1 * r1 - r2 * r2) / (2.0 * distance * r1)).clamp(-1.0, 1.0).acos();
+    let a2 = ((distance * distance + r2 * r2 - r1 * r1) / (2.0 * distance * r2)).clamp(-1.0, 1.0).acos();
+    let kite = (-distance + r1 + r2) * (distance + r1 - r2) * (distance - r1 + r2) * (distance + r1 + r2);
+    r1 * r1 * a1 + r2 * r2 * a2 - 0.5 * kite.max(0.0).sqrt()
+}
+
+impl FivBake {
+    /// Irradiance at receiver point `p` with unit normal `n` (003 §5): DifMap(N) less each
+    /// occluder's N . FIV(EnvOcc) by its case (A: d >= R whole, B: scaled by (d + R) / 2R when
+    /// `partial`, C: d <= -R nothing), plus the pairwise overlaps of eq. (13)-(14), written
+    /// sum_a I_a sum_{b != a} Ov%_ab so that each occluder's table is read once; the overlap is
+    /// at most sum I - max I, I_a >= 0 and the result in [0, DifMap(N)] (spec fiv.md B8).
+    pub fn irradiance(&self, occluders: &[Occluder], p: Vec3, n: Vec3, options: SumOptions) -> Vec3 {
+        let total = self.environment.difmap_lookup(n);
+        let (mut occluded, mut overlap, mut largest) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+        for (a, occluder) in occluders.iter().enumerate() {
+            let table = &self.tables[occluder.table];
+            let v = occluder.centre - p;
+            let d = n.dot(v);
+            if d <= -table.radius {
+                continue;
+            }
+            let fiv = table.lookup(v, options.beyond);
+            let factor = if options.partial && d < table.radius { (d + table.radius) / (2.0 * table.radius) } else { 1.0 };
+            let share = Vec3::new(n.dot(fiv[0]), n.dot(fiv[1]), n.dot(fiv[2])).max(Vec3::ZERO) * factor;
+            occluded += share;
+            largest = largest.max(share);
+            if options.overlap {
+                overlap += share * self.overlap_shares(occluders, a, p, n);
+            }
+        }
+        let overlap = overlap.min(occluded - largest);
+        (total - occluded + overlap).clamp(Vec3::ZERO, total)
+    }
+
+    /// sum over the other occluders b (not in case C) of Ov%_ab = A_ov / (A_a + A_b).
+    fn overlap_shares(&self, occluders: &[Occluder], a: usize, p: Vec3, n: Vec3) -> f32 {
+        let disc_of = |o: &Occluder| {
+            let (v, radius) = (o.centre - p, self.tables[o.table].radius);
+            let d = n.dot(v);
+            (d > -radius).then(|| disc(v, d, radius, n))
+        };
+        let Some((ca, ra)) = disc_of(&occluders[a]) else { return 0.0 };
+        let others = occluders.iter().enumerate().filter(|(b, _)| *b != a).filter_map(|(_, o)| disc_of(o));
+        others.map(|(cb, rb)| lens_area(ca.distance(cb), ra, rb) / (PI * (ra * ra + rb * rb))).sum()
+    }
+}

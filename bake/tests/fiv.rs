@@ -1,0 +1,229 @@
+//! Fullsphere irradiance vectors (003) on the CPU: the environment terms against their
+//! defining sums, the tables against direct evaluation, the three cases and the overlap
+//! correction against closed forms, the bake's determinism and refusals.
+#![cfg(feature = "baking")]
+
+use glam::Vec3;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::environment::{lat_long_image, Environment, EnvironmentSettings};
+use relume_bake::fiv::{bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, SumOptions};
+use relume_bake::reference::environment_irradiance;
+use relume_bake::sampling::PathSampler;
+use relume_bake::scene::{Mesh, Scene};
+use relume_bake::testing::{look_at, material, scene, sky, sphere, square, Facing};
+use relume_bake::work::WorkOptions;
+use serde_json::json;
+use std::f32::consts::PI;
+use std::path::Path;
+
+fn environment(radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Environment {
+    let settings = EnvironmentSettings { image: "t.exr".into(), layer: None, intensity: 1.0, rotation_y_degrees: 0.0, cube_face };
+    Environment::from_lat_long(&lat_long_image(512, radiance), Path::new("t.exr"), &settings).unwrap()
+}
+
+fn random_normals(count: u32) -> impl Iterator<Item = Vec3> {
+    (0..count).map(|k| {
+        let s = PathSampler::new(11, k, 0);
+        let (z, phi) = (1.0 - 2.0 * s.uniform(0), 2.0 * PI * s.uniform(1));
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), z, r * phi.sin())
+    })
+}
+
+#[test]
+fn fiv_of_the_environment_is_the_fullsphere_sum_and_difmap_the_hemispherical_one() {
+    let e = environment(sky(Vec3::new(0.5, 0.6, -0.2), Vec3::splat(200.0), 3.0), 16);
+    let terms = environment_terms(&e, 128);
+    let sources = || e.radiance.iter().zip(&e.solid_angle).zip(&e.direction).map(|((l, w), d)| (*l * *w, *d));
+    for n in random_normals(200) {
+        // Eq. (10): FI(N) = N . FIV(Env), negative cosines included.
+        let fullsphere: Vec3 = sources().map(|(power, w)| power * n.dot(w)).sum();
+        let by_fiv = Vec3::new(n.dot(terms.fiv[0]), n.dot(terms.fiv[1]), n.dot(terms.fiv[2]));
+        let scale: Vec3 = sources().map(|(power, _)| power).sum();
+        assert!(((fullsphere - by_fiv) / scale).abs().max_element() < 1e-5, "N = {n}: {fullsphere} against {by_fiv}");
+        // DifMap, bilinear between its texels, against eq. (5) at N itself.
+        let exact: Vec3 = sources().map(|(power, w)| power * n.dot(w).max(0.0)).sum();
+        let looked_up = terms.difmap_lookup(n);
+        assert!(((looked_up - exact) / exact.max_element()).abs().max_element() < 0.02, "N = {n}: DifMap {looked_up}, eq. (5) {exact}");
+    }
+    // L = max(0, y): FIV = (0, 2 pi / 3, 0); I(+Y) = 2 pi / 3 and FI(-Y) = -2 pi / 3 while I(-Y) = 0.
+    let e = environment(|d| Vec3::splat(d.y.max(0.0)), 32);
+    let terms = environment_terms(&e, 64);
+    assert!((terms.fiv[0] - Vec3::new(0.0, 2.0 * PI / 3.0, 0.0)).length() < 0.01, "FIV {}", terms.fiv[0]);
+    assert!((terms.difmap_lookup(Vec3::Y).x / (2.0 * PI / 3.0) - 1.0).abs() < 0.01);
+    assert!(terms.difmap_lookup(Vec3::NEG_Y).max_element() < 1e-4, "I(-Y) = {}", terms.difmap_lookup(Vec3::NEG_Y));
+    // Uniform light: pi L for every normal.
+    let terms = environment_terms(&environment(|_| Vec3::ONE, 16), 32);
+    let worst = terms.difmap.iter().map(|i| (i.x / PI - 1.0).abs()).fold(0.0, f32::max);
+    assert!(worst < 2e-3, "uniform DifMap off by {worst}");
+}
+
+/// A ground square (the receiver, y = 0, facing up) and black spheres named `ball <k>`,
+/// the occluders, lit by `radiance` on a cube of `cube_face`.
+fn occluder_scene(balls: &[(Vec3, f32)], radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Scene {
+    let mut meshes = vec![Mesh { name: "ground".into(), ..square(Vec3::ZERO, Vec3::X * 20.0, Vec3::NEG_Z * 20.0, 2, 0) }];
+    for (k, (centre, radius)) in balls.iter().enumerate() {
+        meshes.push(Mesh { name: format!("ball {k}"), ..sphere(*centre, *radius, 3, Facing::Outward, 1) });
+    }
+    let materials = vec![material("ground", Vec3::splat(0.5), Vec3::ZERO), material("black", Vec3::ZERO, Vec3::ZERO)];
+    let mut s = scene("fiv", meshes, materials, vec![], look_at(Vec3::new(0.0, 4.0, 4.0), Vec3::ZERO, Vec3::Y, 0.8));
+    s.environment = Some(environment(radiance, cube_face));
+    let names: Vec<String> = (0..balls.len()).map(|k| format!("ball {k}")).collect();
+    s.settings.blocks.insert("fiv".into(), json!({ "occluders": names }));
+    s
+}
+
+fn settings(grid: &str, distance_min: f32, distance_max: f32) -> FivBakeSettings {
+    FivBakeSettings { grid: Grid::parse(grid).unwrap(), distance_min, distance_max, mask_supersample: 1, difmap_width: 64 }
+}
+
+fn occluders(s: &Scene, fiv: &[relume_bake::fiv::OccluderType]) -> Vec<Occluder> {
+    fiv.iter()
+        .enumerate()
+        .flat_map(|(t, ty)| ty.meshes.iter().map(move |&m| (t, m)))
+        .map(|(table, m)| Occluder { table, centre: relume_bake::fiv::bounding_sphere(&s.meshes[m].positions).0 })
+        .collect()
+}
+
+#[test]
+fn tables_equal_the_masked_sum_at_their_samples_and_the_traced_difference_above_the_plane() {
+    // One sphere of radius 1; its table on a 8 x 5 x 3 grid from 1.5 R to 6 R.
+    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::new(1.0, 0.5, 0.25) + Vec3::splat(d.y.max(0.0)), 16);
+    let (fiv, types) = bake(&s, &settings("8x5x3", 1.5, 6.0), &WorkOptions::default()).unwrap();
+    let table = &fiv.tables[0];
+    let g = table.grid;
+    // The sphere out of the way, under the ground.
+    let away = move_mesh(&s, types[0].meshes[0], Vec3::new(0.0, -50.0, 0.0));
+    let without = environment_irradiance(&away, &SceneBvh::new(&away), Vec3::ZERO, Vec3::Y, 1);
+    for (i, j, k) in [(0, 0, 0), (3, 4, 2), (7, 1, 1), (0, 2, 2), (5, 2, 0), (7, 3, 2)] {
+        let v = table.distance(k) * g.direction(i, j);
+        let looked_up = table.lookup(v, Beyond::Scale);
+        let stored = table.fiv[g.index(i, j, k)];
+        for c in 0..3 {
+            assert!((looked_up[c] - stored[c]).length() <= 1e-4 * stored[c].length().max(1e-3), "sample ({i}, {j}, {k})");
+        }
+        // Above the ground plane (case A), N . FIV(EnvOcc) is the irradiance the sphere takes
+        // away from a receiver at the origin: the traced difference, to the texel.
+        if v.y >= table.radius {
+            let moved = move_mesh(&s, types[0].meshes[0], v);
+            let with = environment_irradiance(&moved, &SceneBvh::new(&moved), Vec3::ZERO, Vec3::Y, 1);
+            let taken = Vec3::new(stored[0].y, stored[1].y, stored[2].y);
+            assert!(
+                ((without - with) - taken).abs().max_element() < 1e-3 * without.max_element(),
+                "sample ({i}, {j}, {k}): traced {} against the table's {taken}",
+                without - with
+            );
+        }
+    }
+}
+
+/// `s` with mesh `m` moved so that its bounding-sphere centre is at `centre`.
+fn move_mesh(s: &Scene, m: usize, centre: Vec3) -> Scene {
+    let mut moved = s.clone();
+    let offset = centre - relume_bake::fiv::bounding_sphere(&s.meshes[m].positions).0;
+    moved.meshes[m].positions.iter_mut().for_each(|p| *p += offset);
+    moved
+}
+
+#[test]
+fn case_a_matches_the_closed_form_of_a_sphere_under_uniform_light() {
+    // A black sphere at distance D, at angle beta from the receiver's normal, hides
+    // pi L (r / D)^2 cos(beta) of the uniform sky's pi L. The grid holds D = 2r and 4r and
+    // beta = 0, 30, 60 degrees exactly (7 polar angles, 2 distances).
+    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 32);
+    let mut options = settings("12x7x2", 2.0, 4.0);
+    options.mask_supersample = 8;
+    let (fiv, _) = bake(&s, &options, &WorkOptions::default()).unwrap();
+    let r = fiv.tables[0].radius;
+    for ratio in [2.0f32, 4.0] {
+        for beta in [0.0f32, 30.0, 60.0] {
+            let (b, d) = (beta.to_radians(), ratio * r);
+            let centre = d * Vec3::new(b.sin(), b.cos(), 0.0);
+            let i = fiv.irradiance(&[Occluder { table: 0, centre }], Vec3::ZERO, Vec3::Y, SumOptions::default()).x;
+            let exact = PI * (1.0 - (r / d).powi(2) * b.cos());
+            assert!((i - exact).abs() < 0.01 * PI, "D/r = {ratio}, beta = {beta}: {i} against {exact}");
+        }
+    }
+}
+
+fn one_ball_bake() -> (FivBake, f32) {
+    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::splat(0.2 + d.y.max(0.0)), 16);
+    let (fiv, _) = bake(&s, &settings("16x9x6", 0.1, 16.0), &WorkOptions::default()).unwrap();
+    let radius = fiv.tables[0].radius;
+    (fiv, radius)
+}
+
+#[test]
+fn case_c_takes_nothing_and_case_b_is_bounded_and_continuous() {
+    let (fiv, r) = one_ball_bake();
+    let n = Vec3::new(0.3, 1.0, 0.1).normalize();
+    let total = fiv.environment.difmap_lookup(n);
+    let at = |d: f32| {
+        let centre = d * n + 1.5 * r * n.cross(Vec3::X).normalize();
+        fiv.irradiance(&[Occluder { table: 0, centre }], Vec3::ZERO, n, SumOptions::default())
+    };
+    assert_eq!(at(-r), total);
+    assert_eq!(at(-3.0 * r), total);
+    let steps = 1000;
+    let mut previous = at(-1.2 * r);
+    for s in 1..=steps {
+        let d = -1.2 * r + 2.4 * r * s as f32 / steps as f32;
+        let i = at(d);
+        assert!(i.is_finite() && i.cmpge(Vec3::ZERO).all() && i.cmple(total).all(), "d = {d}: {i}");
+        // No jump at d = -R or d = R: the sweep's steps change I by no more than their size.
+        assert!((i - previous).abs().max_element() < 0.05 * total.max_element(), "jump at d = {d}: {previous} -> {i}");
+        previous = i;
+    }
+}
+
+#[test]
+fn overlap_of_coincident_disjoint_and_nested_occluders() {
+    let (fiv, r) = one_ball_bake();
+    let sum = |centres: &[Vec3]| {
+        let occluders: Vec<Occluder> = centres.iter().map(|&centre| Occluder { table: 0, centre }).collect();
+        fiv.irradiance(&occluders, Vec3::ZERO, Vec3::Y, SumOptions::default())
+    };
+    let one = sum(&[Vec3::new(0.5, 3.0 * r, 0.0)]);
+    let two = sum(&[Vec3::new(0.5, 3.0 * r, 0.0), Vec3::new(0.5, 3.0 * r, 0.0)]);
+    assert!((one - two).abs().max_element() < 1e-4 * one.max_element(), "one {one}, coincident two {two}");
+    // Far apart, their discs do not meet: each takes its own share.
+    let total = fiv.environment.difmap_lookup(Vec3::Y);
+    let (a, b) = (Vec3::new(-3.0 * r, 2.0 * r, 0.0), Vec3::new(3.0 * r, 2.0 * r, 0.0));
+    let apart = sum(&[a, b]);
+    let expected = total - (total - sum(&[a])) - (total - sum(&[b]));
+    assert!((apart - expected).abs().max_element() < 1e-5 * total.max_element());
+    // Lens areas: disjoint, nested, and half-overlapping unit discs.
+    assert_eq!(lens_area(3.0, 1.0, 1.0), 0.0);
+    assert!((lens_area(0.2, 1.0, 0.5) - PI * 0.25).abs() < 1e-6);
+    assert!((lens_area(1.0, 1.0, 1.0) - (2.0 * PI / 3.0 - 3f32.sqrt() / 2.0)).abs() < 1e-5);
+}
+
+#[test]
+fn the_bake_is_the_same_at_any_thread_count_and_instances_share_a_table() {
+    let s = occluder_scene(
+        &[(Vec3::new(0.0, 3.0, 0.0), 1.0), (Vec3::new(2.0, 2.0, 1.0), 1.0), (Vec3::new(0.0, 1.0, 2.0), 0.5)],
+        |d| Vec3::splat(d.y.max(0.0)),
+        8,
+    );
+    let work = |threads| WorkOptions { threads: Some(threads), ..WorkOptions::default() };
+    let (one, types) = bake(&s, &settings("6x4x3", 0.5, 8.0), &work(1)).unwrap();
+    let (three, _) = bake(&s, &settings("6x4x3", 0.5, 8.0), &work(3)).unwrap();
+    assert_eq!(one, three);
+    assert_eq!(types.iter().map(|t| t.meshes.clone()).collect::<Vec<_>>(), vec![vec![1, 2], vec![3]]);
+    assert_eq!(occluders(&s, &types).len(), 3);
+}
+
+#[test]
+fn refuses_open_occluders_missing_names_no_environment_and_empty_grids() {
+    let mut s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 8);
+    let refused = |s: &Scene| bake(s, &settings("6x4x3", 0.5, 8.0), &WorkOptions::default()).unwrap_err();
+    s.settings.blocks.insert("fiv".into(), json!({ "occluders": ["ground"] }));
+    assert!(refused(&s).contains("\"ground\" is not a closed mesh"), "{}", refused(&s));
+    s.settings.blocks.insert("fiv".into(), json!({ "occluders": ["teapot"] }));
+    assert!(refused(&s).contains("\"teapot\", which is no mesh"), "{}", refused(&s));
+    s.environment = None;
+    assert!(refused(&s).contains("no environment"), "{}", refused(&s));
+    for grid in ["0x17x15", "32x17", "32x1x15", "abc"] {
+        assert!(Grid::parse(grid).is_err(), "{grid}");
+    }
+}
