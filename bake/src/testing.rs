@@ -7,6 +7,7 @@
 //! builder checks each triangle's winding against the side it must face and flips it if
 //! needed.
 
+use crate::environment::{Environment, EnvironmentSettings};
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene};
 use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3};
@@ -206,4 +207,29 @@ pub fn two_area_lights(radiance: f32) -> impl Fn(Vec3) -> Vec3 {
             Vec3::ZERO
         }
     }
+}
+
+/// An environment of `radiance` (a lat-long image of 512 x 256 resampled onto a cube of
+/// `cube_face`).
+pub fn environment(radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Environment {
+    let settings = EnvironmentSettings { image: "built in code".into(), layer: None, intensity: 1.0, rotation_y_degrees: 0.0, cube_face };
+    let image = crate::environment::lat_long_image(512, radiance);
+    Environment::from_lat_long(&image, std::path::Path::new("<built in code>"), &settings).expect("a valid environment")
+}
+
+/// FIV's test scene: a ground square 40 m wide at y = 0 facing up (albedo 0.5, mesh
+/// "ground"), black closed spheres (centre, radius) named "ball <k>", each an occluder of
+/// `extras.relume.fiv`, lit only by the environment `radiance` on a cube of `cube_face`, seen
+/// from above at an angle.
+pub fn occluders_over_ground(balls: &[(Vec3, f32)], radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Scene {
+    let mut meshes = vec![Mesh { name: "ground".into(), ..square(Vec3::ZERO, Vec3::X * 20.0, Vec3::NEG_Z * 20.0, 2, 0) }];
+    for (k, (centre, radius)) in balls.iter().enumerate() {
+        meshes.push(Mesh { name: format!("ball {k}"), ..sphere(*centre, *radius, 3, Facing::Outward, 1) });
+    }
+    let materials = vec![material("ground", Vec3::splat(0.5), Vec3::ZERO), material("black", Vec3::ZERO, Vec3::ZERO)];
+    let mut s = scene("occluders over ground", meshes, materials, vec![], look_at(Vec3::new(0.0, 4.0, 4.0), Vec3::ZERO, Vec3::Y, 0.8));
+    s.environment = Some(environment(radiance, cube_face));
+    let names: Vec<String> = (0..balls.len()).map(|k| format!("ball {k}")).collect();
+    s.settings.blocks.insert("fiv".into(), serde_json::json!({ "occluders": names }));
+    s
 }

@@ -5,21 +5,14 @@
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::environment::{lat_long_image, Environment, EnvironmentSettings};
 use relume_bake::fiv::{bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, SumOptions};
 use relume_bake::reference::environment_irradiance;
 use relume_bake::sampling::PathSampler;
-use relume_bake::scene::{Mesh, Scene};
-use relume_bake::testing::{look_at, material, scene, sky, sphere, square, Facing};
+use relume_bake::scene::Scene;
+use relume_bake::testing::{environment, occluders_over_ground, sky};
 use relume_bake::work::WorkOptions;
 use serde_json::json;
 use std::f32::consts::PI;
-use std::path::Path;
-
-fn environment(radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Environment {
-    let settings = EnvironmentSettings { image: "t.exr".into(), layer: None, intensity: 1.0, rotation_y_degrees: 0.0, cube_face };
-    Environment::from_lat_long(&lat_long_image(512, radiance), Path::new("t.exr"), &settings).unwrap()
-}
 
 fn random_normals(count: u32) -> impl Iterator<Item = Vec3> {
     (0..count).map(|k| {
@@ -58,21 +51,6 @@ fn fiv_of_the_environment_is_the_fullsphere_sum_and_difmap_the_hemispherical_one
     assert!(worst < 2e-3, "uniform DifMap off by {worst}");
 }
 
-/// A ground square (the receiver, y = 0, facing up) and black spheres named `ball <k>`,
-/// the occluders, lit by `radiance` on a cube of `cube_face`.
-fn occluder_scene(balls: &[(Vec3, f32)], radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Scene {
-    let mut meshes = vec![Mesh { name: "ground".into(), ..square(Vec3::ZERO, Vec3::X * 20.0, Vec3::NEG_Z * 20.0, 2, 0) }];
-    for (k, (centre, radius)) in balls.iter().enumerate() {
-        meshes.push(Mesh { name: format!("ball {k}"), ..sphere(*centre, *radius, 3, Facing::Outward, 1) });
-    }
-    let materials = vec![material("ground", Vec3::splat(0.5), Vec3::ZERO), material("black", Vec3::ZERO, Vec3::ZERO)];
-    let mut s = scene("fiv", meshes, materials, vec![], look_at(Vec3::new(0.0, 4.0, 4.0), Vec3::ZERO, Vec3::Y, 0.8));
-    s.environment = Some(environment(radiance, cube_face));
-    let names: Vec<String> = (0..balls.len()).map(|k| format!("ball {k}")).collect();
-    s.settings.blocks.insert("fiv".into(), json!({ "occluders": names }));
-    s
-}
-
 fn settings(grid: &str, distance_min: f32, distance_max: f32) -> FivBakeSettings {
     FivBakeSettings { grid: Grid::parse(grid).unwrap(), distance_min, distance_max, mask_supersample: 1, difmap_width: 64 }
 }
@@ -88,7 +66,7 @@ fn occluders(s: &Scene, fiv: &[relume_bake::fiv::OccluderType]) -> Vec<Occluder>
 #[test]
 fn tables_equal_the_masked_sum_at_their_samples_and_the_traced_difference_above_the_plane() {
     // One sphere of radius 1; its table on a 8 x 5 x 3 grid from 1.5 R to 6 R.
-    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::new(1.0, 0.5, 0.25) + Vec3::splat(d.y.max(0.0)), 16);
+    let s = occluders_over_ground(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::new(1.0, 0.5, 0.25) + Vec3::splat(d.y.max(0.0)), 16);
     let (fiv, types) = bake(&s, &settings("8x5x3", 1.5, 6.0), &WorkOptions::default()).unwrap();
     let table = &fiv.tables[0];
     let g = table.grid;
@@ -130,7 +108,7 @@ fn case_a_matches_the_closed_form_of_a_sphere_under_uniform_light() {
     // A black sphere at distance D, at angle beta from the receiver's normal, hides
     // pi L (r / D)^2 cos(beta) of the uniform sky's pi L. The grid holds D = 2r and 4r and
     // beta = 0, 30, 60 degrees exactly (7 polar angles, 2 distances).
-    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 32);
+    let s = occluders_over_ground(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 32);
     let mut options = settings("12x7x2", 2.0, 4.0);
     options.mask_supersample = 8;
     let (fiv, _) = bake(&s, &options, &WorkOptions::default()).unwrap();
@@ -147,7 +125,7 @@ fn case_a_matches_the_closed_form_of_a_sphere_under_uniform_light() {
 }
 
 fn one_ball_bake() -> (FivBake, f32) {
-    let s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::splat(0.2 + d.y.max(0.0)), 16);
+    let s = occluders_over_ground(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::splat(0.2 + d.y.max(0.0)), 16);
     let (fiv, _) = bake(&s, &settings("16x9x6", 0.1, 16.0), &WorkOptions::default()).unwrap();
     let radius = fiv.tables[0].radius;
     (fiv, radius)
@@ -200,7 +178,7 @@ fn overlap_of_coincident_disjoint_and_nested_occluders() {
 
 #[test]
 fn the_bake_is_the_same_at_any_thread_count_and_instances_share_a_table() {
-    let s = occluder_scene(
+    let s = occluders_over_ground(
         &[(Vec3::new(0.0, 3.0, 0.0), 1.0), (Vec3::new(2.0, 2.0, 1.0), 1.0), (Vec3::new(0.0, 1.0, 2.0), 0.5)],
         |d| Vec3::splat(d.y.max(0.0)),
         8,
@@ -215,7 +193,7 @@ fn the_bake_is_the_same_at_any_thread_count_and_instances_share_a_table() {
 
 #[test]
 fn refuses_open_occluders_missing_names_no_environment_and_empty_grids() {
-    let mut s = occluder_scene(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 8);
+    let mut s = occluders_over_ground(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |_| Vec3::ONE, 8);
     let refused = |s: &Scene| bake(s, &settings("6x4x3", 0.5, 8.0), &WorkOptions::default()).unwrap_err();
     s.settings.blocks.insert("fiv".into(), json!({ "occluders": ["ground"] }));
     assert!(refused(&s).contains("\"ground\" is not a closed mesh"), "{}", refused(&s));

@@ -41,7 +41,8 @@ impl EnvironmentTerms {
     /// DifMap at normal `n`, eq. (5): bilinear, repeating in azimuth, clamped at the poles.
     pub fn difmap_lookup(&self, n: Vec3) -> Vec3 {
         let (w, h) = (self.difmap_width as i32, (self.difmap_width / 2) as i32);
-        let u = 0.5 + n.x.atan2(-n.z) / TAU;
+        // Straight up or down the azimuth is undefined; 0.5 is what the GPU pass takes too.
+        let u = if n.x == 0.0 && n.z == 0.0 { 0.5 } else { 0.5 + n.x.atan2(-n.z) / TAU };
         let v = n.y.clamp(-1.0, 1.0).acos() / PI;
         let (x, y) = (u * w as f32 - 0.5, v * h as f32 - 0.5);
         let (x0, y0) = (x.floor(), y.floor());
@@ -60,7 +61,7 @@ impl OccluderTable {
         let g = self.grid;
         let distance = v.length().max(1e-20);
         let d = v / distance;
-        let theta = (-d.z).atan2(d.x);
+        let theta = if d.x == 0.0 && d.z == 0.0 { 0.0 } else { (-d.z).atan2(d.x) };
         let fi = (if theta < 0.0 { theta + TAU } else { theta }) / TAU * g.azimuths as f32;
         let fj = (d.y.clamp(-1.0, 1.0).acos() / PI * (g.polar - 1) as f32).min((g.polar - 1) as f32);
         let steps = (g.distances - 1) as f32;

@@ -183,7 +183,7 @@ impl LightingPass {
         tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
         tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
-        rec.begin_rendering(radiance.desc.extent(), radiance.view, [0.0; 4], depth.view);
+        rec.begin_rendering(radiance.desc.extent(), [radiance.view], [0.0; 4], depth.view);
         rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
         for draw in &scene.draws {
             rec.push_constants(self.pipeline.layout, &draw.material);

@@ -89,7 +89,7 @@ impl VsmPass {
             tracker.use_image(rec, &self.depth, Access::DepthAttachmentWrite);
             rec.push_constants(self.pipeline.layout, &VsmPush { light: view.light, layer: view.layer });
             let clear = [view.far, view.far * view.far, 0.0, 0.0];
-            rec.begin_rendering(self.moments.desc.extent(), self.layer_views[view.layer as usize].raw, clear, self.depth.view);
+            rec.begin_rendering(self.moments.desc.extent(), [self.layer_views[view.layer as usize].raw], clear, self.depth.view);
             rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
             rec.draw_indexed(0, scene.index_count);
             rec.end_rendering();

@@ -254,15 +254,17 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_dispatch(self.cmd, x, y, z) };
     }
 
-    /// Begins dynamic rendering into `color` (cleared to `clear`) and `depth` (cleared to
-    /// far), with viewport and scissor covering `extent`.
-    pub fn begin_rendering(&self, extent: vk::Extent2D, color: vk::ImageView, clear: [f32; 4], depth: vk::ImageView) {
-        let colors = [vk::RenderingAttachmentInfo::default()
-            .image_view(color)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: clear } })];
+    /// Begins dynamic rendering into the colour attachments `colors` (each cleared to `clear`)
+    /// and `depth` (cleared to far), with viewport and scissor covering `extent`.
+    pub fn begin_rendering<const N: usize>(&self, extent: vk::Extent2D, colors: [vk::ImageView; N], clear: [f32; 4], depth: vk::ImageView) {
+        let colors = colors.map(|color| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(color)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: clear } })
+        });
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(depth)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)

@@ -1,0 +1,206 @@
+//! Fullsphere irradiance vectors of Michael & Chrysanthou (003) at run time: the environment's
+//! DifMap and the occluder types' tables uploaded once, and two passes a frame that turn the
+//! occluders' current positions into each pixel's irradiance from the environment, handed to
+//! the lighting pass as a pixel term (added as albedo / pi * I).
+//!
+//! Uploaded at creation (device-local, never written again):
+//! - `difmap`: W x W/2 vec4, rgb I(N) (relume_bake::fiv::EnvironmentTerms);
+//! - `tables`: every type's samples, 3 vec4 each (the r, g, b vectors of FIV(EnvOcc)), types
+//!   one after another;
+//! - `types`: per type { uvec4 grid (azimuths, polar, distances, first sample), vec4 (R,
+//!   distance_min, distance_max, ln(max / min)) }.
+//!
+//! Written every frame, in order:
+//! - `occluders` (per occluder { vec4 centre, uvec4 type }), from the technique's array,
+//!   which [`Fiv::set_occluder_centre`] changes without allocating;
+//! 1. `surfaces` (surfaces.rs): `positions` and `normals` per pixel;
+//! 2. `occluder_sums` (occluder_sums.rs): `irradiance`, rgb lux per pixel.
+//!
+//! Occluders translate only: a table holds its type in the orientation it was baked in (the
+//! paper's §6 limit), so there is no rotation here.
+
+mod occluder_sums;
+mod surfaces;
+
+use crate::technique::{MakeTechnique, Resource, Shared, Source, Technique, Term};
+use crate::upload::upload_buffers_blocking;
+use crate::vk::{vk, Buffer, CommandRecorder, Image, ImageDesc, Tracker, VkError, VkResult};
+use glam::{Vec3, Vec4};
+use occluder_sums::{OccluderSumsPass, OccluderSumsPush};
+use relume_bake::fiv::{FivBake, Occluder, SumOptions};
+use surfaces::SurfacesPass;
+
+/// What the technique is made from: a bake, the occluders (type and centre) where the
+/// frame starts, and the run-time choices.
+pub struct FivData<'d> {
+    pub bake: &'d FivBake,
+    pub occluders: &'d [Occluder],
+    pub options: SumOptions,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuType {
+    grid: [u32; 4],
+    facts: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuOccluder {
+    centre: Vec4,
+    table: [u32; 4],
+}
+
+/// The most occluders one in-stream update carries (vkCmdUpdateBuffer's 65536 bytes).
+pub const MAX_OCCLUDERS: usize = 65536 / std::mem::size_of::<GpuOccluder>();
+
+struct Buffers {
+    difmap: Buffer,
+    tables: Buffer,
+    types: Buffer,
+    occluders: Buffer,
+}
+
+pub struct Fiv {
+    buffers: Buffers,
+    surfaces: SurfacesPass,
+    occluder_sums: OccluderSumsPass,
+    irradiance: Image,
+    occluders: Vec<GpuOccluder>,
+    options: SumOptions,
+    difmap_width: u32,
+}
+
+impl Fiv {
+    /// Moves occluder `occluder` (an index into the occluders it was made with) so that its
+    /// bounding-sphere centre is `centre`, for the frames recorded from now on, without
+    /// allocating. Its mesh in the scene is the caller's to move (`Renderer::set_mesh_translation`).
+    pub fn set_occluder_centre(&mut self, occluder: usize, centre: Vec3) -> VkResult<()> {
+        let count = self.occluders.len();
+        let slot =
+            self.occluders.get_mut(occluder).ok_or_else(|| VkError::Invalid(format!("fiv: no occluder {occluder} (it has {count})")))?;
+        if !centre.is_finite() {
+            return Err(VkError::Invalid(format!("fiv: occluder {occluder} moved to {centre}, not a finite point")));
+        }
+        slot.centre = centre.extend(1.0);
+        Ok(())
+    }
+
+    /// Changes the run-time choices for the frames recorded from now on.
+    pub fn set_options(&mut self, options: SumOptions) {
+        self.options = options;
+    }
+}
+
+const PASSES: [&str; 2] = ["fiv.surfaces", "fiv.occluder_sums"];
+
+impl Technique for Fiv {
+    fn name(&self) -> &'static str {
+        "fiv"
+    }
+
+    fn passes(&self) -> &'static [&'static str] {
+        &PASSES
+    }
+
+    fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
+        match pass {
+            0 => self.surfaces.record(rec, tracker),
+            _ => {
+                if !self.occluders.is_empty() {
+                    rec.update_buffers([(self.buffers.occluders.raw, bytemuck::cast_slice(&self.occluders))]);
+                }
+                let push = OccluderSumsPush::new(self.occluders.len() as u32, self.difmap_width, self.options);
+                self.occluder_sums.record(rec, tracker, &push);
+            }
+        }
+    }
+
+    fn term(&self) -> Option<Term<'_>> {
+        Some(Term::Irradiance { source: Source::Pixel(&self.irradiance), times_occlusion: false, occluded_direct: false })
+    }
+
+    /// `positions` (xyz world, alpha 1 on a surface), `normals` (unnormalised) and
+    /// `irradiance` (rgb lux), as the last frame left them.
+    fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
+        vec![
+            ("positions", Resource::Image(&self.surfaces.positions)),
+            ("normals", Resource::Image(&self.surfaces.normals)),
+            ("irradiance", Resource::Image(&self.irradiance)),
+        ]
+    }
+}
+
+impl MakeTechnique for FivData<'_> {
+    /// Uploads the bake in one submission that is waited for. Refused, by name: occluders of
+    /// a type the bake lacks, more than [`MAX_OCCLUDERS`], and tables larger than one storage
+    /// buffer may span.
+    fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
+        let ctx = shared.ctx;
+        let refuse = |why: String| Err(VkError::Invalid(format!("fiv: {why}")));
+        let tables = &self.bake.tables;
+        if let Some((k, o)) = self.occluders.iter().enumerate().find(|(_, o)| o.table >= tables.len()) {
+            return refuse(format!("occluder {k} is of type {}, but the bake has {} tables", o.table, tables.len()));
+        }
+        if self.occluders.len() > MAX_OCCLUDERS {
+            return refuse(format!("{} occluders; at most {MAX_OCCLUDERS} are moved per frame", self.occluders.len()));
+        }
+        let samples: Vec<Vec4> = tables.iter().flat_map(|t| t.fiv.iter().flat_map(|f| f.map(|v| v.extend(0.0)))).collect();
+        let limit = ctx.info.max_storage_buffer_range;
+        if std::mem::size_of_val(samples.as_slice()) as u64 > limit {
+            return refuse(format!(
+                "the tables take {} bytes, more than one storage buffer spans on {} ({limit})",
+                samples.len() * 16,
+                ctx.info.name
+            ));
+        }
+        let mut first = 0u32;
+        let types: Vec<GpuType> = tables
+            .iter()
+            .map(|t| {
+                let grid = [t.grid.azimuths, t.grid.polar, t.grid.distances, first];
+                first += t.grid.samples() as u32;
+                GpuType { grid, facts: [t.radius, t.distance_min, t.distance_max, (t.distance_max / t.distance_min).ln()] }
+            })
+            .collect();
+        let occluders: Vec<GpuOccluder> =
+            self.occluders.iter().map(|o| GpuOccluder { centre: o.centre.extend(1.0), table: [o.table as u32, 0, 0, 0] }).collect();
+        let difmap: Vec<Vec4> = self.bake.environment.difmap.iter().map(|i| i.extend(0.0)).collect();
+        // Never empty: a buffer of no bytes cannot be bound.
+        let padded = |bytes: &[u8]| if bytes.is_empty() { vec![0u8; 32] } else { bytes.to_vec() };
+        let [difmap, tables, types, occluders_buffer] = upload_buffers_blocking(
+            ctx,
+            [
+                ("fiv difmap", bytemuck::cast_slice(&difmap)),
+                ("fiv tables", &padded(bytemuck::cast_slice(&samples))),
+                ("fiv types", &padded(bytemuck::cast_slice(&types))),
+                ("fiv occluders", &padded(bytemuck::cast_slice(&occluders))),
+            ],
+        )?;
+        let buffers = Buffers { difmap, tables, types, occluders: occluders_buffer };
+        let irradiance = Image::new(
+            ctx,
+            "fiv irradiance",
+            ImageDesc {
+                width: shared.settings.width,
+                height: shared.settings.height,
+                layers: 1,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC,
+                view_type: vk::ImageViewType::TYPE_2D_ARRAY,
+            },
+        )?;
+        let surfaces = SurfacesPass::new(shared)?;
+        let occluder_sums = OccluderSumsPass::new(shared, &surfaces, &buffers, &irradiance)?;
+        Ok(Box::new(Fiv {
+            buffers,
+            surfaces,
+            occluder_sums,
+            irradiance,
+            occluders,
+            options: self.options,
+            difmap_width: self.bake.environment.difmap_width,
+        }))
+    }
+}

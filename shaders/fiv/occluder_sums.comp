@@ -1,0 +1,166 @@
+#version 450
+// The FIV occluder sums, 003 §5, per pixel (relume_bake::fiv::FivBake::irradiance is the same
+// formula on the CPU, step for step): DifMap(N), less each occluder's N . FIV(EnvOcc) by its
+// case (A: d >= R, B: scaled by (d + R) / 2R when partial, C: d <= -R nothing), plus the
+// pairwise overlaps of eq. (13)-(14) as sum_a I_a sum_{b != a} Ov%_ab; the overlap at most
+// sum I - max I and the result in [0, DifMap(N)]. Pixels with no surface get 0.
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(set = 0, binding = 0, rgba32f) uniform readonly image2D positions;   // w 1: a surface
+layout(set = 0, binding = 1, rgba32f) uniform readonly image2D normals;
+layout(set = 0, binding = 2, rgba32f) uniform writeonly image2DArray irradiance;
+// DifMap: width x width / 2 lat-long texels, rgb.
+layout(std430, set = 0, binding = 3) readonly buffer DifMap { vec4 difmap[]; };
+// Every type's table, 3 vec4 per sample (the r, g and b vectors), types one after another.
+layout(std430, set = 0, binding = 4) readonly buffer Tables { vec4 tables[]; };
+struct OccluderType {
+    uvec4 grid;     // azimuths, polar angles, distances, first sample in `tables`
+    vec4 facts;     // radius R, distance_min, distance_max, ln(distance_max / distance_min)
+};
+layout(std430, set = 0, binding = 5) readonly buffer Types { OccluderType types[]; };
+struct Occluder {
+    vec4 centre;    // xyz: the bounding-sphere centre; w unused
+    uvec4 type;     // x: the type
+};
+layout(std430, set = 0, binding = 6) readonly buffer Occluders { Occluder occluders[]; };
+
+layout(push_constant) uniform OccluderSumsPush {
+    uint occluder_count;
+    uint difmap_width;
+    uint partial;       // 1: case B scaled by (d + R) / 2R
+    uint overlap;       // 1: the pairwise overlap correction
+    uint beyond_scale;  // 1: beyond distance_max the outer shell times (max / distance)^2; 0: nothing
+} pc;
+
+const float PI = 3.14159265358979;
+const float TAU = 6.28318530717959;
+
+// The azimuth of a direction from +X towards -Z, 0 straight up or down.
+float azimuth(vec3 d) {
+    return (d.x == 0.0 && d.z == 0.0) ? 0.0 : atan(-d.z, d.x);
+}
+
+vec3 difmap_texel(int i, int j) {
+    int w = int(pc.difmap_width);
+    int h = w / 2;
+    i = i < 0 ? i + w : (i >= w ? i - w : i);
+    return difmap[clamp(j, 0, h - 1) * w + i].rgb;
+}
+
+// DifMap at N, bilinear, repeating in azimuth, clamped at the poles.
+vec3 difmap_lookup(vec3 n) {
+    float u = (n.x == 0.0 && n.z == 0.0) ? 0.5 : 0.5 + atan(n.x, -n.z) / TAU;
+    float v = acos(clamp(n.y, -1.0, 1.0)) / PI;
+    float x = u * float(pc.difmap_width) - 0.5;
+    float y = v * float(pc.difmap_width / 2u) - 0.5;
+    float x0 = floor(x);
+    float y0 = floor(y);
+    int i = int(x0);
+    int j = int(y0);
+    vec3 top = mix(difmap_texel(i, j), difmap_texel(i + 1, j), x - x0);
+    vec3 bottom = mix(difmap_texel(i, j + 1), difmap_texel(i + 1, j + 1), x - x0);
+    return mix(top, bottom, y - y0);
+}
+
+// N . FIV(EnvOcc) of type t centred at offset v: trilinear over the 8 nearest samples,
+// distances in log space, clamped below; the r, g, b rows dotted with N.
+vec3 table_lookup(uint t, vec3 v, vec3 n) {
+    uvec4 g = types[t].grid;
+    vec4 facts = types[t].facts;
+    float distance = max(length(v), 1e-20);
+    vec3 d = v / distance;
+    float theta = azimuth(d);
+    float fi = (theta < 0.0 ? theta + TAU : theta) / TAU * float(g.x);
+    float fj = min(acos(clamp(d.y, -1.0, 1.0)) / PI * float(g.y - 1u), float(g.y - 1u));
+    float steps = float(g.z - 1u);
+    float fk = clamp(log(distance / facts.y) / facts.w * steps, 0.0, steps);
+    float i0 = floor(fi);
+    float j0 = min(floor(fj), float(g.y - 2u));
+    float k0 = min(floor(fk), steps - 1.0);
+    vec3 weights = vec3(fi - i0, fj - j0, fk - k0);
+    uint i = uint(i0) % g.x;
+    uint ii = (i + 1u) % g.x;
+    uint j = uint(j0);
+    uint k = uint(k0);
+    vec3 sum = vec3(0.0);
+    for (uint dk = 0u; dk < 2u; ++dk) {
+        float wk = dk == 0u ? 1.0 - weights.z : weights.z;
+        for (uint dj = 0u; dj < 2u; ++dj) {
+            float wj = dj == 0u ? 1.0 - weights.y : weights.y;
+            for (uint di = 0u; di < 2u; ++di) {
+                float wi = di == 0u ? 1.0 - weights.x : weights.x;
+                uint sample_index = g.w + ((k + dk) * g.y + j + dj) * g.x + (di == 0u ? i : ii);
+                float w = wi * wj * wk;
+                sum += w * vec3(dot(n, tables[3u * sample_index].xyz), dot(n, tables[3u * sample_index + 1u].xyz),
+                                dot(n, tables[3u * sample_index + 2u].xyz));
+            }
+        }
+    }
+    if (distance > facts.z) {
+        sum *= pc.beyond_scale == 1u ? (facts.z / distance) * (facts.z / distance) : 0.0;
+    }
+    return sum;
+}
+
+// The area two discs share (a lens; nested and disjoint discs included).
+float lens_area(float distance, float r1, float r2) {
+    if (distance >= r1 + r2) return 0.0;
+    if (distance <= abs(r1 - r2)) return PI * min(r1, r2) * min(r1, r2);
+    float a1 = acos(clamp((distance * distance + r1 * r1 - r2 * r2) / (2.0 * distance * r1), -1.0, 1.0));
+    float a2 = acos(clamp((distance * distance + r2 * r2 - r1 * r1) / (2.0 * distance * r2), -1.0, 1.0));
+    float kite = (-distance + r1 + r2) * (distance + r1 - r2) * (distance - r1 + r2) * (distance + r1 + r2);
+    return r1 * r1 * a1 + r2 * r2 * a2 - 0.5 * sqrt(max(kite, 0.0));
+}
+
+// Occluder o's disc on the plane at unit height along n (centre in xyz, radius in w), or
+// radius 0 in case C.
+vec4 disc(uint o, vec3 p, vec3 n) {
+    vec3 v = occluders[o].centre.xyz - p;
+    float radius = types[occluders[o].type.x].facts.x;
+    float d = dot(n, v);
+    if (d <= -radius) return vec4(0.0);
+    float height = max(d, radius);
+    return vec4((v - d * n) / height, radius / height);
+}
+
+float overlap_shares(uint a, vec3 p, vec3 n) {
+    vec4 da = disc(a, p, n);
+    float shares = 0.0;
+    for (uint b = 0u; b < pc.occluder_count; ++b) {
+        if (b == a) continue;
+        vec4 db = disc(b, p, n);
+        if (db.w == 0.0) continue;
+        shares += lens_area(distance(da.xyz, db.xyz), da.w, db.w) / (PI * (da.w * da.w + db.w * db.w));
+    }
+    return shares;
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, imageSize(positions)))) return;
+    vec4 surface = imageLoad(positions, pixel);
+    if (surface.w == 0.0) {
+        imageStore(irradiance, ivec3(pixel, 0), vec4(0.0));
+        return;
+    }
+    vec3 p = surface.xyz;
+    vec3 n = normalize(imageLoad(normals, pixel).xyz);
+    vec3 total = difmap_lookup(n);
+    vec3 occluded = vec3(0.0);
+    vec3 overlap = vec3(0.0);
+    vec3 largest = vec3(0.0);
+    for (uint a = 0u; a < pc.occluder_count; ++a) {
+        uint t = occluders[a].type.x;
+        float radius = types[t].facts.x;
+        vec3 v = occluders[a].centre.xyz - p;
+        float d = dot(n, v);
+        if (d <= -radius) continue;
+        float factor = (pc.partial == 1u && d < radius) ? (d + radius) / (2.0 * radius) : 1.0;
+        vec3 share = max(table_lookup(t, v, n), vec3(0.0)) * factor;
+        occluded += share;
+        largest = max(largest, share);
+        if (pc.overlap == 1u) overlap += share * overlap_shares(a, p, n);
+    }
+    overlap = min(overlap, occluded - largest);
+    imageStore(irradiance, ivec3(pixel, 0), vec4(clamp(total - occluded + overlap, vec3(0.0), total), 1.0));
+}

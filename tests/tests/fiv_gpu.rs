@@ -1,0 +1,139 @@
+//! FIV's run time on the GPU (003 §5) against its CPU twin, relume_bake::fiv::FivBake::irradiance,
+//! evaluated at the positions and normals the surfaces pass wrote; the lighting pass adding
+//! albedo / pi * I; moving occluders against a renderer made for the moved scene; all with
+//! validation and synchronization validation on.
+
+use glam::{Vec3, Vec4};
+use relume_bake::fiv::{bake, bounding_sphere, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, SumOptions};
+use relume_bake::scene::Scene;
+use relume_bake::testing::{occluders_over_ground, sky};
+use relume_bake::work::WorkOptions;
+use relume_renderer::techniques::fiv::{Fiv, FivData};
+use relume_renderer::{Headless, RenderSettings};
+use relume_tests::*;
+use std::f32::consts::PI;
+
+const SIZE: u32 = 64;
+
+/// Three balls: two overlapping as seen from the ground, one sunk halfway into it (case B).
+fn scene() -> Scene {
+    let balls = [(Vec3::new(-0.4, 1.2, 0.0), 0.6), (Vec3::new(0.3, 1.5, 0.2), 0.5), (Vec3::new(1.2, 0.1, -0.8), 0.4)];
+    occluders_over_ground(&balls, sky(Vec3::new(0.4, 0.8, 0.3), Vec3::splat(80.0), 4.0), 16)
+}
+
+fn baked(scene: &Scene) -> (FivBake, Vec<OccluderType>) {
+    let settings = FivBakeSettings {
+        grid: Grid::parse("16x9x8").unwrap(),
+        distance_min: 0.1,
+        distance_max: 16.0,
+        mask_supersample: 1,
+        difmap_width: 32,
+    };
+    bake(scene, &settings, &WorkOptions::default()).expect("bake")
+}
+
+fn occluders(scene: &Scene, types: &[OccluderType]) -> Vec<Occluder> {
+    let mut out = Vec::new();
+    for (table, t) in types.iter().enumerate() {
+        out.extend(t.meshes.iter().map(|&m| Occluder { table, centre: bounding_sphere(&scene.meshes[m].positions).0 }));
+    }
+    out
+}
+
+fn settings() -> RenderSettings {
+    RenderSettings { width: SIZE, height: SIZE, ..RenderSettings::default() }
+}
+
+/// The irradiance the GPU wrote against the CPU formula at the GPU's own surface points; the
+/// number of surface pixels compared.
+fn compare_with_cpu(renderer: &mut Headless, fiv: &FivBake, occluders: &[Occluder], options: SumOptions) -> usize {
+    let positions = read_vec4s(renderer, "fiv.positions").expect("positions");
+    let normals = read_vec4s(renderer, "fiv.normals").expect("normals");
+    let irradiance = read_vec4s(renderer, "fiv.irradiance").expect("irradiance");
+    let mut surfaces = 0;
+    for (pixel, ((p, n), gpu)) in positions.iter().zip(&normals).zip(&irradiance).enumerate() {
+        if p.w == 0.0 {
+            assert_eq!(*gpu, Vec4::ZERO, "pixel {pixel} has no surface but irradiance {gpu}");
+            continue;
+        }
+        surfaces += 1;
+        let n = n.truncate().normalize();
+        let cpu = fiv.irradiance(occluders, p.truncate(), n, options);
+        let scale = fiv.environment.difmap_lookup(n).max_element().max(1e-6);
+        assert!((gpu.truncate() - cpu).abs().max_element() <= 1e-3 * scale, "pixel {pixel}: GPU {gpu}, CPU {cpu} ({options:?})");
+    }
+    surfaces
+}
+
+#[test]
+fn occluder_sums_equal_the_cpu_formula_and_the_lighting_pass_adds_albedo_over_pi() {
+    let scene = scene();
+    let (fiv, types) = baked(&scene);
+    let occluders = occluders(&scene, &types);
+    let ctx = validated_context();
+    let options = SumOptions::default();
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let radiance = render(&mut renderer);
+    let surfaces = compare_with_cpu(&mut renderer, &fiv, &occluders, options);
+    assert!(surfaces > (SIZE * SIZE / 2) as usize, "only {surfaces} surface pixels");
+    // Nothing else lights the scene: radiance is albedo / pi * I on the ground, 0 on the balls.
+    let positions = read_vec4s(&mut renderer, "fiv.positions").unwrap();
+    let irradiance = read_vec4s(&mut renderer, "fiv.irradiance").unwrap();
+    for (pixel, (p, e)) in positions.iter().zip(&irradiance).enumerate() {
+        let albedo = if p.w == 1.0 && p.y.abs() < 1e-4 { 0.5 } else { 0.0 };
+        let expected = albedo / PI * e.truncate();
+        assert!((radiance.pixels[pixel] - expected).abs().max_element() <= 1e-5 * (1.0 + expected.max_element()), "pixel {pixel}");
+    }
+    // Every other choice of the paper's options, on the same renderer.
+    for options in [
+        SumOptions { partial: false, overlap: false, beyond: Beyond::Drop },
+        SumOptions { partial: true, overlap: false, beyond: Beyond::Scale },
+        SumOptions { partial: false, overlap: true, beyond: Beyond::Drop },
+    ] {
+        renderer.technique_mut::<Fiv>().expect("fiv").set_options(options);
+        render(&mut renderer);
+        compare_with_cpu(&mut renderer, &fiv, &occluders, options);
+    }
+    drop(renderer);
+    assert_clean(ctx);
+}
+
+#[test]
+fn moved_occluders_render_as_a_renderer_made_for_the_moved_scene() {
+    let scene = scene();
+    let (fiv, types) = baked(&scene);
+    let occluders = occluders(&scene, &types);
+    let ctx = validated_context();
+    let options = SumOptions::default();
+    let mut moving = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    render(&mut moving);
+    let offsets = [Vec3::new(0.5, 0.2, 0.0), Vec3::new(-0.3, 0.0, 0.4), Vec3::new(0.0, 0.3, 0.0)];
+    let mut moved_scene = scene.clone();
+    let mut moved_occluders = occluders.clone();
+    for (k, offset) in offsets.iter().enumerate() {
+        let mesh = types.iter().flat_map(|t| &t.meshes).nth(k).copied().unwrap();
+        moving.set_mesh_translation(mesh, *offset).expect("move the mesh");
+        moving.technique_mut::<Fiv>().unwrap().set_occluder_centre(k, occluders[k].centre + *offset).expect("move the occluder");
+        moved_scene.meshes[mesh].positions.iter_mut().for_each(|p| *p += *offset);
+        moved_occluders[k].centre = occluders[k].centre + *offset;
+    }
+    let after_moving = render(&mut moving);
+    let mut fresh = new_renderer(&ctx, &moved_scene, &settings(), &[&FivData { bake: &fiv, occluders: &moved_occluders, options }]);
+    let made_moved = render(&mut fresh);
+    assert_eq!(after_moving.pixels, made_moved.pixels);
+    assert!(refusal(moving.technique_mut::<Fiv>().unwrap().set_occluder_centre(3, Vec3::ZERO)).contains("no occluder 3"));
+    drop((moving, fresh));
+    assert_clean(ctx);
+}
+
+#[test]
+fn occluders_of_a_type_the_bake_lacks_are_refused() {
+    let scene = scene();
+    let (fiv, _) = baked(&scene);
+    let ctx = validated_context();
+    let wrong = [Occluder { table: 5, centre: Vec3::ZERO }];
+    let message =
+        refusal(try_new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &wrong, options: SumOptions::default() }]));
+    says(&message, &["fiv", "type 5", "3 tables"]);
+    assert_clean(ctx);
+}
