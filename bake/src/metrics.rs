@@ -61,6 +61,18 @@ pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageErro
     Ok(ErrorStats { rmse, nrmse: relative(rmse), non_finite_pixels, dark_pixels, dark_leak })
 }
 
+/// [`compare`] over the pixels `mask` keeps (a receiver's pixels, say), the others left out
+/// of both sums.
+pub fn compare_masked(image: &Image, reference: &Image, mask: &[bool]) -> Result<ErrorStats, ImageError> {
+    check_sizes(image, reference)?;
+    let keep = |source: &Image| Image {
+        pixels: source.pixels.iter().zip(mask).filter(|(_, keep)| **keep).map(|(p, _)| *p).collect(),
+        width: mask.iter().filter(|k| **k).count() as u32,
+        height: 1,
+    };
+    compare(&keep(image), &keep(reference))
+}
+
 /// The scale s that makes `base + s * unit` closest to `reference` in the least-squares
 /// sense (over every channel of every pixel): how much of a term a method should add to come
 /// nearest the truth. 0 when `unit` is black.

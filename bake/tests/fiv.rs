@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::fiv::{bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, SumOptions};
+use relume_bake::fiv::{bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, Radial, SumOptions};
 use relume_bake::reference::environment_irradiance;
 use relume_bake::sampling::PathSampler;
 use relume_bake::scene::Scene;
@@ -55,14 +55,6 @@ fn settings(grid: &str, distance_min: f32, distance_max: f32) -> FivBakeSettings
     FivBakeSettings { grid: Grid::parse(grid).unwrap(), distance_min, distance_max, mask_supersample: 1, difmap_width: 64 }
 }
 
-fn occluders(s: &Scene, fiv: &[relume_bake::fiv::OccluderType]) -> Vec<Occluder> {
-    fiv.iter()
-        .enumerate()
-        .flat_map(|(t, ty)| ty.meshes.iter().map(move |&m| (t, m)))
-        .map(|(table, m)| Occluder { table, centre: relume_bake::fiv::bounding_sphere(&s.meshes[m].positions).0 })
-        .collect()
-}
-
 #[test]
 fn tables_equal_the_masked_sum_at_their_samples_and_the_traced_difference_above_the_plane() {
     // One sphere of radius 1; its table on a 8 x 5 x 3 grid from 1.5 R to 6 R.
@@ -75,7 +67,8 @@ fn tables_equal_the_masked_sum_at_their_samples_and_the_traced_difference_above_
     let without = environment_irradiance(&away, &SceneBvh::new(&away), Vec3::ZERO, Vec3::Y, 1);
     for (i, j, k) in [(0, 0, 0), (3, 4, 2), (7, 1, 1), (0, 2, 2), (5, 2, 0), (7, 3, 2)] {
         let v = table.distance(k) * g.direction(i, j);
-        let looked_up = table.lookup(v, Beyond::Scale);
+        let looked_up = table.lookup(v, Beyond::Scale, Radial::InverseSquare);
+        assert_eq!(looked_up, table.lookup(v, Beyond::Scale, Radial::Linear));
         let stored = table.fiv[g.index(i, j, k)];
         for c in 0..3 {
             assert!((looked_up[c] - stored[c]).length() <= 1e-4 * stored[c].length().max(1e-3), "sample ({i}, {j}, {k})");
@@ -188,7 +181,7 @@ fn the_bake_is_the_same_at_any_thread_count_and_instances_share_a_table() {
     let (three, _) = bake(&s, &settings("6x4x3", 0.5, 8.0), &work(3)).unwrap();
     assert_eq!(one, three);
     assert_eq!(types.iter().map(|t| t.meshes.clone()).collect::<Vec<_>>(), vec![vec![1, 2], vec![3]]);
-    assert_eq!(occluders(&s, &types).len(), 3);
+    assert_eq!(relume_bake::fiv::occluders(&s, &types).len(), 3);
 }
 
 #[test]

@@ -30,6 +30,7 @@ layout(push_constant) uniform OccluderSumsPush {
     uint partial;       // 1: case B scaled by (d + R) / 2R
     uint overlap;       // 1: the pairwise overlap correction
     uint beyond_scale;  // 1: beyond distance_max the outer shell times (max / distance)^2; 0: nothing
+    uint inverse_square; // 1: shells blended as distance^2 x FIV, divided by distance^2; 0: linearly
 } pc;
 
 const float PI = 3.14159265358979;
@@ -63,7 +64,8 @@ vec3 difmap_lookup(vec3 n) {
 }
 
 // N . FIV(EnvOcc) of type t centred at offset v: trilinear over the 8 nearest samples,
-// distances in log space, clamped below; the r, g, b rows dotted with N.
+// distances in log space (each shell weighted by (its distance / distance)^2 when
+// inverse_square), clamped below; the r, g, b rows dotted with N.
 vec3 table_lookup(uint t, vec3 v, vec3 n) {
     uvec4 g = types[t].grid;
     vec4 facts = types[t].facts;
@@ -83,8 +85,13 @@ vec3 table_lookup(uint t, vec3 v, vec3 n) {
     uint j = uint(j0);
     uint k = uint(k0);
     vec3 sum = vec3(0.0);
+    float within = clamp(distance, facts.y, facts.z);
     for (uint dk = 0u; dk < 2u; ++dk) {
         float wk = dk == 0u ? 1.0 - weights.z : weights.z;
+        if (pc.inverse_square == 1u) {
+            float shell = facts.y * pow(facts.z / facts.y, float(k + dk) / steps) / within;
+            wk *= shell * shell;
+        }
         for (uint dj = 0u; dj < 2u; ++dj) {
             float wj = dj == 0u ? 1.0 - weights.y : weights.y;
             for (uint di = 0u; di < 2u; ++di) {

@@ -4,7 +4,7 @@
 //! validation and synchronization validation on.
 
 use glam::{Vec3, Vec4};
-use relume_bake::fiv::{bake, bounding_sphere, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, SumOptions};
+use relume_bake::fiv::{bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, SumOptions};
 use relume_bake::scene::Scene;
 use relume_bake::testing::{occluders_over_ground, sky};
 use relume_bake::work::WorkOptions;
@@ -30,14 +30,6 @@ fn baked(scene: &Scene) -> (FivBake, Vec<OccluderType>) {
         difmap_width: 32,
     };
     bake(scene, &settings, &WorkOptions::default()).expect("bake")
-}
-
-fn occluders(scene: &Scene, types: &[OccluderType]) -> Vec<Occluder> {
-    let mut out = Vec::new();
-    for (table, t) in types.iter().enumerate() {
-        out.extend(t.meshes.iter().map(|&m| Occluder { table, centre: bounding_sphere(&scene.meshes[m].positions).0 }));
-    }
-    out
 }
 
 fn settings() -> RenderSettings {
@@ -86,9 +78,9 @@ fn occluder_sums_equal_the_cpu_formula_and_the_lighting_pass_adds_albedo_over_pi
     }
     // Every other choice of the paper's options, on the same renderer.
     for options in [
-        SumOptions { partial: false, overlap: false, beyond: Beyond::Drop },
-        SumOptions { partial: true, overlap: false, beyond: Beyond::Scale },
-        SumOptions { partial: false, overlap: true, beyond: Beyond::Drop },
+        SumOptions { partial: false, overlap: false, beyond: Beyond::Drop, radial: Radial::Linear },
+        SumOptions { partial: true, overlap: false, beyond: Beyond::Scale, radial: Radial::Linear },
+        SumOptions { partial: false, overlap: true, beyond: Beyond::Drop, radial: Radial::InverseSquare },
     ] {
         renderer.technique_mut::<Fiv>().expect("fiv").set_options(options);
         render(&mut renderer);

@@ -45,7 +45,7 @@ pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
         }
     };
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Render))?;
-    let loaded = method.load(artifact.as_ref(), &scene, &values)?;
+    let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
     let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
     let (renders, device) = render_on_gpu(&[GpuJob { loaded: loaded.as_ref(), settings, frames }], &args.gpu)?;
     write_render_outputs(&args.out, &renders[0])?;

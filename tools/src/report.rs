@@ -65,7 +65,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
             }
             false => None,
         };
-        let loaded = method.load(artifact.as_ref(), &scene, &values)?;
+        let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
         let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
         models.push(Model { method, loaded, settings });
     }

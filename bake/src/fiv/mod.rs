@@ -100,6 +100,13 @@ pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<
     Ok(types)
 }
 
+/// Every occluder of the scene where the scene has it: type by type, each type's meshes in
+/// order (the order the technique takes them and moves them by).
+pub fn occluders(scene: &Scene, types: &[OccluderType]) -> Vec<Occluder> {
+    let instances = types.iter().enumerate().flat_map(|(table, t)| t.meshes.iter().map(move |&m| (table, m)));
+    instances.map(|(table, m)| Occluder { table, centre: bounding_sphere(&scene.meshes[m].positions).0 }).collect()
+}
+
 /// Whether two meshes have the same triangles and the same positions about their centres.
 fn same_shape(a: &Mesh, b: &Mesh) -> bool {
     let ((ca, ra), (cb, _)) = (bounding_sphere(&a.positions), bounding_sphere(&b.positions));

@@ -14,7 +14,18 @@ pub enum Beyond {
     Drop,
 }
 
-/// The run-time choices the paper leaves open or offers (spec fiv.md B6-B8).
+/// How a table is interpolated between its distance shells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Radial {
+    /// Linearly in log distance: the paper's trilinear lookup (003 §5).
+    Linear,
+    /// distance^2 x FIV linearly, then divided by distance^2: a far occluder's FIV falls as
+    /// its solid angle, 1 / distance^2, which a linear blend of two shells overestimates
+    /// between them (docs/BENCHMARKS.md "FIV" measures both).
+    InverseSquare,
+}
+
+/// The run-time choices the paper leaves open or offers (spec fiv.md B4, B6-B8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SumOptions {
     /// Case B scaled by (d + R) / 2R (the paper's partial correction); off, case B counts whole.
@@ -22,11 +33,12 @@ pub struct SumOptions {
     /// The pairwise overlap correction of eq. (13)-(14).
     pub overlap: bool,
     pub beyond: Beyond,
+    pub radial: Radial,
 }
 
 impl Default for SumOptions {
     fn default() -> Self {
-        SumOptions { partial: true, overlap: true, beyond: Beyond::Scale }
+        SumOptions { partial: true, overlap: true, beyond: Beyond::Scale, radial: Radial::InverseSquare }
     }
 }
 
@@ -56,8 +68,9 @@ impl EnvironmentTerms {
 
 impl OccluderTable {
     /// FIV(EnvOcc) of the type with its centre at offset `v` from the receiver: trilinear over
-    /// the 8 nearest samples (003 §5), distances interpolated in log space and clamped below.
-    pub fn lookup(&self, v: Vec3, beyond: Beyond) -> [Vec3; 3] {
+    /// the 8 nearest samples (003 §5), distances in log space (weighted by `radial`) and
+    /// clamped below.
+    pub fn lookup(&self, v: Vec3, beyond: Beyond, radial: Radial) -> [Vec3; 3] {
         let g = self.grid;
         let distance = v.length().max(1e-20);
         let d = v / distance;
@@ -71,7 +84,12 @@ impl OccluderTable {
         let (i0, j0, k0) = (i0 as u32 % g.azimuths, j0 as u32, k0 as u32);
         let i1 = (i0 + 1) % g.azimuths;
         let mut out = [Vec3::ZERO; 3];
-        for (k, wk) in [(k0, 1.0 - tk), (k0 + 1, tk)] {
+        let within = distance.clamp(self.distance_min, self.distance_max);
+        let shell = |k: u32| match radial {
+            Radial::Linear => 1.0,
+            Radial::InverseSquare => (self.distance(k) / within).powi(2),
+        };
+        for (k, wk) in [(k0, (1.0 - tk) * shell(k0)), (k0 + 1, tk * shell(k0 + 1))] {
             for (j, wj) in [(j0, 1.0 - tj), (j0 + 1, tj)] {
                 for (i, wi) in [(i0, 1.0 - ti), (i1, ti)] {
                     let sample = &self.fiv[g.index(i, j, k)];
@@ -125,7 +143,7 @@ impl FivBake {
             if d <= -table.radius {
                 continue;
             }
-            let fiv = table.lookup(v, options.beyond);
+            let fiv = table.lookup(v, options.beyond, options.radial);
             let factor = if options.partial && d < table.radius { (d + table.radius) / (2.0 * table.radius) } else { 1.0 };
             let share = Vec3::new(n.dot(fiv[0]), n.dot(fiv[1]), n.dot(fiv[2])).max(Vec3::ZERO) * factor;
             occluded += share;

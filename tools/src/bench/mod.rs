@@ -255,7 +255,7 @@ impl<'s> SceneBench<'s> {
             }
             false => (BakeCost::default(), None),
         };
-        let loaded = method.load(artifact.as_ref(), &self.scene, &config.values)?;
+        let loaded = methods::load(method, artifact.as_ref(), &self.scene, &config.values)?;
         let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ..RenderSettings::default() };
         let settings = config.frame.settings(method, &self.scene, base);
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;

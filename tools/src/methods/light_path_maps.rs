@@ -204,7 +204,7 @@ impl Method for LightPathMaps {
     /// A scene that declares where its lights move: without a region the light path maps
     /// serve only the lights where they stand.
     fn suits(&self, scene: &Scene) -> bool {
-        LightPathMapsSceneSettings::of(scene).is_ok_and(|s| s.region.is_some())
+        scene.environment.is_none() && LightPathMapsSceneSettings::of(scene).is_ok_and(|s| s.region.is_some())
     }
 
     /// 000 §3.2.3's sizes: C = 32 clusters, D = 2 eigen-textures.

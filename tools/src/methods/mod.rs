@@ -5,6 +5,7 @@
 mod atlas;
 mod constant;
 mod direct;
+mod fiv;
 mod light_path_maps;
 mod obscurance;
 pub(crate) mod params;
@@ -20,8 +21,8 @@ use serde_json::{json, Value};
 use std::time::Instant;
 
 /// Every method, in the order reports list them.
-pub(crate) const METHODS: [&dyn Method; 4] =
-    [&direct::Direct, &constant::Constant, &obscurance::Obscurance, &light_path_maps::LightPathMaps];
+pub(crate) const METHODS: [&dyn Method; 5] =
+    [&direct::Direct, &constant::Constant, &obscurance::Obscurance, &light_path_maps::LightPathMaps, &fiv::Fiv];
 
 /// What `relume render` renders without a bake.
 pub(crate) const WITHOUT_BAKE: &dyn Method = &constant::Constant;
@@ -42,10 +43,18 @@ pub(crate) trait Method: Sync {
         false
     }
 
+    /// Whether it renders a distant environment's light (`extras.relume.environment`); a
+    /// method that does not is refused on a scene that declares one (its image would lack
+    /// that light).
+    fn lights_environment(&self) -> bool {
+        false
+    }
+
     /// Whether the main job runs it on `scene`: a method that needs what the scene does not
-    /// declare is left out (relume models no more than a scene needs).
-    fn suits(&self, _scene: &Scene) -> bool {
-        true
+    /// declare, or misses light the scene has, is left out (relume models no more than a
+    /// scene needs).
+    fn suits(&self, scene: &Scene) -> bool {
+        scene.environment.is_none()
     }
 
     /// Parameter values the main job gives it instead of the defaults.
@@ -168,6 +177,21 @@ pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
     })
 }
 
+/// What `method` renders from: its bake `artifact` read for `scene` with the run-time
+/// `values`; refused when the scene holds light the method does not render.
+pub(crate) fn load(method: &dyn Method, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
+    if scene.environment.is_some() && !method.lights_environment() {
+        let lit_by: Vec<&str> = METHODS.iter().filter(|m| m.lights_environment()).map(|m| m.name()).collect();
+        anyhow::bail!(
+            "{}: the scene is lit by an environment (extras.relume.environment), which {} does not render; use {} (or `relume reference`)",
+            scene.source.display(),
+            method.name(),
+            lit_by.join(", ")
+        );
+    }
+    method.load(artifact, scene, values)
+}
+
 /// The methods that take the parameter `name`.
 pub(crate) fn takers(name: &str) -> Vec<&'static str> {
     METHODS.iter().filter(|m| m.params().iter().any(|p| p.name == name)).map(|m| m.name()).collect()
@@ -185,7 +209,7 @@ mod tests {
     use relume_bake::testing::{closed_box, look_at, scene, Facing};
 
     #[test]
-    fn a_given_ambient_light_reaches_every_method_that_models_one_and_never_direct() {
+    fn a_given_ambient_light_reaches_every_method_that_models_one_and_never_direct_or_fiv() {
         let mut room = scene(
             "room",
             vec![closed_box(Vec3::ZERO, Vec3::ONE, 1, Facing::Inward, 0)],
@@ -199,7 +223,8 @@ mod tests {
             let (ambient, beta) = frame_ambient(method.ambient(&room), given.0, given.1);
             let (default_ambient, _) = frame_ambient(method.ambient(&room), None, None);
             match method.name() {
-                "direct" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
+                // Models no ambient light: direct light alone, or the environment's.
+                "direct" | "fiv" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
                 "constant" | "obscurance" => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::splat(0.25))),
                 _ => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::ZERO)),
             }

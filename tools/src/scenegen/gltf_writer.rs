@@ -23,6 +23,11 @@ pub(super) fn quat_json(q: DQuat) -> Value {
 
 pub(super) struct Builder {
     settings: Settings,
+    /// `extras.relume.environment`: the lat-long image (relative to the glTF file) and its
+    /// intensity, if the scene is lit by one.
+    environment: Option<(String, f64)>,
+    /// `extras.relume.fiv.occluders`: the nodes that occlude.
+    occluders: Vec<String>,
     bin: Vec<u8>,
     buffer_views: Vec<Value>,
     accessors: Vec<Value>,
@@ -43,6 +48,8 @@ impl Builder {
     pub(super) fn new(settings: Settings) -> Self {
         Builder {
             settings,
+            environment: None,
+            occluders: Vec::new(),
             bin: Vec::new(),
             buffer_views: Vec::new(),
             accessors: Vec::new(),
@@ -133,6 +140,17 @@ impl Builder {
         self.meshes.len() - 1
     }
 
+    /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.
+    pub(super) fn environment(&mut self, image: &str, intensity: f64) {
+        self.environment = Some((image.to_string(), intensity));
+    }
+
+    /// A mesh node that is one of FIV's occluders.
+    pub(super) fn occluder_node(&mut self, name: &str, mesh: usize, translation: DVec3, scale: DVec3) {
+        self.mesh_node(name, mesh, translation, scale);
+        self.occluders.push(name.to_string());
+    }
+
     pub(super) fn mesh_node(&mut self, name: &str, mesh: usize, translation: DVec3, scale: DVec3) {
         let mut node = json!({ "name": name, "mesh": mesh });
         if translation != DVec3::ZERO {
@@ -200,7 +218,7 @@ impl Builder {
             "scenes": [{
                 "name": name,
                 "nodes": (0..self.nodes.len()).collect::<Vec<_>>(),
-                "extras": { "relume": settings_json(&self.settings) },
+                "extras": { "relume": self.settings_json() },
             }],
             "nodes": self.nodes,
             "meshes": self.meshes,
@@ -214,6 +232,20 @@ impl Builder {
         let mut text = serde_json::to_string_pretty(&root).unwrap_or_default();
         text.push('\n');
         (text, self.bin)
+    }
+}
+
+impl Builder {
+    /// The settings, the environment and the occluders as `extras.relume`.
+    fn settings_json(&self) -> Value {
+        let mut block = settings_json(&self.settings);
+        if let Some((image, intensity)) = &self.environment {
+            block["environment"] = json!({ "image": image, "intensity": num(*intensity) });
+        }
+        if !self.occluders.is_empty() {
+            block["fiv"] = json!({ "occluders": self.occluders });
+        }
+        block
     }
 }
 

@@ -15,6 +15,9 @@
 //! - `classroom`: a classroom with sixteen desk and chair pairs, about the size (1,244
 //!   triangles) of that paper's Table 2 scene: many repeated occluders, so bake cost and
 //!   obscurance range show at scale.
+//! - `fiv-blobs`: two lumpy blobs and a box over a ground plane, lit only by a sky with a
+//!   small sun (`envs/sky.exr`): a stand-in for the fullsphere-irradiance paper's Fig. 12,
+//!   the blobs and the box its occluders.
 //! - `cornell-wall-light`: the `cornell` geometry with its spot light 5 cm from the red wall,
 //!   pointing at it: that paper's Fig. 9 failure case. Nearly all light reaches the room
 //!   only after a bounce off the wall, while the method's indirect term (a share beta of
@@ -38,14 +41,37 @@ mod settings;
 mod tests;
 
 use anyhow::Context;
-use scenes::{classroom, cornell, cornell_wall_light, occluder_plane, occluder_stacked, table_chair};
+use glam::Vec3;
+use relume_bake::environment::lat_long_image;
+use relume_bake::image::{write_exr_layers, Image};
+use relume_bake::testing::{sky, two_area_lights};
+use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, occluder_plane, occluder_stacked, table_chair};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 6] = ["cornell", "occluder-plane", "occluder-stacked", "table-chair", "classroom", "cornell-wall-light"];
+pub const SCENE_NAMES: [&str; 7] =
+    ["cornell", "occluder-plane", "occluder-stacked", "table-chair", "classroom", "cornell-wall-light", "fiv-blobs"];
 
-/// Writes every generated scene into `out_dir` (created if missing) and returns the files
-/// written, `.gltf` then `.bin` for each scene.
+/// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
+/// `sky` (a blue-to-white gradient over a dim ground with a sun 2 degrees in radius and
+/// radiance 400, 50 degrees up: on open ground about a third of the light), `two-area-lights` (003 Fig. 14's red and green lights) and
+/// `uniform` (radiance 1 everywhere: the furnace).
+pub const ENVIRONMENT_NAMES: [&str; 3] = ["sky", "two-area-lights", "uniform"];
+
+/// The image of a named environment.
+fn environment(name: &str) -> Option<Image> {
+    let image = match name {
+        "sky" => lat_long_image(256, sky(Vec3::new(0.45, 0.77, 0.45), Vec3::splat(400.0), 2.0)),
+        "two-area-lights" => lat_long_image(256, two_area_lights(5.0)),
+        "uniform" => lat_long_image(256, |_| Vec3::ONE),
+        _ => return None,
+    };
+    Some(image)
+}
+
+/// Writes every generated scene into `out_dir` (created if missing) and the environments
+/// they use into `out_dir/envs`, and returns the files written: `.gltf` then `.bin` for
+/// each scene, then each environment's `.exr`.
 pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(out_dir).with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
     let mut written = Vec::new();
@@ -56,6 +82,14 @@ pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             std::fs::write(&path, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
             written.push(path);
         }
+    }
+    let envs = out_dir.join("envs");
+    std::fs::create_dir_all(&envs).with_context(|| format!("{}: cannot create the folder", envs.display()))?;
+    for name in ENVIRONMENT_NAMES {
+        let image = environment(name).with_context(|| format!("no generator for environment {name}"))?;
+        let path = envs.join(format!("{name}.exr"));
+        write_exr_layers(&path, &[("rgb", &image)])?;
+        written.push(path);
     }
     Ok(written)
 }
@@ -69,6 +103,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "table-chair" => table_chair(),
         "classroom" => classroom(),
         "cornell-wall-light" => cornell_wall_light(),
+        "fiv-blobs" => fiv_blobs(),
         _ => return None,
     };
     Some(builder.finish(name))

@@ -359,3 +359,22 @@ pub(super) fn teacher_desk(at: DVec3) -> Vec<Part> {
     ));
     parts
 }
+
+/// A stand-in for 003's Fig. 12 scene (the bunny over a plane under the Eucalyptus Grove
+/// probe): two instances of one lumpy blob (radius 0.4 m, 1,280 triangles; one type, one
+/// table) and a box over the occluder scenes' 4 x 4 m ground, lit only by `envs/sky.exr`
+/// (a sky with a small sun, [`super::environments`]). The blobs and the box are FIV's
+/// occluders; the ground is the receiver whose shadows the paper measures.
+pub(super) fn fiv_blobs() -> Builder {
+    let mut b = Builder::new(OCCLUDER_SETTINGS);
+    ground(&mut b);
+    let grey = b.material("occluder", [0.5, 0.5, 0.5]);
+    let blob_mesh = b.mesh("Blob", &blob(0.4, 3), grey);
+    b.occluder_node("Blob", blob_mesh, DVec3::new(-0.5, 0.7, 0.2), DVec3::ONE);
+    b.occluder_node("Blob.001", blob_mesh, DVec3::new(0.6, 0.55, -0.5), DVec3::ONE);
+    let cube = b.mesh("Cube", &unit_cube(), grey);
+    b.occluder_node("Box", cube, DVec3::new(0.5, 0.2, 0.8), DVec3::splat(0.4));
+    b.environment("envs/sky.exr", 1.0);
+    b.camera("Camera", DVec3::new(0.0, 2.8, 3.6), DVec3::new(0.0, 0.2, 0.0), 45f64.to_radians(), None, 0.1, 20.0);
+    b
+}

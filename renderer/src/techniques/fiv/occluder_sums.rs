@@ -14,7 +14,7 @@ use crate::passes::compute::{ComputePass, Slot};
 use crate::shaders;
 use crate::technique::Shared;
 use crate::vk::{Access, CommandRecorder, Image, Tracker, VkResult};
-use relume_bake::fiv::{Beyond, SumOptions};
+use relume_bake::fiv::{Beyond, Radial, SumOptions};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -24,6 +24,7 @@ pub(super) struct OccluderSumsPush {
     partial: u32,
     overlap: u32,
     beyond_scale: u32,
+    inverse_square: u32,
 }
 
 impl OccluderSumsPush {
@@ -34,6 +35,7 @@ impl OccluderSumsPush {
             partial: options.partial as u32,
             overlap: options.overlap as u32,
             beyond_scale: (options.beyond == Beyond::Scale) as u32,
+            inverse_square: (options.radial == Radial::InverseSquare) as u32,
         }
     }
 }
