@@ -110,7 +110,7 @@ fn case_a_matches_the_closed_form_of_a_sphere_under_uniform_light() {
         for beta in [0.0f32, 30.0, 60.0] {
             let (b, d) = (beta.to_radians(), ratio * r);
             let centre = d * Vec3::new(b.sin(), b.cos(), 0.0);
-            let i = fiv.irradiance(&[Occluder { table: 0, centre }], Vec3::ZERO, Vec3::Y, SumOptions::default()).x;
+            let i = fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], Vec3::ZERO, Vec3::Y, SumOptions::default()).x;
             let exact = PI * (1.0 - (r / d).powi(2) * b.cos());
             assert!((i - exact).abs() < 0.01 * PI, "D/r = {ratio}, beta = {beta}: {i} against {exact}");
         }
@@ -131,7 +131,7 @@ fn case_c_takes_nothing_and_case_b_is_bounded_and_continuous() {
     let total = fiv.environment.difmap_lookup(n);
     let at = |d: f32| {
         let centre = d * n + 1.5 * r * n.cross(Vec3::X).normalize();
-        fiv.irradiance(&[Occluder { table: 0, centre }], Vec3::ZERO, n, SumOptions::default())
+        fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], Vec3::ZERO, n, SumOptions::default())
     };
     assert_eq!(at(-r), total);
     assert_eq!(at(-3.0 * r), total);
@@ -151,7 +151,7 @@ fn case_c_takes_nothing_and_case_b_is_bounded_and_continuous() {
 fn overlap_of_coincident_disjoint_and_nested_occluders() {
     let (fiv, r) = one_ball_bake();
     let sum = |centres: &[Vec3]| {
-        let occluders: Vec<Occluder> = centres.iter().map(|&centre| Occluder { table: 0, centre }).collect();
+        let occluders: Vec<Occluder> = centres.iter().map(|&centre| Occluder { table: 0, mesh: 1, centre }).collect();
         fiv.irradiance(&occluders, Vec3::ZERO, Vec3::Y, SumOptions::default())
     };
     let one = sum(&[Vec3::new(0.5, 3.0 * r, 0.0)]);

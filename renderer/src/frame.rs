@@ -251,11 +251,14 @@ impl Renderer {
 
     /// Moves mesh `mesh` (an index into the scene's meshes) by `translation` from where the
     /// scene had it, for the frames recorded from now on, without allocating; the shadow
-    /// maps refit to the moved scene at the next [`Renderer::set_lights`]. Baked data stays
-    /// as baked: that is what a moving-occluder sweep measures. The vertex buffer is written
-    /// at once, so no frame this renderer recorded may be in flight.
+    /// maps refit to the moved scene at the next [`Renderer::set_lights`], and every technique
+    /// hears of it (`Technique::mesh_translated`: one that models moving geometry follows).
+    /// Baked data stays as baked: that is what a moving-occluder sweep measures. The vertex
+    /// buffer is written at once, so no frame this renderer recorded may be in flight.
     pub fn set_mesh_translation(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
-        self.scene.translate_mesh(mesh, translation)
+        self.scene.translate_mesh(mesh, translation)?;
+        self.techniques.iter_mut().for_each(|t| t.mesh_translated(mesh, translation));
+        Ok(())
     }
 
     pub fn set_camera(&mut self, camera: Camera) {

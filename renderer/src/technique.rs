@@ -7,6 +7,7 @@
 use crate::gpu_scene::GpuScene;
 use crate::vk::{Buffer, CommandRecorder, Context, Image, Tracker, VkResult};
 use crate::RenderSettings;
+use glam::Vec3;
 use relume_bake::scene::Scene;
 use std::any::Any;
 use std::sync::Arc;
@@ -85,6 +86,11 @@ pub trait Technique: Any + Send {
     fn creation_timings(&self) -> Vec<(&'static str, f64)> {
         Vec::new()
     }
+
+    /// The scene's mesh `mesh` now stands `translation` from where the scene had it (see
+    /// `Renderer::set_mesh_translation`), for the frames recorded from now on; a technique
+    /// that follows moving geometry updates its own data here, without allocating.
+    fn mesh_translated(&mut self, _mesh: usize, _translation: Vec3) {}
 }
 
 /// A technique's data, ready to become a technique on the device.

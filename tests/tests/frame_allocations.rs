@@ -1,11 +1,15 @@
 //! The frame loop allocates nothing: a counting allocator watches the thread that renders
 //! while frames are rendered, lights are moved, the ambient term (and the composition of the
-//! light path maps) changes and timings are read, without obscurance, with it, and with
-//! light path maps. (Its own test binary, so no other test shares the allocator.)
+//! light path maps) changes, occluders move and timings are read, without obscurance, with
+//! it, with light path maps, and with FIV. (Its own test binary, so no other test shares the allocator.)
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
+use relume_bake::fiv::{self, FivBakeSettings, Grid, SumOptions};
 use relume_bake::scene::Scene;
+use relume_bake::testing;
+use relume_bake::work::WorkOptions;
+use relume_renderer::techniques::fiv::FivData;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{Headless, RenderSettings};
@@ -55,15 +59,17 @@ fn frame_allocations(renderer: &mut Headless, scene: &Scene, ambient: bool) -> u
     })
 }
 
-/// Heap allocations made by 10 frames that move the first light and call `change` (with the
-/// frame number) every frame, after one warm-up frame.
+/// Heap allocations made by 10 frames that move the first light (if there is one) and call
+/// `change` (with the frame number) every frame, after one warm-up frame.
 fn frame_allocations_with(renderer: &mut Headless, scene: &Scene, change: impl Fn(&mut Headless, usize)) -> usize {
     renderer.render().expect("warm-up frame");
     let mut lights = scene.lights.clone();
     let before = allocations();
     for frame in 0..10 {
-        lights[0].position += Vec3::new(0.001 * frame as f32, 0.0, 0.0);
-        renderer.set_lights(&lights).expect("same kinds");
+        if let Some(light) = lights.first_mut() {
+            light.position += Vec3::new(0.001 * frame as f32, 0.0, 0.0);
+            renderer.set_lights(&lights).expect("same kinds");
+        }
         change(renderer, frame);
         let timings = renderer.render().expect("frame");
         assert!(timings.passes().iter().all(|(_, ms)| ms.is_finite()));
@@ -131,4 +137,31 @@ fn frames_with_light_path_maps_allocate_nothing() {
     drop(renderer);
     assert_clean(ctx);
     assert_eq!(during, 0, "10 frames made {during} heap allocations");
+}
+
+#[test]
+fn frames_with_fiv_and_moving_occluders_allocate_nothing() {
+    let scene = testing::occluders_over_ground(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.5), (Vec3::new(0.8, 0.7, 0.0), 0.3)],
+        |d| Vec3::splat(d.y.max(0.1)),
+        8,
+    );
+    let settings_fiv = FivBakeSettings {
+        grid: Grid::parse("8x5x3").unwrap(),
+        distance_min: 0.5,
+        distance_max: 8.0,
+        mask_supersample: 1,
+        difmap_width: 16,
+    };
+    let (baked, types) = fiv::bake(&scene, &settings_fiv, &WorkOptions::default()).expect("bake");
+    let data = FivData { bake: &baked, occluders: &fiv::occluders(&scene, &types), options: SumOptions::default() };
+    let ctx = validated_context();
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
+    let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
+        renderer.set_mesh_translation(1, Vec3::new(0.02 * frame as f32, 0.0, 0.0)).expect("an occluder of the scene");
+        renderer.set_mesh_translation(2, Vec3::new(0.0, 0.01 * frame as f32, 0.0)).expect("an occluder of the scene");
+    });
+    drop(renderer);
+    assert_clean(ctx);
+    assert_eq!(during, 0, "10 frames with moving occluders made {during} heap allocations");
 }

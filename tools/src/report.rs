@@ -108,6 +108,9 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
 struct Score {
     method: String,
     combined: metrics::ErrorStats,
+    /// The image against the reference's direct layer: the score of a method that models
+    /// direct light alone (`direct`, an environment's `fiv`).
+    direct: metrics::ErrorStats,
     /// The method's indirect part (its image minus the direct-only image) against the
     /// reference's indirect layer.
     indirect: metrics::ErrorStats,
@@ -129,6 +132,7 @@ fn score(method: &str, render: &GpuRender, direct: &GpuRender, reference: &Refer
     Ok(Score {
         method: method.to_string(),
         combined: metrics::compare(&render.radiance, &refs.combined)?,
+        direct: metrics::compare(&render.radiance, &refs.direct)?,
         indirect: metrics::compare(&indirect, &refs.indirect)?,
         best_scale,
         best_indirect_nrmse: metrics::compare(&best_indirect, &refs.indirect)?.nrmse,
@@ -159,14 +163,17 @@ fn report_text(
     let errors: String = names.iter().map(|m| format!(" ![](error_{m}.png) |")).collect();
     let _ = writeln!(r, "|{errors} false-colour error against the reference |\n");
     let _ = writeln!(r, "## Error against the reference (NRMSE = RMSE / RMS of the reference, all channels)\n");
-    let _ = writeln!(r, "The indirect part of a method is its image minus the direct-only image. The best factor scales that part to fit the reference's indirect layer in the least-squares sense.\n");
-    let _ = writeln!(r, "| method | image vs combined | indirect part vs reference indirect | best factor | indirect at best factor | image at best factor |");
-    let _ = writeln!(r, "|---|---|---|---|---|---|");
+    let _ = writeln!(r, "A method that models direct light alone is scored against the reference's direct layer (emission and one bounce). The indirect part of a method is its image minus the direct-only image (punctual lights with shadow maps). The best factor scales that part to fit the reference's indirect layer in the least-squares sense.\n");
+    let _ = writeln!(
+        r,
+        "| method | image vs combined | image vs direct | indirect part vs reference indirect | best factor | indirect at best factor | image at best factor |"
+    );
+    let _ = writeln!(r, "|---|---|---|---|---|---|---|");
     for row in rows {
         let _ = writeln!(
             r,
-            "| {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
-            row.method, row.combined.nrmse, row.indirect.nrmse, row.best_scale, row.best_indirect_nrmse, row.best_nrmse
+            "| {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            row.method, row.combined.nrmse, row.direct.nrmse, row.indirect.nrmse, row.best_scale, row.best_indirect_nrmse, row.best_nrmse
         );
     }
     let _ = writeln!(r, "\n## Bakes\n\n```\n{bake_summary}```");

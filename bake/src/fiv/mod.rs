@@ -104,7 +104,7 @@ pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<
 /// order (the order the technique takes them and moves them by).
 pub fn occluders(scene: &Scene, types: &[OccluderType]) -> Vec<Occluder> {
     let instances = types.iter().enumerate().flat_map(|(table, t)| t.meshes.iter().map(move |&m| (table, m)));
-    instances.map(|(table, m)| Occluder { table, centre: bounding_sphere(&scene.meshes[m].positions).0 }).collect()
+    instances.map(|(table, mesh)| Occluder { table, mesh, centre: bounding_sphere(&scene.meshes[mesh].positions).0 }).collect()
 }
 
 /// Whether two meshes have the same triangles and the same positions about their centres.

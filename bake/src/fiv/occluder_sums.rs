@@ -42,10 +42,12 @@ impl Default for SumOptions {
     }
 }
 
-/// An occluder at run time: its type's table and where its bounding-sphere centre is.
+/// An occluder at run time: its type's table, the scene mesh it is, and where its
+/// bounding-sphere centre is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Occluder {
     pub table: usize,
+    pub mesh: usize,
     pub centre: Vec3,
 }
 

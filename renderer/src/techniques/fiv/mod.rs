@@ -12,7 +12,8 @@
 //!
 //! Written every frame, in order:
 //! - `occluders` (per occluder { vec4 centre, uvec4 type }), from the technique's array,
-//!   which [`Fiv::set_occluder_centre`] changes without allocating;
+//!   which follows `Renderer::set_mesh_translation` of the occluders' meshes without
+//!   allocating;
 //! 1. `surfaces` (surfaces.rs): `positions` and `normals` per pixel;
 //! 2. `occluder_sums` (occluder_sums.rs): `irradiance`, rgb lux per pixel.
 //!
@@ -68,25 +69,13 @@ pub struct Fiv {
     occluder_sums: OccluderSumsPass,
     irradiance: Image,
     occluders: Vec<GpuOccluder>,
+    /// Each occluder's mesh and centre as the scene had it, which mesh translations move.
+    placed: Vec<Occluder>,
     options: SumOptions,
     difmap_width: u32,
 }
 
 impl Fiv {
-    /// Moves occluder `occluder` (an index into the occluders it was made with) so that its
-    /// bounding-sphere centre is `centre`, for the frames recorded from now on, without
-    /// allocating. Its mesh in the scene is the caller's to move (`Renderer::set_mesh_translation`).
-    pub fn set_occluder_centre(&mut self, occluder: usize, centre: Vec3) -> VkResult<()> {
-        let count = self.occluders.len();
-        let slot =
-            self.occluders.get_mut(occluder).ok_or_else(|| VkError::Invalid(format!("fiv: no occluder {occluder} (it has {count})")))?;
-        if !centre.is_finite() {
-            return Err(VkError::Invalid(format!("fiv: occluder {occluder} moved to {centre}, not a finite point")));
-        }
-        slot.centre = centre.extend(1.0);
-        Ok(())
-    }
-
     /// Changes the run-time choices for the frames recorded from now on.
     pub fn set_options(&mut self, options: SumOptions) {
         self.options = options;
@@ -119,6 +108,15 @@ impl Technique for Fiv {
 
     fn term(&self) -> Option<Term<'_>> {
         Some(Term::Irradiance { source: Source::Pixel(&self.irradiance), times_occlusion: false, occluded_direct: false })
+    }
+
+    /// The occluders that are this mesh move with it (they translate only: 003 §6).
+    fn mesh_translated(&mut self, mesh: usize, translation: Vec3) {
+        for (gpu, placed) in self.occluders.iter_mut().zip(&self.placed) {
+            if placed.mesh == mesh {
+                gpu.centre = (placed.centre + translation).extend(1.0);
+            }
+        }
     }
 
     /// `positions` (xyz world, alpha 1 on a surface), `normals` (unnormalised) and
@@ -199,6 +197,7 @@ impl MakeTechnique for FivData<'_> {
             occluder_sums,
             irradiance,
             occluders,
+            placed: self.occluders.to_vec(),
             options: self.options,
             difmap_width: self.bake.environment.difmap_width,
         }))
