@@ -91,7 +91,14 @@ pub struct Environment {
     cdf: Vec<f64>,
     /// Selection probability per texel (the differences of `cdf`).
     select: Vec<f32>,
+    /// Texels of the image a hair below zero (within [`NEGATIVE_TOLERANCE`]), read as 0.
+    pub clamped_texels: usize,
 }
+
+/// How far below zero a texel may be, relative to the image's mean radiance, and still be
+/// read (as 0) rather than refused: lossy compression's ringing, not negative light (every
+/// probe of Debian's blender-data loads within it).
+pub const NEGATIVE_TOLERANCE: f64 = 0.02;
 
 /// The direction through point (a, b) in [-1, 1]^2 of cube face `face` (not normalised):
 /// the inverse of Vulkan's face table (sc, tc, ma).
@@ -155,13 +162,20 @@ impl Environment {
         if image.width != 2 * image.height || image.height == 0 {
             return Err(bad(format!("is {}x{}, not a lat-long image (width must be twice the height)", image.width, image.height)));
         }
-        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
+        // Lossily compressed probes ring a little below zero next to bright texels (down to
+        // -0.0018 in Blender's studio lights); those read as 0 and are counted, anything more
+        // negative is refused.
+        let finite_mean =
+            image.pixels.iter().filter(|p| p.is_finite()).map(|p| p.max_element().max(0.0) as f64).sum::<f64>() / image.pixels.len() as f64;
+        let tolerance = -(NEGATIVE_TOLERANCE * finite_mean) as f32;
+        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < tolerance) {
             let (x, y) = (i as u32 % image.width, i as u32 / image.width);
             return Err(bad(format!("texel ({x}, {y}) is {} (radiance must be finite and >= 0)", image.pixels[i])));
         }
+        let clamped_texels = image.pixels.iter().filter(|p| p.min_element() < 0.0).count();
         let n = settings.cube_face;
         let turn = Mat3::from_rotation_y(-settings.rotation_y_degrees.to_radians());
-        let lookup = |d: Vec3| lat_long_texel(image, turn * d) * settings.intensity;
+        let lookup = |d: Vec3| lat_long_texel(image, turn * d).max(Vec3::ZERO) * settings.intensity;
         // Enough sub-samples per texel to visit every lat-long texel it covers (8 x 8 at least).
         let sub = (image.width / (4 * n)).max(8);
         let texels = 6 * (n * n) as usize;
@@ -185,7 +199,7 @@ impl Environment {
             }
             radiance.push(sum / weights);
         }
-        Ok(Environment::new(source.to_path_buf(), n, radiance, direction, solid_angle))
+        Ok(Environment { clamped_texels, ..Environment::new(source.to_path_buf(), n, radiance, direction, solid_angle) })
     }
 
     fn new(source: PathBuf, face: u32, radiance: Vec<Vec3>, direction: Vec<Vec3>, solid_angle: Vec<f32>) -> Environment {
@@ -206,7 +220,7 @@ impl Environment {
                 *s = (cdf[i] - if i == 0 { 0.0 } else { cdf[i - 1] }) as f32;
             }
         }
-        Environment { source, face, radiance, direction, solid_angle, cdf, select }
+        Environment { source, face, radiance, direction, solid_angle, cdf, select, clamped_texels: 0 }
     }
 
     /// Whether any texel is lit (a black environment lights nothing and is never sampled).

@@ -2,9 +2,10 @@
 //! an image size), the frame's settings (shadow maps, the ambient light, the device), and the
 //! reference path tracer's settings.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::Vec3;
+use relume_bake::environment::{Environment, EnvironmentSettings};
 use relume_bake::gltf_load::{load_with_camera, CameraOverride};
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::Scene;
@@ -24,6 +25,10 @@ pub(crate) struct SceneArgs {
     pub width: u32,
     #[arg(long, default_value_t = 512)]
     pub height: u32,
+    /// Light the scene by this lat-long EXR instead of the one its extras.relume.environment
+    /// names (the scene must declare one; its intensity, rotation and cube face stay).
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -111,7 +116,30 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
         bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
-    load(&args.scene, camera.as_ref())
+    let mut scene = load(&args.scene, camera.as_ref())?;
+    if let Some(image) = &args.environment {
+        scene.environment = Some(replaced_environment(&scene, image)?);
+    }
+    Ok(scene)
+}
+
+/// The scene's environment read from `image` instead of its own file.
+fn replaced_environment(scene: &Scene, image: &Path) -> Result<Environment> {
+    let Some(declared) = &scene.settings.environment else {
+        bail!(
+            "--environment {}: {} declares no environment to replace (extras.relume.environment)",
+            image.display(),
+            scene.source.display()
+        );
+    };
+    let image = std::path::absolute(image).with_context(|| format!("--environment {}: not a usable path", image.display()))?;
+    let settings = EnvironmentSettings { image: image.clone(), ..declared.clone() };
+    let environment = Environment::load(&settings, &scene.source)
+        .map_err(|e| anyhow::anyhow!("--environment: {e}; give a lat-long RGB EXR of finite radiance >= 0"))?;
+    if environment.clamped_texels > 0 {
+        eprintln!("warning: --environment {}: {} texels slightly below 0 read as 0", image.display(), environment.clamped_texels);
+    }
+    Ok(environment)
 }
 
 /// The scene at `path`, its load warnings printed.

@@ -325,7 +325,13 @@ impl<'a> Loader<'a> {
             None => defaults,
         };
         if let Some(settings) = &self.scene.settings.environment {
-            self.scene.environment = Some(load_environment(ctx, &scene_item, settings)?);
+            let environment = load_environment(ctx, &scene_item, settings)?;
+            if environment.clamped_texels > 0 {
+                let message =
+                    format!("{} texels of {} slightly below 0 read as 0", environment.clamped_texels, environment.source.display());
+                self.warnings.push(ctx.warning(&format!("{scene_item} extras.relume.environment"), &message));
+            }
+            self.scene.environment = Some(environment);
         }
         let emissive = self.scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
         let environment = self.scene.environment.as_ref().is_some_and(Environment::is_lit);

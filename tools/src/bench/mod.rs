@@ -137,7 +137,13 @@ fn check_scenes(sweep: &Sweep) -> Result<()> {
 }
 
 fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
-    SceneArgs { scene: entry.path.clone(), camera: entry.camera.clone(), width: sweep.width, height: sweep.height }
+    SceneArgs {
+        scene: entry.path.clone(),
+        camera: entry.camera.clone(),
+        width: sweep.width,
+        height: sweep.height,
+        environment: entry.environment.clone(),
+    }
 }
 
 fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outcome> {

@@ -70,5 +70,8 @@ fn key(scene: &Scene, settings: &ReferenceSettings) -> String {
         settings.shadows,
         env!("CARGO_PKG_VERSION"),
     );
-    relume_bake::artifact::checksum(described.as_bytes()).replace(':', "-")
+    // The environment joins the key only where there is one, so older entries stay valid.
+    let environment =
+        scene.environment.as_ref().map(|e| format!("|{}", relume_bake::artifact::environment_checksum(e))).unwrap_or_default();
+    relume_bake::artifact::checksum((described + &environment).as_bytes()).replace(':', "-")
 }

@@ -53,6 +53,9 @@ pub(crate) struct SweepScene {
     pub name: Option<String>,
     /// `--camera` syntax; default the scene's camera.
     pub camera: Option<String>,
+    /// A lat-long EXR lighting the scene instead of its own environment (`--environment`),
+    /// relative to the sweep file's folder.
+    pub environment: Option<PathBuf>,
     /// Move one light along a path; without it the scene's lights as they are.
     pub light_path: Option<LightPath>,
     /// Or move one mesh (an occluder) along a path of translations; the bakes stay as made.
@@ -106,6 +109,7 @@ impl Sweep {
         let folder = path.parent().unwrap_or(Path::new("."));
         for scene in &mut sweep.scenes {
             scene.path = folder.join(&scene.path);
+            scene.environment = scene.environment.as_ref().map(|e| folder.join(e));
         }
         sweep.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         Ok(sweep)
