@@ -217,12 +217,12 @@ pub fn environment(radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Environme
     Environment::from_lat_long(&image, std::path::Path::new("<built in code>"), &settings).expect("a valid environment")
 }
 
-/// FIV's test scene: a ground square 40 m wide at y = 0 facing up (albedo 0.5, mesh
-/// "ground"), black closed spheres (centre, radius) named "ball <k>", each an occluder of
+/// FIV's test scene: a ground square 40 m wide at y = 0 facing up, 16 x 16 cells (albedo
+/// 0.5, mesh "ground"), black closed spheres (centre, radius) named "ball <k>", each an occluder of
 /// `extras.relume.fiv`, lit only by the environment `radiance` on a cube of `cube_face`, seen
 /// from above at an angle.
 pub fn occluders_over_ground(balls: &[(Vec3, f32)], radiance: impl Fn(Vec3) -> Vec3, cube_face: u32) -> Scene {
-    let mut meshes = vec![Mesh { name: "ground".into(), ..square(Vec3::ZERO, Vec3::X * 20.0, Vec3::NEG_Z * 20.0, 2, 0) }];
+    let mut meshes = vec![Mesh { name: "ground".into(), ..square(Vec3::ZERO, Vec3::X * 20.0, Vec3::NEG_Z * 20.0, 16, 0) }];
     for (k, (centre, radius)) in balls.iter().enumerate() {
         meshes.push(Mesh { name: format!("ball {k}"), ..sphere(*centre, *radius, 3, Facing::Outward, 1) });
     }
@@ -232,4 +232,20 @@ pub fn occluders_over_ground(balls: &[(Vec3, f32)], radiance: impl Fn(Vec3) -> V
     let names: Vec<String> = (0..balls.len()).map(|k| format!("ball {k}")).collect();
     s.settings.blocks.insert("fiv".into(), serde_json::json!({ "occluders": names }));
     s
+}
+
+/// A wave on a flat-shaded mesh: every vertex raised by `amplitude` sin(2 pi x / `wavelength`)
+/// cos(2 pi z / `wavelength`), each triangle's normals its new face normal (front kept).
+/// Positions and normals in the mesh's vertex order: a deforming receiver's next shape.
+pub fn waved(mesh: &Mesh, amplitude: f32, wavelength: f32) -> (Vec<Vec3>, Vec<Vec3>) {
+    let k = std::f32::consts::TAU / wavelength;
+    let positions: Vec<Vec3> = mesh.positions.iter().map(|p| *p + Vec3::Y * amplitude * (k * p.x).sin() * (k * p.z).cos()).collect();
+    let mut normals = mesh.normals.clone();
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        let n = if n.dot(mesh.normals[t[0] as usize]) < 0.0 { -n } else { n };
+        t.iter().for_each(|&i| normals[i as usize] = n);
+    }
+    (positions, normals)
 }

@@ -261,6 +261,16 @@ impl Renderer {
         Ok(())
     }
 
+    /// Gives mesh `mesh` new vertex positions and normals (one each per vertex of the mesh as
+    /// the renderer was made with it, in that order; its triangles stay), for the frames
+    /// recorded from now on, without allocating: a deforming receiver (003 §5: receivers need
+    /// no precomputation). Its translation, if any, still applies. Baked data stays as baked.
+    /// The vertex buffer is written at once, so no frame this renderer recorded may be in
+    /// flight.
+    pub fn set_mesh_vertices(&mut self, mesh: usize, positions: &[Vec3], normals: &[Vec3]) -> VkResult<()> {
+        self.scene.reshape_mesh(mesh, positions, normals)
+    }
+
     pub fn set_camera(&mut self, camera: Camera) {
         self.camera = camera;
     }

@@ -121,8 +121,9 @@ pub struct GpuScene {
     light_data: Vec<GpuLight>,
     layer_data: Vec<Mat4>,
     bounds: (Vec3, Vec3),
-    /// The vertices as uploaded, each mesh's range of them, and room for one moved mesh:
-    /// what `translate_mesh` rewrites without allocating.
+    /// The vertices as uploaded (or as `reshape_mesh` last gave them), each mesh's range of
+    /// them, and room for one moved mesh: what `translate_mesh` and `reshape_mesh` rewrite
+    /// without allocating.
     uploaded: Vec<GpuVertex>,
     mesh_ranges: Vec<std::ops::Range<usize>>,
     moved: Vec<GpuVertex>,
@@ -226,12 +227,49 @@ impl GpuScene {
     /// shadow layers are fitted to, which takes effect at the next `set_lights`. No frame
     /// that reads the vertices may be in flight.
     pub fn translate_mesh(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
-        let Some(range) = self.mesh_ranges.get(mesh).cloned() else {
-            return Err(VkError::Invalid(format!("mesh {mesh}: the scene has {} meshes", self.mesh_ranges.len())));
-        };
+        self.range_of(mesh)?;
         if !translation.is_finite() {
             return Err(VkError::Invalid(format!("mesh {mesh}: translation {translation} is not finite")));
         }
+        self.translations[mesh] = translation;
+        self.write_mesh(mesh)
+    }
+
+    /// Gives mesh `mesh` new vertex positions and normals (as many as it has, in its vertex
+    /// order; its triangles stay), kept under its translation: a deforming receiver. Rewrites
+    /// the vertex buffer now, without allocating; no frame that reads it may be in flight.
+    pub fn reshape_mesh(&mut self, mesh: usize, positions: &[Vec3], normals: &[Vec3]) -> VkResult<()> {
+        let range = self.range_of(mesh)?;
+        if positions.len() != range.len() || normals.len() != range.len() {
+            return Err(VkError::Invalid(format!(
+                "mesh {mesh}: {} positions and {} normals for its {} vertices",
+                positions.len(),
+                normals.len(),
+                range.len()
+            )));
+        }
+        if let Some(i) = positions.iter().zip(normals).position(|(p, n)| !p.is_finite() || !n.is_finite()) {
+            return Err(VkError::Invalid(format!("mesh {mesh}: vertex {i} is not finite")));
+        }
+        for ((vertex, p), n) in self.uploaded[range].iter_mut().zip(positions).zip(normals) {
+            vertex.position = p.to_array();
+            vertex.normal = n.to_array();
+        }
+        self.write_mesh(mesh)
+    }
+
+    fn range_of(&self, mesh: usize) -> VkResult<std::ops::Range<usize>> {
+        self.mesh_ranges
+            .get(mesh)
+            .cloned()
+            .ok_or_else(|| VkError::Invalid(format!("mesh {mesh}: the scene has {} meshes", self.mesh_ranges.len())))
+    }
+
+    /// Writes mesh `mesh` (its uploaded vertices moved by its translation) into the vertex
+    /// buffer and refits the bounds.
+    fn write_mesh(&mut self, mesh: usize) -> VkResult<()> {
+        let range = self.mesh_ranges[mesh].clone();
+        let translation = self.translations[mesh];
         self.moved.clear();
         self.moved.extend(
             self.uploaded[range.clone()]
@@ -239,7 +277,6 @@ impl GpuScene {
                 .map(|v| GpuVertex { position: (Vec3::from_array(v.position) + translation).to_array(), ..*v }),
         );
         self.vertices.write_at(range.start * std::mem::size_of::<GpuVertex>(), &self.moved)?;
-        self.translations[mesh] = translation;
         self.bounds = self.mesh_ranges.iter().zip(&self.translations).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (r, t)| {
             self.uploaded[r.clone()]
                 .iter()

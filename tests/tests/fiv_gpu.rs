@@ -1,12 +1,13 @@
 //! FIV's run time on the GPU (003 §5) against its CPU twin, relume_bake::fiv::FivBake::irradiance,
 //! evaluated at the positions and normals the surfaces pass wrote; the lighting pass adding
-//! albedo / pi * I; moving occluders against a renderer made for the moved scene; all with
+//! albedo / pi * I; moving occluders and a deforming receiver against a renderer made for
+//! the moved or deformed scene; all with
 //! validation and synchronization validation on.
 
 use glam::{Vec3, Vec4};
 use relume_bake::fiv::{bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, SumOptions};
 use relume_bake::scene::Scene;
-use relume_bake::testing::{occluders_over_ground, sky};
+use relume_bake::testing::{occluders_over_ground, sky, waved};
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::fiv::{Fiv, FivData};
 use relume_renderer::{Headless, RenderSettings};
@@ -129,5 +130,32 @@ fn occluders_of_a_type_the_bake_lacks_are_refused() {
     let message =
         refusal(try_new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &wrong, options: SumOptions::default() }]));
     says(&message, &["fiv", "type 5", "3 tables"]);
+    assert_clean(ctx);
+}
+
+#[test]
+fn a_deformed_receiver_renders_as_a_renderer_made_for_the_deformed_scene() {
+    let scene = scene();
+    let (fiv, types) = baked(&scene);
+    let occluders = occluders(&scene, &types);
+    let ctx = validated_context();
+    let options = SumOptions::default();
+    let mut deforming = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let flat = render(&mut deforming);
+    let mut waving = scene.clone();
+    for frame in 1..=3 {
+        let (positions, normals) = waved(&scene.meshes[0], 0.1 * frame as f32, 3.0);
+        deforming.set_mesh_vertices(0, &positions, &normals).expect("the ground's vertices");
+        waving.meshes[0].positions = positions;
+        waving.meshes[0].normals = normals;
+    }
+    let deformed = render(&mut deforming);
+    let mut fresh = new_renderer(&ctx, &waving, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let made_deformed = render(&mut fresh);
+    let differing = deformed.pixels.iter().zip(&made_deformed.pixels).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} pixels differ from a renderer made for the deformed scene");
+    assert!(deformed.pixels != flat.pixels, "the wave changed nothing");
+    says(&refusal(deforming.set_mesh_vertices(0, &[Vec3::ZERO], &[Vec3::Y])), &["mesh 0", "1 positions", "vertices"]);
+    drop((deforming, fresh));
     assert_clean(ctx);
 }

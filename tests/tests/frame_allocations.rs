@@ -140,7 +140,7 @@ fn frames_with_light_path_maps_allocate_nothing() {
 }
 
 #[test]
-fn frames_with_fiv_and_moving_occluders_allocate_nothing() {
+fn frames_with_fiv_moving_occluders_and_a_deforming_receiver_allocate_nothing() {
     let scene = testing::occluders_over_ground(
         &[(Vec3::new(0.0, 1.0, 0.0), 0.5), (Vec3::new(0.8, 0.7, 0.0), 0.3)],
         |d| Vec3::splat(d.y.max(0.1)),
@@ -157,9 +157,13 @@ fn frames_with_fiv_and_moving_occluders_allocate_nothing() {
     let data = FivData { bake: &baked, occluders: &fiv::occluders(&scene, &types), options: SumOptions::default() };
     let ctx = validated_context();
     let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
+    // The ground's shapes are made before the frames: a deforming receiver's data is the caller's.
+    let waves: Vec<_> = (0..3).map(|k| testing::waved(&scene.meshes[0], 0.05 * k as f32, 2.0)).collect();
     let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
         renderer.set_mesh_translation(1, Vec3::new(0.02 * frame as f32, 0.0, 0.0)).expect("an occluder of the scene");
         renderer.set_mesh_translation(2, Vec3::new(0.0, 0.01 * frame as f32, 0.0)).expect("an occluder of the scene");
+        let (positions, normals) = &waves[frame % waves.len()];
+        renderer.set_mesh_vertices(0, positions, normals).expect("the ground's vertices");
     });
     drop(renderer);
     assert_clean(ctx);

@@ -18,6 +18,8 @@
 //! - `fiv-blobs`: two lumpy blobs and a box over a ground plane, lit only by a sky with a
 //!   small sun (`envs/sky.exr`): a stand-in for the fullsphere-irradiance paper's Fig. 12,
 //!   the blobs and the box its occluders.
+//! - `fiv-crowd-<N>`, N = 1, 10, 20, 30, 40, 60: N instances of that blob on a grid under the
+//!   sky, the occluder counts of that paper's Table 2 (cost against occluders).
 //! - `cornell-wall-light`: the `cornell` geometry with its spot light 5 cm from the red wall,
 //!   pointing at it: that paper's Fig. 9 failure case. Nearly all light reaches the room
 //!   only after a bounce off the wall, while the method's indirect term (a share beta of
@@ -45,12 +47,25 @@ use glam::Vec3;
 use relume_bake::environment::lat_long_image;
 use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::testing::{sky, two_area_lights};
-use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, occluder_plane, occluder_stacked, table_chair};
+use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, fiv_crowd, occluder_plane, occluder_stacked, table_chair};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 7] =
-    ["cornell", "occluder-plane", "occluder-stacked", "table-chair", "classroom", "cornell-wall-light", "fiv-blobs"];
+pub const SCENE_NAMES: [&str; 13] = [
+    "cornell",
+    "occluder-plane",
+    "occluder-stacked",
+    "table-chair",
+    "classroom",
+    "cornell-wall-light",
+    "fiv-blobs",
+    "fiv-crowd-1",
+    "fiv-crowd-10",
+    "fiv-crowd-20",
+    "fiv-crowd-30",
+    "fiv-crowd-40",
+    "fiv-crowd-60",
+];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
 /// `sky` (a blue-to-white gradient over a dim ground with a sun 2 degrees in radius and
@@ -104,6 +119,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "classroom" => classroom(),
         "cornell-wall-light" => cornell_wall_light(),
         "fiv-blobs" => fiv_blobs(),
+        crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
         _ => return None,
     };
     Some(builder.finish(name))

@@ -133,8 +133,12 @@ pub(super) fn exposure_one_intensity(distance: f64) -> f64 {
 
 /// The ground shared by the occluder scenes: a 4 x 4 m quad at y = 0 facing up.
 pub(super) fn ground(b: &mut Builder) {
+    ground_of_half_size(b, 2.0);
+}
+
+/// A ground quad 2h x 2h at y = 0 facing up, centred on the origin.
+pub(super) fn ground_of_half_size(b: &mut Builder, h: f64) {
     let grey = b.material("ground", [0.8, 0.8, 0.8]);
-    let h = 2.0;
     let quad = [DVec3::new(-h, 0.0, -h), DVec3::new(h, 0.0, -h), DVec3::new(h, 0.0, h), DVec3::new(-h, 0.0, h)];
     let mesh = b.mesh("Ground", &quad_facing(quad, |_| DVec3::Y), grey);
     b.mesh_node("Ground", mesh, DVec3::ZERO, DVec3::ONE);
@@ -376,5 +380,27 @@ pub(super) fn fiv_blobs() -> Builder {
     b.occluder_node("Box", cube, DVec3::new(0.5, 0.2, 0.8), DVec3::splat(0.4));
     b.environment("envs/sky.exr", 1.0);
     b.camera("Camera", DVec3::new(0.0, 2.8, 3.6), DVec3::new(0.0, 0.2, 0.0), 45f64.to_radians(), None, 0.1, 20.0);
+    b
+}
+
+/// 003 Table 2's occluder counts: `count` instances of the `fiv-blobs` blob (one type, one
+/// table) on a square grid 1.2 m apart, 0.6 m over a ground that holds them with a metre to
+/// spare, under the sky, seen from above: the occluder-sum pass's cost against the number of
+/// occluders.
+pub(super) fn fiv_crowd(count: usize) -> Builder {
+    let mut b = Builder::new(OCCLUDER_SETTINGS);
+    let side = (count as f64).sqrt().ceil() as usize;
+    let spacing = 1.2;
+    let half = 0.5 * spacing * side as f64 + 1.0;
+    ground_of_half_size(&mut b, half);
+    let grey = b.material("occluder", [0.5, 0.5, 0.5]);
+    let blob_mesh = b.mesh("Blob", &blob(0.4, 3), grey);
+    for k in 0..count {
+        let (i, j) = ((k % side) as f64, (k / side) as f64);
+        let at = DVec3::new((i - 0.5 * (side - 1) as f64) * spacing, 0.6, (j - 0.5 * (side - 1) as f64) * spacing);
+        b.occluder_node(&format!("Blob.{k:03}"), blob_mesh, at, DVec3::ONE);
+    }
+    b.environment("envs/sky.exr", 1.0);
+    b.camera("Camera", DVec3::new(0.0, 2.0 * half, 1.2 * half), DVec3::ZERO, 45f64.to_radians(), None, 0.1, 100.0);
     b
 }
