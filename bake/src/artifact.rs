@@ -470,7 +470,7 @@ fn check_key(manifest_path: &Path, section: &str, key: &Value, scene: Option<&Sc
                 return Err(fail(
                     manifest_path,
                     problem,
-                    "bake again for this environment (its image, intensity, rotation or cube face changed)",
+                    "bake again for this environment (its image, intensity, rotation or cube face changed; `relume bake --environment` bakes for another image)",
                 ));
             }
         }

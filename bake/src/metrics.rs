@@ -65,6 +65,10 @@ pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageErro
 /// of both sums.
 pub fn compare_masked(image: &Image, reference: &Image, mask: &[bool]) -> Result<ErrorStats, ImageError> {
     check_sizes(image, reference)?;
+    if mask.len() != reference.pixels.len() {
+        let (a, b) = ("the mask".to_string(), "the reference".to_string());
+        return Err(ImageError::SizeMismatch { a, aw: mask.len() as u32, ah: 1, b, bw: reference.width, bh: reference.height });
+    }
     let keep = |source: &Image| Image {
         pixels: source.pixels.iter().zip(mask).filter(|(_, keep)| **keep).map(|(p, _)| *p).collect(),
         width: mask.iter().filter(|k| **k).count() as u32,

@@ -5,7 +5,9 @@
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::fiv::{bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, Radial, SumOptions};
+use relume_bake::fiv::{
+    bake, environment_terms, lens_area, Beyond, FivBake, FivBakeSettings, Grid, Occluder, Radial, Receiver, SumOptions,
+};
 use relume_bake::reference::environment_irradiance;
 use relume_bake::sampling::PathSampler;
 use relume_bake::scene::Scene;
@@ -49,6 +51,11 @@ fn fiv_of_the_environment_is_the_fullsphere_sum_and_difmap_the_hemispherical_one
     let terms = environment_terms(&environment(|_| Vec3::ONE, 16), 32);
     let worst = terms.difmap.iter().map(|i| (i.x / PI - 1.0).abs()).fold(0.0, f32::max);
     assert!(worst < 2e-3, "uniform DifMap off by {worst}");
+}
+
+/// A receiver at the origin with normal `normal`, on no occluder.
+fn on_ground(normal: Vec3) -> Receiver {
+    Receiver { point: Vec3::ZERO, normal, occluder: None }
 }
 
 fn settings(grid: &str, distance_min: f32, distance_max: f32) -> FivBakeSettings {
@@ -110,7 +117,7 @@ fn case_a_matches_the_closed_form_of_a_sphere_under_uniform_light() {
         for beta in [0.0f32, 30.0, 60.0] {
             let (b, d) = (beta.to_radians(), ratio * r);
             let centre = d * Vec3::new(b.sin(), b.cos(), 0.0);
-            let i = fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], Vec3::ZERO, Vec3::Y, SumOptions::default()).x;
+            let i = fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], on_ground(Vec3::Y), SumOptions::default()).x;
             let exact = PI * (1.0 - (r / d).powi(2) * b.cos());
             assert!((i - exact).abs() < 0.01 * PI, "D/r = {ratio}, beta = {beta}: {i} against {exact}");
         }
@@ -131,7 +138,7 @@ fn case_c_takes_nothing_and_case_b_is_bounded_and_continuous() {
     let total = fiv.environment.difmap_lookup(n);
     let at = |d: f32| {
         let centre = d * n + 1.5 * r * n.cross(Vec3::X).normalize();
-        fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], Vec3::ZERO, n, SumOptions::default())
+        fiv.irradiance(&[Occluder { table: 0, mesh: 1, centre }], on_ground(n), SumOptions::default())
     };
     assert_eq!(at(-r), total);
     assert_eq!(at(-3.0 * r), total);
@@ -152,7 +159,7 @@ fn overlap_of_coincident_disjoint_and_nested_occluders() {
     let (fiv, r) = one_ball_bake();
     let sum = |centres: &[Vec3]| {
         let occluders: Vec<Occluder> = centres.iter().map(|&centre| Occluder { table: 0, mesh: 1, centre }).collect();
-        fiv.irradiance(&occluders, Vec3::ZERO, Vec3::Y, SumOptions::default())
+        fiv.irradiance(&occluders, on_ground(Vec3::Y), SumOptions::default())
     };
     let one = sum(&[Vec3::new(0.5, 3.0 * r, 0.0)]);
     let two = sum(&[Vec3::new(0.5, 3.0 * r, 0.0), Vec3::new(0.5, 3.0 * r, 0.0)]);

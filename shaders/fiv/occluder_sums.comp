@@ -3,11 +3,12 @@
 // formula on the CPU, step for step): DifMap(N), less each occluder's N . FIV(EnvOcc) by its
 // case (A: d >= R, B: scaled by (d + R) / 2R when partial, C: d <= -R nothing), plus the
 // pairwise overlaps of eq. (13)-(14) as sum_a I_a sum_{b != a} Ov%_ab; the overlap at most
-// sum I - max I and the result in [0, DifMap(N)]. Pixels with no surface get 0.
+// sum I - max I and the result in [0, DifMap(N)]. A surface of an occluder is not occluded by
+// that occluder (no self-shadowing). Pixels with no surface get 0.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 layout(set = 0, binding = 0, rgba32f) uniform readonly image2D positions;   // w 1: a surface
-layout(set = 0, binding = 1, rgba32f) uniform readonly image2D normals;
+layout(set = 0, binding = 1, rgba32f) uniform readonly image2D normals;     // w: own occluder + 1
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image2DArray irradiance;
 // DifMap: width x width / 2 lat-long texels, rgb.
 layout(std430, set = 0, binding = 3) readonly buffer DifMap { vec4 difmap[]; };
@@ -119,24 +120,29 @@ float lens_area(float distance, float r1, float r2) {
     return r1 * r1 * a1 + r2 * r2 * a2 - 0.5 * sqrt(max(kite, 0.0));
 }
 
-// Occluder o's disc on the plane at unit height along n (centre in xyz, radius in w), or
-// radius 0 in case C.
+// Whether occluder o takes light from the receiver at p with normal n: not its own, not in
+// case C, not dropped beyond the tables.
+bool occludes(uint o, uint own, vec3 p, vec3 n) {
+    vec3 v = occluders[o].centre.xyz - p;
+    vec4 facts = types[occluders[o].type.x].facts;
+    return o != own && dot(n, v) > -facts.x && (pc.beyond_scale == 1u || length(v) <= facts.z);
+}
+
+// Occluder o's disc on the plane at unit height along n (centre in xyz, radius in w).
 vec4 disc(uint o, vec3 p, vec3 n) {
     vec3 v = occluders[o].centre.xyz - p;
     float radius = types[occluders[o].type.x].facts.x;
     float d = dot(n, v);
-    if (d <= -radius) return vec4(0.0);
     float height = max(d, radius);
     return vec4((v - d * n) / height, radius / height);
 }
 
-float overlap_shares(uint a, vec3 p, vec3 n) {
+float overlap_shares(uint a, uint own, vec3 p, vec3 n) {
     vec4 da = disc(a, p, n);
     float shares = 0.0;
     for (uint b = 0u; b < pc.occluder_count; ++b) {
-        if (b == a) continue;
+        if (b == a || !occludes(b, own, p, n)) continue;
         vec4 db = disc(b, p, n);
-        if (db.w == 0.0) continue;
         shares += lens_area(distance(da.xyz, db.xyz), da.w, db.w) / (PI * (da.w * da.w + db.w * db.w));
     }
     return shares;
@@ -151,22 +157,24 @@ void main() {
         return;
     }
     vec3 p = surface.xyz;
-    vec3 n = normalize(imageLoad(normals, pixel).xyz);
+    vec4 normal = imageLoad(normals, pixel);
+    vec3 n = normalize(normal.xyz);
+    uint own = uint(normal.w) - 1u;   // all ones (no occluder) when w is 0
     vec3 total = difmap_lookup(n);
     vec3 occluded = vec3(0.0);
     vec3 overlap = vec3(0.0);
     vec3 largest = vec3(0.0);
     for (uint a = 0u; a < pc.occluder_count; ++a) {
+        if (!occludes(a, own, p, n)) continue;
         uint t = occluders[a].type.x;
         float radius = types[t].facts.x;
         vec3 v = occluders[a].centre.xyz - p;
         float d = dot(n, v);
-        if (d <= -radius) continue;
         float factor = (pc.partial == 1u && d < radius) ? (d + radius) / (2.0 * radius) : 1.0;
         vec3 share = max(table_lookup(t, v, n), vec3(0.0)) * factor;
         occluded += share;
         largest = max(largest, share);
-        if (pc.overlap == 1u) overlap += share * overlap_shares(a, p, n);
+        if (pc.overlap == 1u) overlap += share * overlap_shares(a, own, p, n);
     }
     overlap = min(overlap, occluded - largest);
     imageStore(irradiance, ivec3(pixel, 0), vec4(clamp(total - occluded + overlap, vec3(0.0), total), 1.0));

@@ -5,7 +5,7 @@
 //! validation and synchronization validation on.
 
 use glam::{Vec3, Vec4};
-use relume_bake::fiv::{bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, SumOptions};
+use relume_bake::fiv::{bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, Receiver, SumOptions};
 use relume_bake::scene::Scene;
 use relume_bake::testing::{occluders_over_ground, sky, waved};
 use relume_bake::work::WorkOptions;
@@ -50,9 +50,10 @@ fn compare_with_cpu(renderer: &mut Headless, fiv: &FivBake, occluders: &[Occlude
             continue;
         }
         surfaces += 1;
-        let n = n.truncate().normalize();
-        let cpu = fiv.irradiance(occluders, p.truncate(), n, options);
-        let scale = fiv.environment.difmap_lookup(n).max_element().max(1e-6);
+        let normal = n.truncate().normalize();
+        let receiver = Receiver { point: p.truncate(), normal, occluder: (n.w > 0.0).then(|| n.w as usize - 1) };
+        let cpu = fiv.irradiance(occluders, receiver, options);
+        let scale = fiv.environment.difmap_lookup(normal).max_element().max(1e-6);
         assert!((gpu.truncate() - cpu).abs().max_element() <= 1e-3 * scale, "pixel {pixel}: GPU {gpu}, CPU {cpu} ({options:?})");
     }
     surfaces
@@ -158,4 +159,33 @@ fn a_deformed_receiver_renders_as_a_renderer_made_for_the_deformed_scene() {
     says(&refusal(deforming.set_mesh_vertices(0, &[Vec3::ZERO], &[Vec3::Y])), &["mesh 0", "1 positions", "vertices"]);
     drop((deforming, fresh));
     assert_clean(ctx);
+}
+
+#[test]
+fn surfaces_face_the_viewer_and_no_occluder_shades_itself() {
+    // From under the ground its back faces show: their normal turns down, as the lighting
+    // pass and the path tracer turn it, so they take the dim light from below (every ball is
+    // above them: case C) and nothing of the sky.
+    let mut below = scene();
+    below.camera = relume_bake::testing::look_at(Vec3::new(0.0, -4.0, 0.5), Vec3::ZERO, Vec3::Y, 0.8);
+    let (fiv, types) = baked(&below);
+    let occluders = occluders(&below, &types);
+    let ctx = validated_context();
+    let mut renderer =
+        new_renderer(&ctx, &below, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options: SumOptions::default() }]);
+    render(&mut renderer);
+    let from_below = fiv.environment.difmap_lookup(Vec3::NEG_Y);
+    let positions = read_vec4s(&mut renderer, "fiv.positions").unwrap();
+    let irradiance = read_vec4s(&mut renderer, "fiv.irradiance").unwrap();
+    let ground: Vec<Vec3> =
+        positions.iter().zip(&irradiance).filter(|(p, _)| p.w == 1.0 && p.y.abs() < 1e-4).map(|(_, e)| e.truncate()).collect();
+    assert!(ground.len() > 100, "only {} ground pixels seen from below", ground.len());
+    for e in &ground {
+        assert!((*e - from_below).abs().max_element() < 0.02 * from_below.max_element(), "{e} against DifMap(-Y) {from_below}");
+    }
+    drop(renderer);
+    assert_clean(ctx);
+    // On top of a lone ball, nothing occludes: its own table takes nothing.
+    let top = Receiver { point: occluders[0].centre + Vec3::Y * fiv.tables[occluders[0].table].radius, normal: Vec3::Y, occluder: Some(0) };
+    assert_eq!(fiv.irradiance(&occluders[..1], top, SumOptions::default()), fiv.environment.difmap_lookup(Vec3::Y));
 }

@@ -117,10 +117,17 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
     let mut scene = load(&args.scene, camera.as_ref())?;
-    if let Some(image) = &args.environment {
-        scene.environment = Some(replaced_environment(&scene, image)?);
-    }
+    replace_environment(&mut scene, args.environment.as_deref())?;
     Ok(scene)
+}
+
+/// Lights `scene` by `image` instead of its own environment, when one is given
+/// (`--environment`).
+pub(crate) fn replace_environment(scene: &mut Scene, image: Option<&Path>) -> Result<()> {
+    if let Some(image) = image {
+        scene.environment = Some(replaced_environment(scene, image)?);
+    }
+    Ok(())
 }
 
 /// The scene's environment read from `image` instead of its own file.

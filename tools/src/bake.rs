@@ -2,7 +2,7 @@
 //! docs/FORMATS.md). The method comes from the registry (`methods`); this command only times,
 //! writes and reports.
 
-use crate::args::{load, WorkArgs};
+use crate::args::{load, replace_environment, WorkArgs};
 use crate::methods::params::{BakeParams, Stage};
 use crate::methods::{self, Method, Stages};
 use anyhow::{bail, Result};
@@ -25,6 +25,10 @@ pub(crate) struct BakeArgs {
     /// The artifact folder (default: out/<scene>/<method>).
     #[arg(long, short)]
     out: Option<PathBuf>,
+    /// Bake for the scene lit by this lat-long EXR instead of its own environment (as
+    /// `render --environment`; a bake keyed to the environment is read only with the same).
+    #[arg(long)]
+    environment: Option<PathBuf>,
     #[command(flatten)]
     params: BakeParams,
 }
@@ -49,7 +53,8 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let method = baking_method(&args.method)?;
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Bake))?;
     let work = args.work.options()?;
-    let scene = load(&args.scene, None)?;
+    let mut scene = load(&args.scene, None)?;
+    replace_environment(&mut scene, args.environment.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
     print!("{}", bake_scene(&scene, method, &values, work, &out)?);
     Ok(())

@@ -84,7 +84,12 @@ pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<
             return Err(format!("extras.relume.fiv.occluders names \"{name}\" twice"));
         }
         let Some(index) = scene.meshes.iter().position(|m| &m.name == name) else {
-            return Err(format!("extras.relume.fiv.occluders names \"{name}\", which is no mesh of the scene"));
+            let names: Vec<&str> = scene.meshes.iter().take(12).map(|m| m.name.as_str()).collect();
+            let more = if scene.meshes.len() > names.len() { ", ..." } else { "" };
+            return Err(format!(
+                "extras.relume.fiv.occluders names \"{name}\", which is no mesh of the scene (its meshes: {}{more}; a node of several primitives loads as \"<node> primitive <k>\")",
+                names.join(", ")
+            ));
         };
         let mesh = &scene.meshes[index];
         if let Some(edges) = open_edges(mesh) {

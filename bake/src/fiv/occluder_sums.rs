@@ -129,44 +129,65 @@ pub fn lens_area(distance: f32, r1: f32, r2: f32) -> f32 {
     r1 * r1 * a1 + r2 * r2 * a2 - 0.5 * kite.max(0.0).sqrt()
 }
 
+/// A point that receives light: where it is, its unit normal (towards the viewer), and the
+/// occluder it lies on, if any (index into the occluders).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver {
+    pub point: Vec3,
+    pub normal: Vec3,
+    pub occluder: Option<usize>,
+}
+
 impl FivBake {
-    /// Irradiance at receiver point `p` with unit normal `n` (003 §5): DifMap(N) less each
-    /// occluder's N . FIV(EnvOcc) by its case (A: d >= R whole, B: scaled by (d + R) / 2R when
-    /// `partial`, C: d <= -R nothing), plus the pairwise overlaps of eq. (13)-(14), written
-    /// sum_a I_a sum_{b != a} Ov%_ab so that each occluder's table is read once; the overlap is
-    /// at most sum I - max I, I_a >= 0 and the result in [0, DifMap(N)] (spec fiv.md B8).
-    pub fn irradiance(&self, occluders: &[Occluder], p: Vec3, n: Vec3, options: SumOptions) -> Vec3 {
+    /// Irradiance at `receiver` (003 §5): DifMap(N) less each occluder's N . FIV(EnvOcc) by
+    /// its case (A: d >= R whole, B: scaled by (d + R) / 2R when `partial`, C: d <= -R
+    /// nothing), plus the pairwise overlaps of eq. (13)-(14), written sum_a I_a sum_{b != a}
+    /// Ov%_ab so that each occluder's table is read once; the overlap is at most
+    /// sum I - max I, I_a >= 0 and the result in [0, DifMap(N)] (spec fiv.md B8). The
+    /// receiver's own occluder takes nothing (no self-shadowing), nor one dropped beyond its
+    /// table; pairs leave both out too.
+    pub fn irradiance(&self, occluders: &[Occluder], receiver: Receiver, options: SumOptions) -> Vec3 {
+        let (p, n) = (receiver.point, receiver.normal);
         let total = self.environment.difmap_lookup(n);
         let (mut occluded, mut overlap, mut largest) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
         for (a, occluder) in occluders.iter().enumerate() {
+            if !self.occludes(occluders, a, receiver, options) {
+                continue;
+            }
             let table = &self.tables[occluder.table];
             let v = occluder.centre - p;
             let d = n.dot(v);
-            if d <= -table.radius {
-                continue;
-            }
             let fiv = table.lookup(v, options.beyond, options.radial);
             let factor = if options.partial && d < table.radius { (d + table.radius) / (2.0 * table.radius) } else { 1.0 };
             let share = Vec3::new(n.dot(fiv[0]), n.dot(fiv[1]), n.dot(fiv[2])).max(Vec3::ZERO) * factor;
             occluded += share;
             largest = largest.max(share);
             if options.overlap {
-                overlap += share * self.overlap_shares(occluders, a, p, n);
+                overlap += share * self.overlap_shares(occluders, a, receiver, options);
             }
         }
         let overlap = overlap.min(occluded - largest);
         (total - occluded + overlap).clamp(Vec3::ZERO, total)
     }
 
-    /// sum over the other occluders b (not in case C) of Ov%_ab = A_ov / (A_a + A_b).
-    fn overlap_shares(&self, occluders: &[Occluder], a: usize, p: Vec3, n: Vec3) -> f32 {
+    /// Whether occluder `o` takes light from `receiver`: not its own, not in case C, not
+    /// dropped beyond its table.
+    fn occludes(&self, occluders: &[Occluder], o: usize, receiver: Receiver, options: SumOptions) -> bool {
+        let table = &self.tables[occluders[o].table];
+        let v = occluders[o].centre - receiver.point;
+        receiver.occluder != Some(o)
+            && receiver.normal.dot(v) > -table.radius
+            && (options.beyond == Beyond::Scale || v.length() <= table.distance_max)
+    }
+
+    /// sum over the other occluders b that occlude the receiver of Ov%_ab = A_ov / (A_a + A_b).
+    fn overlap_shares(&self, occluders: &[Occluder], a: usize, receiver: Receiver, options: SumOptions) -> f32 {
         let disc_of = |o: &Occluder| {
-            let (v, radius) = (o.centre - p, self.tables[o.table].radius);
-            let d = n.dot(v);
-            (d > -radius).then(|| disc(v, d, radius, n))
+            let (v, radius) = (o.centre - receiver.point, self.tables[o.table].radius);
+            disc(v, receiver.normal.dot(v), radius, receiver.normal)
         };
-        let Some((ca, ra)) = disc_of(&occluders[a]) else { return 0.0 };
-        let others = occluders.iter().enumerate().filter(|(b, _)| *b != a).filter_map(|(_, o)| disc_of(o));
-        others.map(|(cb, rb)| lens_area(ca.distance(cb), ra, rb) / (PI * (ra * ra + rb * rb))).sum()
+        let (ca, ra) = disc_of(&occluders[a]);
+        let others = (0..occluders.len()).filter(|&b| b != a && self.occludes(occluders, b, receiver, options));
+        others.map(|b| disc_of(&occluders[b])).map(|(cb, rb)| lens_area(ca.distance(cb), ra, rb) / (PI * (ra * ra + rb * rb))).sum()
     }
 }

@@ -14,7 +14,7 @@
 //! - `occluders` (per occluder { vec4 centre, uvec4 type }), from the technique's array,
 //!   which follows `Renderer::set_mesh_translation` of the occluders' meshes without
 //!   allocating;
-//! 1. `surfaces` (surfaces.rs): `positions` and `normals` per pixel;
+//! 1. `surfaces` (surfaces.rs): `positions`, `normals` and the occluder per pixel;
 //! 2. `occluder_sums` (occluder_sums.rs): `irradiance`, rgb lux per pixel.
 //!
 //! Occluders translate only: a table holds its type in the orientation it was baked in (the
@@ -189,7 +189,14 @@ impl MakeTechnique for FivData<'_> {
                 view_type: vk::ImageViewType::TYPE_2D_ARRAY,
             },
         )?;
-        let surfaces = SurfacesPass::new(shared)?;
+        let mut occluder_of_mesh = vec![0u32; shared.scene.meshes.len()];
+        for (k, o) in self.occluders.iter().enumerate() {
+            match occluder_of_mesh.get_mut(o.mesh) {
+                Some(slot) => *slot = k as u32 + 1,
+                None => return refuse(format!("occluder {k} is mesh {}, but the scene has {} meshes", o.mesh, shared.scene.meshes.len())),
+            }
+        }
+        let surfaces = SurfacesPass::new(shared, &occluder_of_mesh)?;
         let occluder_sums = OccluderSumsPass::new(shared, &surfaces, &buffers, &irradiance)?;
         Ok(Box::new(Fiv {
             buffers,

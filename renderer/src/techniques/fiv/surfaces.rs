@@ -4,8 +4,9 @@
 //! pass shades (the GPU test checks the lighting pass's pixels against this pass's).
 //!
 //! Reads: the scene's vertex and index buffers and the frame's uniforms. Writes: `positions`
-//! and `normals` (colour attachments, cleared to 0) and its own depth. Cost: one draw of the
-//! whole scene.
+//! (xyz, w 1 on a surface) and `normals` (unit, towards the viewer; w the occluder the
+//! surface belongs to plus one, 0 for none), colour attachments cleared to 0, and its own
+//! depth. Cost: one draw per mesh (the push constant names its occluder).
 
 use crate::gpu_scene::{vertex_attributes, VERTEX_STRIDE};
 use crate::passes::lighting::DEPTH_FORMAT;
@@ -22,14 +23,15 @@ pub(super) struct SurfacesPass {
     pub normals: Image,
     depth: Image,
     /// The scene's geometry (its buffers live as long as the renderer; moved meshes are
-    /// rewritten in place).
+    /// rewritten in place) and per mesh its indices and its occluder index + 1 (0: none).
     vertices: vk::Buffer,
     indices: vk::Buffer,
-    index_count: u32,
+    draws: Vec<(u32, u32, u32)>,
 }
 
 impl SurfacesPass {
-    pub fn new(shared: &Shared) -> VkResult<SurfacesPass> {
+    /// `occluder_of_mesh[m]`: the occluder index + 1 of the scene's mesh m, 0 for none.
+    pub fn new(shared: &Shared, occluder_of_mesh: &[u32]) -> VkResult<SurfacesPass> {
         let (ctx, settings) = (shared.ctx, shared.settings);
         let target = |name, format, usage| {
             let desc = ImageDesc {
@@ -47,7 +49,11 @@ impl SurfacesPass {
         let positions = target("fiv positions", SURFACE_FORMAT, surface_usage)?;
         let normals = target("fiv normals", SURFACE_FORMAT, surface_usage)?;
         let depth = target("fiv depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
-        let descriptors = DescriptorSet::new(ctx, vk::ShaderStageFlags::VERTEX, &[Binding::UniformBuffer(shared.gpu_scene.frame.raw)])?;
+        let descriptors = DescriptorSet::new(
+            ctx,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            &[Binding::UniformBuffer(shared.gpu_scene.frame.raw)],
+        )?;
         let pipeline = Pipeline::graphics(
             ctx,
             &GraphicsPipelineDesc {
@@ -61,7 +67,7 @@ impl SurfacesPass {
                 // Two-sided, as the lighting pass draws.
                 cull_mode: vk::CullModeFlags::NONE,
                 set_layout: descriptors.layout,
-                push_bytes: 0,
+                push_bytes: 4,
             },
         )?;
         let scene = shared.gpu_scene;
@@ -73,7 +79,7 @@ impl SurfacesPass {
             depth,
             vertices: scene.vertices.raw,
             indices: scene.indices.raw,
-            index_count: scene.index_count,
+            draws: scene.draws.iter().zip(occluder_of_mesh).map(|(d, id)| (d.first_index, d.index_count, *id)).collect(),
         })
     }
 
@@ -84,7 +90,10 @@ impl SurfacesPass {
         rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
         rec.begin_rendering(self.positions.desc.extent(), [self.positions.view, self.normals.view], [0.0; 4], self.depth.view);
         rec.bind_geometry(self.vertices, self.indices);
-        rec.draw_indexed(0, self.index_count);
+        for (first_index, index_count, occluder) in &self.draws {
+            rec.push_constants(self.pipeline.layout, occluder);
+            rec.draw_indexed(*first_index, *index_count);
+        }
         rec.end_rendering();
     }
 }
