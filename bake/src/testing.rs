@@ -10,7 +10,7 @@
 use crate::environment::{Environment, EnvironmentSettings};
 use crate::scene::{Camera, Light, LightKind, Material, Mesh, Scene};
 use crate::settings::SceneSettings;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{DVec3, Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// Which way a closed surface's front faces (and so its emission) point.
@@ -97,25 +97,26 @@ fn soup(name: &str, triangles: &[[Vec3; 3]], material: usize, wanted: impl Fn(Ve
     }
 }
 
-/// A closed sphere: an icosahedron subdivided `subdivisions` times (20 * 4^n triangles),
-/// vertices on the sphere.
-pub fn sphere(center: Vec3, radius: f32, subdivisions: u32, facing: Facing, material: usize) -> Mesh {
-    let t = (1.0 + 5.0f32.sqrt()) / 2.0;
+/// The unit icosphere: an icosahedron subdivided `subdivisions` times (20 * 4^n triangles),
+/// in f64 so that the scene generator's meshes built on it keep their bytes. Vertices shared
+/// by triangles are computed from the same numbers, so meshes made from it are closed.
+pub fn icosphere(subdivisions: u32) -> Vec<[DVec3; 3]> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
     let v = [
-        Vec3::new(-1.0, t, 0.0),
-        Vec3::new(1.0, t, 0.0),
-        Vec3::new(-1.0, -t, 0.0),
-        Vec3::new(1.0, -t, 0.0),
-        Vec3::new(0.0, -1.0, t),
-        Vec3::new(0.0, 1.0, t),
-        Vec3::new(0.0, -1.0, -t),
-        Vec3::new(0.0, 1.0, -t),
-        Vec3::new(t, 0.0, -1.0),
-        Vec3::new(t, 0.0, 1.0),
-        Vec3::new(-t, 0.0, -1.0),
-        Vec3::new(-t, 0.0, 1.0),
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
     ]
-    .map(|p| p.normalize());
+    .map(|p| DVec3::from_array(p).normalize());
     #[rustfmt::skip]
     const FACES: [[usize; 3]; 20] = [
         [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
@@ -123,7 +124,7 @@ pub fn sphere(center: Vec3, radius: f32, subdivisions: u32, facing: Facing, mate
         [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
         [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
     ];
-    let mut tris: Vec<[Vec3; 3]> = FACES.iter().map(|f| f.map(|i| v[i])).collect();
+    let mut tris: Vec<[DVec3; 3]> = FACES.iter().map(|f| f.map(|i| v[i])).collect();
     for _ in 0..subdivisions {
         let mut next = Vec::with_capacity(tris.len() * 4);
         for [a, b, c] in tris {
@@ -132,7 +133,12 @@ pub fn sphere(center: Vec3, radius: f32, subdivisions: u32, facing: Facing, mate
         }
         tris = next;
     }
-    let tris: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| center + p * radius)).collect();
+    tris
+}
+
+/// A closed sphere: [`icosphere`] of `subdivisions`, vertices on the sphere.
+pub fn sphere(center: Vec3, radius: f32, subdivisions: u32, facing: Facing, material: usize) -> Mesh {
+    let tris: Vec<[Vec3; 3]> = icosphere(subdivisions).iter().map(|t| t.map(|p| center + p.as_vec3() * radius)).collect();
     let sign = if facing == Facing::Outward { 1.0 } else { -1.0 };
     soup("sphere", &tris, material, |c| (c - center) * sign)
 }

@@ -40,8 +40,7 @@ fn ground_and_exact(scene: &Scene) -> (Vec<bool>, Image) {
 /// The ground NRMSE of `fiv-blobs` baked at `grid` and rendered with each of `options`.
 fn ground_errors(scene: &Scene, mask: &[bool], exact: &Image, grid: &str, options: &[SumOptions]) -> Vec<f64> {
     let types = occluder_types(scene, &FivSceneSettings::of(scene).unwrap()).unwrap();
-    let bake_settings =
-        FivBakeSettings { grid: Grid::parse(grid).unwrap(), distance_min: 0.1, distance_max: 16.0, mask_supersample: 1, difmap_width: 128 };
+    let bake_settings = FivBakeSettings { grid: Grid::parse(grid).unwrap(), ..FivBakeSettings::default() };
     let (fiv, _) = bake(scene, &bake_settings, &WorkOptions::default()).unwrap();
     let ctx = validated_context();
     let settings = RenderSettings { width: SIZE, height: SIZE, ..RenderSettings::default() };

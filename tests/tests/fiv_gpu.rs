@@ -10,9 +10,11 @@ use relume_bake::scene::Scene;
 use relume_bake::testing::{occluders_over_ground, sky, waved};
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::fiv::{Fiv, FivData};
+use relume_renderer::vk::Context;
 use relume_renderer::{Headless, RenderSettings};
 use relume_tests::*;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 const SIZE: u32 = 64;
 
@@ -23,14 +25,16 @@ fn scene() -> Scene {
 }
 
 fn baked(scene: &Scene) -> (FivBake, Vec<OccluderType>) {
-    let settings = FivBakeSettings {
-        grid: Grid::parse("16x9x8").unwrap(),
-        distance_min: 0.1,
-        distance_max: 16.0,
-        mask_supersample: 1,
-        difmap_width: 32,
-    };
+    let settings = FivBakeSettings { grid: Grid::parse("16x9x8").unwrap(), difmap_width: 32, ..FivBakeSettings::default() };
     bake(scene, &settings, &WorkOptions::default()).expect("bake")
+}
+
+/// `scene` baked, its occluders, and a renderer of it with FIV's default choices.
+fn baked_renderer(ctx: &Arc<Context>, scene: &Scene) -> (FivBake, Vec<Occluder>, Headless) {
+    let (fiv, types) = baked(scene);
+    let occluders = occluders(scene, &types);
+    let renderer = new_renderer(ctx, scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options: SumOptions::default() }]);
+    (fiv, occluders, renderer)
 }
 
 fn settings() -> RenderSettings {
@@ -62,11 +66,9 @@ fn compare_with_cpu(renderer: &mut Headless, fiv: &FivBake, occluders: &[Occlude
 #[test]
 fn occluder_sums_equal_the_cpu_formula_and_the_lighting_pass_adds_albedo_over_pi() {
     let scene = scene();
-    let (fiv, types) = baked(&scene);
-    let occluders = occluders(&scene, &types);
     let ctx = validated_context();
     let options = SumOptions::default();
-    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let (fiv, occluders, mut renderer) = baked_renderer(&ctx, &scene);
     let radiance = render(&mut renderer);
     let surfaces = compare_with_cpu(&mut renderer, &fiv, &occluders, options);
     assert!(surfaces > (SIZE * SIZE / 2) as usize, "only {surfaces} surface pixels");
@@ -95,11 +97,9 @@ fn occluder_sums_equal_the_cpu_formula_and_the_lighting_pass_adds_albedo_over_pi
 #[test]
 fn occluders_follow_their_moved_meshes_as_a_renderer_made_for_the_moved_scene() {
     let scene = scene();
-    let (fiv, types) = baked(&scene);
-    let occluders = occluders(&scene, &types);
     let ctx = validated_context();
     let options = SumOptions::default();
-    let mut moving = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let (fiv, occluders, mut moving) = baked_renderer(&ctx, &scene);
     render(&mut moving);
     let offsets = [Vec3::new(0.5, 0.2, 0.0), Vec3::new(-0.3, 0.0, 0.4), Vec3::new(0.0, 0.3, 0.0)];
     let mut moved_scene = scene.clone();
@@ -137,11 +137,9 @@ fn occluders_of_a_type_the_bake_lacks_are_refused() {
 #[test]
 fn a_deformed_receiver_renders_as_a_renderer_made_for_the_deformed_scene() {
     let scene = scene();
-    let (fiv, types) = baked(&scene);
-    let occluders = occluders(&scene, &types);
     let ctx = validated_context();
     let options = SumOptions::default();
-    let mut deforming = new_renderer(&ctx, &scene, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options }]);
+    let (fiv, occluders, mut deforming) = baked_renderer(&ctx, &scene);
     let flat = render(&mut deforming);
     let mut waving = scene.clone();
     for frame in 1..=3 {
@@ -168,11 +166,8 @@ fn surfaces_face_the_viewer_and_no_occluder_shades_itself() {
     // above them: case C) and nothing of the sky.
     let mut below = scene();
     below.camera = relume_bake::testing::look_at(Vec3::new(0.0, -4.0, 0.5), Vec3::ZERO, Vec3::Y, 0.8);
-    let (fiv, types) = baked(&below);
-    let occluders = occluders(&below, &types);
     let ctx = validated_context();
-    let mut renderer =
-        new_renderer(&ctx, &below, &settings(), &[&FivData { bake: &fiv, occluders: &occluders, options: SumOptions::default() }]);
+    let (fiv, occluders, mut renderer) = baked_renderer(&ctx, &below);
     render(&mut renderer);
     let from_below = fiv.environment.difmap_lookup(Vec3::NEG_Y);
     let positions = read_vec4s(&mut renderer, "fiv.positions").unwrap();

@@ -146,13 +146,7 @@ fn frames_with_fiv_moving_occluders_and_a_deforming_receiver_allocate_nothing() 
         |d| Vec3::splat(d.y.max(0.1)),
         8,
     );
-    let settings_fiv = FivBakeSettings {
-        grid: Grid::parse("8x5x3").unwrap(),
-        distance_min: 0.5,
-        distance_max: 8.0,
-        mask_supersample: 1,
-        difmap_width: 16,
-    };
+    let settings_fiv = FivBakeSettings { grid: Grid::parse("8x5x3").unwrap(), difmap_width: 16, ..FivBakeSettings::default() };
     let (baked, types) = fiv::bake(&scene, &settings_fiv, &WorkOptions::default()).expect("bake");
     let data = FivData { bake: &baked, occluders: &fiv::occluders(&scene, &types), options: SumOptions::default() };
     let ctx = validated_context();

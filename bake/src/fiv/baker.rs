@@ -26,6 +26,20 @@ pub struct FivBakeSettings {
     pub difmap_width: u32,
 }
 
+impl Default for FivBakeSettings {
+    /// The paper's middle grid (64 x 33 x 30), distances 0.1 R to 16 R (spec fiv.md B4), one
+    /// ray per texel, DifMap 128 x 64.
+    fn default() -> Self {
+        FivBakeSettings {
+            grid: Grid { azimuths: 64, polar: 33, distances: 30 },
+            distance_min: 0.1,
+            distance_max: 16.0,
+            mask_supersample: 1,
+            difmap_width: 128,
+        }
+    }
+}
+
 impl FivBakeSettings {
     pub fn validate(&self) -> Result<(), String> {
         crate::settings::first_failed_check(&[

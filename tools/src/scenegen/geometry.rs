@@ -76,42 +76,10 @@ pub(super) fn unit_cube() -> Vec<[DVec3; 3]> {
 }
 
 /// A closed, lumpy sphere (a stand-in for 003's bunny: convex in places, concave in others):
-/// an icosahedron subdivided `subdivisions` times (20 * 4^n triangles), each vertex pushed
+/// the unit icosphere subdivided `subdivisions` times (20 * 4^n triangles), each vertex pushed
 /// out to radius(direction) = `radius` (1 + 0.15 sin 3x sin 4y cos 2z). Vertices shared by
 /// triangles are computed from the same numbers, so the mesh stays closed.
 pub(super) fn blob(radius: f64, subdivisions: u32) -> Vec<[DVec3; 3]> {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let v = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .map(|p| DVec3::from_array(p).normalize());
-    #[rustfmt::skip]
-    const FACES: [[usize; 3]; 20] = [
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
-        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
-        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
-    ];
-    let mut tris: Vec<[DVec3; 3]> = FACES.iter().map(|f| f.map(|i| v[i])).collect();
-    for _ in 0..subdivisions {
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let (ab, bc, ca) = ((a + b).normalize(), (b + c).normalize(), (c + a).normalize());
-            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
     let lump = |d: DVec3| d * radius * (1.0 + 0.15 * (3.0 * d.x).sin() * (4.0 * d.y).sin() * (2.0 * d.z).cos());
-    tris.iter().map(|t| t.map(lump)).collect()
+    relume_bake::testing::icosphere(subdivisions).iter().map(|t| t.map(lump)).collect()
 }
