@@ -109,7 +109,7 @@ struct Score {
     method: String,
     combined: metrics::ErrorStats,
     /// The image against the reference's direct layer: the score of a method that models
-    /// direct light alone (`direct`, an environment's `fiv`).
+    /// direct light alone (punctual or an environment's).
     direct: metrics::ErrorStats,
     /// The method's indirect part (its image minus the direct-only image) against the
     /// reference's indirect layer.
