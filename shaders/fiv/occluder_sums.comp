@@ -1,22 +1,26 @@
 #version 450
 // The FIV occluder sums, 003 §5, per pixel (relume_bake::fiv::FivBake::irradiance is the same
-// formula on the CPU, step for step): DifMap(N), less each occluder's N . FIV(EnvOcc) by its
-// case (A: d >= R, B: scaled by (d + R) / 2R when partial, C: d <= -R nothing), plus the
-// pairwise overlaps of eq. (13)-(14) as sum_a I_a sum_{b != a} Ov%_ab; the overlap at most
-// sum I - max I and the result in [0, DifMap(N)]. A surface of an occluder is not occluded by
-// that occluder (no self-shadowing). Pixels with no surface get 0.
+// formula on the CPU, step for step): DifMap(N), or on a self-shadowing occluder
+// max(0, N . (FIV(Env) - FIV_self)), less each other occluder's N . FIV(EnvOcc) by its case
+// (A: d >= R, B: scaled by (d + R) / 2R when partial, C: d <= -R nothing; a receiver inside
+// it, all of DifMap(N)), plus the pairwise overlaps of eq. (13)-(14) as
+// sum_a I_a sum_{b != a} Ov%_ab; the overlap at most sum I - max I and the result in
+// [0, DifMap(N)]. Pixels with no surface get 0.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 layout(set = 0, binding = 0, rgba32f) uniform readonly image2D positions;   // w 1: a surface
 layout(set = 0, binding = 1, rgba32f) uniform readonly image2D normals;     // w: own occluder + 1
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image2DArray irradiance;
-// DifMap: width x width / 2 lat-long texels, rgb.
+// DifMap: width x width / 2 lat-long texels, rgb; then FIV(Env), the r, g and b vectors.
 layout(std430, set = 0, binding = 3) readonly buffer DifMap { vec4 difmap[]; };
-// Every type's table, 3 vec4 per sample (the r, g and b vectors), types one after another.
+// Every type's table, 3 vec4 per sample (the r, g and b vectors; the first one's w 1 where
+// the sample is valid, 0 where not), then its surface points' masks for its first shells
+// alike; types one after another.
 layout(std430, set = 0, binding = 4) readonly buffer Tables { vec4 tables[]; };
 struct OccluderType {
     uvec4 grid;     // azimuths, polar angles, distances, first sample in `tables`
     vec4 facts;     // radius R, distance_min, distance_max, ln(distance_max / distance_min)
+    uvec4 surface;  // the surface points' masks: first sample in `tables`, shells
 };
 layout(std430, set = 0, binding = 5) readonly buffer Types { OccluderType types[]; };
 struct Occluder {
@@ -32,7 +36,11 @@ layout(push_constant) uniform OccluderSumsPush {
     uint overlap;       // 1: the pairwise overlap correction
     uint beyond_scale;  // 1: beyond distance_max the outer shell times (max / distance)^2; 0: nothing
     uint inverse_square; // 1: shells blended as distance^2 x FIV, divided by distance^2; 0: linearly
+    uint self_shadow;   // a receiver on an occluder shadowed by it: 0 not, 1 the paper's lookup, 2 the surface points'
 } pc;
+
+// relume_bake::fiv::VALID_WEIGHT_MIN
+const float VALID_WEIGHT_MIN = 1e-3;
 
 const float PI = 3.14159265358979;
 const float TAU = 6.28318530717959;
@@ -64,10 +72,13 @@ vec3 difmap_lookup(vec3 n) {
     return mix(top, bottom, y - y0);
 }
 
-// N . FIV(EnvOcc) of type t centred at offset v: trilinear over the 8 nearest samples,
-// distances in log space (each shell weighted by (its distance / distance)^2 when
-// inverse_square), clamped below; the r, g, b rows dotted with N.
-vec3 table_lookup(uint t, vec3 v, vec3 n) {
+// N . FIV(EnvOcc) of type t centred at offset v: trilinear over the 8 nearest of the samples
+// from `first` on (`shells` shells of them; beyond, none is valid), distances in log space
+// (each shell weighted by (its distance / distance)^2 when `inverse_square`), clamped below,
+// renormalised over the valid samples; the r, g, b rows dotted with N. w: 1, or 0 where the
+// valid samples carry too little weight. Beyond distance_max: the outer shell scaled when
+// `beyond_scale`, else nothing.
+vec4 interpolate(uint t, uint first, uint shells, bool beyond_scale, bool inverse_square, vec3 v, vec3 n) {
     uvec4 g = types[t].grid;
     vec4 facts = types[t].facts;
     float distance = max(length(v), 1e-20);
@@ -86,28 +97,57 @@ vec3 table_lookup(uint t, vec3 v, vec3 n) {
     uint j = uint(j0);
     uint k = uint(k0);
     vec3 sum = vec3(0.0);
+    float weight = 0.0;
     float within = clamp(distance, facts.y, facts.z);
     for (uint dk = 0u; dk < 2u; ++dk) {
         float wk = dk == 0u ? 1.0 - weights.z : weights.z;
-        if (pc.inverse_square == 1u) {
-            float shell = facts.y * pow(facts.z / facts.y, float(k + dk) / steps) / within;
-            wk *= shell * shell;
+        float shell = 1.0;
+        if (inverse_square) {
+            shell = facts.y * pow(facts.z / facts.y, float(k + dk) / steps) / within;
+            shell *= shell;
         }
         for (uint dj = 0u; dj < 2u; ++dj) {
             float wj = dj == 0u ? 1.0 - weights.y : weights.y;
             for (uint di = 0u; di < 2u; ++di) {
                 float wi = di == 0u ? 1.0 - weights.x : weights.x;
-                uint sample_index = g.w + ((k + dk) * g.y + j + dj) * g.x + (di == 0u ? i : ii);
+                if (k + dk >= shells) continue;
+                uint sample_index = first + ((k + dk) * g.y + j + dj) * g.x + (di == 0u ? i : ii);
+                vec4 red = tables[3u * sample_index];
+                if (red.w == 0.0) continue;
                 float w = wi * wj * wk;
+                weight += w;
+                w *= shell;
                 sum += w * vec3(dot(n, tables[3u * sample_index].xyz), dot(n, tables[3u * sample_index + 1u].xyz),
                                 dot(n, tables[3u * sample_index + 2u].xyz));
             }
         }
     }
+    if (weight < VALID_WEIGHT_MIN) return vec4(0.0);
     if (distance > facts.z) {
-        sum *= pc.beyond_scale == 1u ? (facts.z / distance) * (facts.z / distance) : 0.0;
+        sum *= beyond_scale ? (facts.z / distance) * (facts.z / distance) : 0.0;
     }
-    return sum;
+    return vec4(sum / weight, 1.0);
+}
+
+// The table's lookup (relume_bake::fiv::OccluderTable::lookup).
+vec4 table_lookup(uint t, vec3 v, vec3 n) {
+    return interpolate(t, types[t].grid.w, types[t].grid.z, pc.beyond_scale == 1u, pc.inverse_square == 1u, v, n);
+}
+
+// max(0, N . (FIV(Env) - FIV_self)) for a receiver on its own occluder, FIV_self from the
+// surface points' masks or (self_shadow 1, or where those have none) the table; DifMap(N)
+// where there is no occluder, no self-shadowing or no valid sample.
+vec3 unoccluded(uint own, vec3 p, vec3 n, vec3 total) {
+    if (pc.self_shadow == 0u || own >= pc.occluder_count) return total;
+    uint t = occluders[own].type.x;
+    vec3 v = occluders[own].centre.xyz - p;
+    vec4 self_fiv = vec4(0.0);
+    if (pc.self_shadow == 2u) self_fiv = interpolate(t, types[t].surface.x, types[t].surface.y, false, false, v, n);
+    if (self_fiv.w == 0.0) self_fiv = table_lookup(t, v, n);
+    if (self_fiv.w == 0.0) return total;
+    uint e = pc.difmap_width * (pc.difmap_width / 2u);
+    vec3 environment = vec3(dot(n, difmap[e].xyz), dot(n, difmap[e + 1u].xyz), dot(n, difmap[e + 2u].xyz));
+    return max(environment - self_fiv.xyz, vec3(0.0));
 }
 
 // The area two discs share (a lens; nested and disjoint discs included).
@@ -171,11 +211,13 @@ void main() {
         vec3 v = occluders[a].centre.xyz - p;
         float d = dot(n, v);
         float factor = (pc.partial == 1u && d < radius) ? (d + radius) / (2.0 * radius) : 1.0;
-        vec3 share = max(table_lookup(t, v, n), vec3(0.0)) * factor;
+        vec4 fiv = table_lookup(t, v, n);
+        vec3 share = fiv.w == 0.0 ? total : max(fiv.xyz, vec3(0.0)) * factor;
         occluded += share;
         largest = max(largest, share);
         if (pc.overlap == 1u) overlap += share * overlap_shares(a, own, p, n);
     }
     overlap = min(overlap, occluded - largest);
-    imageStore(irradiance, ivec3(pixel, 0), vec4(clamp(total - occluded + overlap, vec3(0.0), total), 1.0));
+    vec3 open = unoccluded(own, p, n, total);
+    imageStore(irradiance, ivec3(pixel, 0), vec4(clamp(open - occluded + overlap, vec3(0.0), total), 1.0));
 }

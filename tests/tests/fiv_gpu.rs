@@ -5,7 +5,9 @@
 //! validation and synchronization validation on.
 
 use glam::{Vec3, Vec4};
-use relume_bake::fiv::{bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, Receiver, SumOptions};
+use relume_bake::fiv::{
+    bake, occluders, Beyond, FivBake, FivBakeSettings, Grid, Occluder, OccluderType, Radial, Receiver, SelfShadow, SumOptions,
+};
 use relume_bake::scene::Scene;
 use relume_bake::testing::{occluders_over_ground, sky, waved};
 use relume_bake::work::WorkOptions;
@@ -82,9 +84,9 @@ fn occluder_sums_equal_the_cpu_formula_and_the_lighting_pass_adds_albedo_over_pi
     }
     // Every other choice of the paper's options, on the same renderer.
     for options in [
-        SumOptions { partial: false, overlap: false, beyond: Beyond::Drop, radial: Radial::Linear },
-        SumOptions { partial: true, overlap: false, beyond: Beyond::Scale, radial: Radial::Linear },
-        SumOptions { partial: false, overlap: true, beyond: Beyond::Drop, radial: Radial::InverseSquare },
+        SumOptions { partial: false, overlap: false, beyond: Beyond::Drop, radial: Radial::Linear, self_shadow: SelfShadow::Off },
+        SumOptions { partial: true, overlap: false, beyond: Beyond::Scale, radial: Radial::Linear, self_shadow: SelfShadow::Paper },
+        SumOptions { partial: false, overlap: true, beyond: Beyond::Drop, radial: Radial::InverseSquare, self_shadow: SelfShadow::Surface },
     ] {
         renderer.technique_mut::<Fiv>().expect("fiv").set_options(options);
         render(&mut renderer);
@@ -160,7 +162,7 @@ fn a_deformed_receiver_renders_as_a_renderer_made_for_the_deformed_scene() {
 }
 
 #[test]
-fn surfaces_face_the_viewer_and_no_occluder_shades_itself() {
+fn surfaces_face_the_viewer_and_a_lone_ball_does_not_shade_its_top() {
     // From under the ground its back faces show: their normal turns down, as the lighting
     // pass and the path tracer turn it, so they take the dim light from below (every ball is
     // above them: case C) and nothing of the sky.
@@ -180,7 +182,13 @@ fn surfaces_face_the_viewer_and_no_occluder_shades_itself() {
     }
     drop(renderer);
     assert_clean(ctx);
-    // On top of a lone ball, nothing occludes: its own table takes nothing.
+    // On top of a lone ball, nothing occludes: without self-shadowing its own table takes
+    // nothing; with it, a convex ball hides its lower hemisphere only, which is what DifMap
+    // leaves out too.
     let top = Receiver { point: occluders[0].centre + Vec3::Y * fiv.tables[occluders[0].table].radius, normal: Vec3::Y, occluder: Some(0) };
-    assert_eq!(fiv.irradiance(&occluders[..1], top, SumOptions::default()), fiv.environment.difmap_lookup(Vec3::Y));
+    let open = fiv.environment.difmap_lookup(Vec3::Y);
+    let off = SumOptions { self_shadow: SelfShadow::Off, ..SumOptions::default() };
+    assert_eq!(fiv.irradiance(&occluders[..1], top, off), open);
+    let shadowed = fiv.irradiance(&occluders[..1], top, SumOptions::default());
+    assert!((shadowed - open).abs().max_element() < 0.02 * open.max_element(), "{shadowed} against DifMap(+Y) {open}");
 }

@@ -96,19 +96,59 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
         distance_min: settings.distance_min * radius,
         distance_max: settings.distance_max * radius,
         fiv: Vec::new(),
+        valid: Vec::new(),
+        surface: Vec::new(),
+        surface_valid: Vec::new(),
     };
     let g = settings.grid;
-    let progress = progress_bar(g.samples() as u64, &format!("fiv table of {}", mesh.name), work.progress);
-    let fiv = (0..g.samples() as u32)
+    let surface_samples = table.surface_shells() * g.azimuths * g.polar;
+    let progress = progress_bar(g.samples() as u64 + surface_samples as u64, &format!("fiv table of {}", mesh.name), work.progress);
+    let (fiv, valid) = (0..g.samples() as u32)
         .into_par_iter()
         .map(|s| {
             let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
             progress.inc(1);
-            masked_sum(&bvh, environment, table.distance(k) * g.direction(i, j), radius, settings.mask_supersample)
+            let v = table.distance(k) * g.direction(i, j);
+            match inside(&bvh, -v) {
+                true => ([Vec3::ZERO; 3], false),
+                false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample), true),
+            }
         })
-        .collect();
+        .unzip();
+    let (surface, surface_valid) = (0..surface_samples)
+        .into_par_iter()
+        .map(|s| {
+            let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
+            progress.inc(1);
+            match surface_point(&bvh, -table.distance(k) * g.direction(i, j)) {
+                Some(point) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample), true),
+                None => ([Vec3::ZERO; 3], false),
+            }
+        })
+        .unzip();
     progress.finish_and_clear();
-    OccluderTable { fiv, ..table }
+    OccluderTable { fiv, valid, surface, surface_valid, ..table }
+}
+
+/// The surface point nearest `point` along its radial line (towards the centre or away
+/// from it), moved off the surface by the ray epsilon to the side its face faces: where a
+/// receiver on the surface near `point` sits. The line is tilted by a thousandth of a radian:
+/// the grid's poles and seam meet a generated mesh's vertices exactly, where a ray may pass
+/// between triangles and report the far side.
+fn surface_point(bvh: &SceneBvh, point: Vec3) -> Option<Vec3> {
+    let radial = (point.normalize_or(Vec3::Y) + Vec3::new(0.6e-3, 0.3e-3, 0.74e-3)).normalize();
+    let hits = [-radial, radial].map(|d| bvh.closest_hit(point, d, f32::INFINITY));
+    let nearest = hits.into_iter().flatten().min_by(|a, b| a.t.total_cmp(&b.t))?;
+    Some(nearest.position + nearest.geometric_normal * bvh.epsilon())
+}
+
+/// Whether `point` lies inside the closed mesh of `bvh` (spec fiv.md B10): from inside, the
+/// first face a ray meets shows its back. Three rays vote, so a ray grazing an edge cannot
+/// decide alone.
+fn inside(bvh: &SceneBvh, point: Vec3) -> bool {
+    const VOTES: [Vec3; 3] = [Vec3::new(0.267, 0.535, 0.802), Vec3::new(-0.802, 0.267, -0.535), Vec3::new(0.535, -0.802, 0.267)];
+    let back = |d: &Vec3| bvh.closest_hit(point, d.normalize(), f32::INFINITY).is_some_and(|h| h.geometric_normal.dot(*d) > 0.0);
+    VOTES.iter().filter(|d| back(d)).count() >= 2
 }
 
 /// FIV(EnvOcc) for the occluder centred at `v` from the receiver: sum over texels of the

@@ -34,11 +34,27 @@ pub struct SumOptions {
     pub overlap: bool,
     pub beyond: Beyond,
     pub radial: Radial,
+    pub self_shadow: SelfShadow,
+}
+
+/// How a receiver on an occluder is shadowed by that occluder (003 §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SelfShadow {
+    /// Not at all: DifMap(N).
+    Off,
+    /// The paper's: FIV_self looked up in the table, its samples inside the occluder left out.
+    /// The table's samples lie off the surface, where the occluder no longer hides the whole
+    /// lower hemisphere, and what it leaves open there counts against N (docs/BENCHMARKS.md).
+    Paper,
+    /// FIV_self looked up among the masks of the surface points nearest the samples
+    /// (`OccluderTable::surface`): seen from the surface, the occluder hides the lower
+    /// hemisphere, as the paper's eq. (7) argument needs.
+    Surface,
 }
 
 impl Default for SumOptions {
     fn default() -> Self {
-        SumOptions { partial: true, overlap: true, beyond: Beyond::Scale, radial: Radial::InverseSquare }
+        SumOptions { partial: true, overlap: true, beyond: Beyond::Scale, radial: Radial::InverseSquare, self_shadow: SelfShadow::Surface }
     }
 }
 
@@ -68,11 +84,29 @@ impl EnvironmentTerms {
     }
 }
 
+/// The least share of a lookup's trilinear weight its valid samples must carry.
+pub const VALID_WEIGHT_MIN: f32 = 1e-3;
+
 impl OccluderTable {
     /// FIV(EnvOcc) of the type with its centre at offset `v` from the receiver: trilinear over
     /// the 8 nearest samples (003 §5), distances in log space (weighted by `radial`) and
-    /// clamped below.
-    pub fn lookup(&self, v: Vec3, beyond: Beyond, radial: Radial) -> [Vec3; 3] {
+    /// clamped below, renormalised over the valid samples (spec fiv.md B9-B10); None when
+    /// valid samples carry less than [`VALID_WEIGHT_MIN`] of the weight (the receiver is
+    /// inside the type, as far as the grid can tell).
+    pub fn lookup(&self, v: Vec3, beyond: Beyond, radial: Radial) -> Option<[Vec3; 3]> {
+        self.interpolate(&self.fiv, &self.valid, v, beyond, radial)
+    }
+
+    /// FIV_self for a receiver on the type's surface at offset `v` from its centre: as
+    /// [`Self::lookup`], among the surface points' masks (`surface`, the first shells only),
+    /// linearly between shells (a surface point's mask does not fall with the sample's
+    /// distance).
+    pub fn lookup_surface(&self, v: Vec3) -> Option<[Vec3; 3]> {
+        self.interpolate(&self.surface, &self.surface_valid, v, Beyond::Drop, Radial::Linear)
+    }
+
+    /// Trilinear over `values`, leaving out samples not `valid` and those past their end.
+    fn interpolate(&self, values: &[[Vec3; 3]], valid: &[bool], v: Vec3, beyond: Beyond, radial: Radial) -> Option<[Vec3; 3]> {
         let g = self.grid;
         let distance = v.length().max(1e-20);
         let d = v / distance;
@@ -85,26 +119,32 @@ impl OccluderTable {
         let (ti, tj, tk) = (fi - i0, fj - j0, fk - k0);
         let (i0, j0, k0) = (i0 as u32 % g.azimuths, j0 as u32, k0 as u32);
         let i1 = (i0 + 1) % g.azimuths;
-        let mut out = [Vec3::ZERO; 3];
+        let (mut out, mut weight) = ([Vec3::ZERO; 3], 0.0);
         let within = distance.clamp(self.distance_min, self.distance_max);
         let shell = |k: u32| match radial {
             Radial::Linear => 1.0,
             Radial::InverseSquare => (self.distance(k) / within).powi(2),
         };
-        for (k, wk) in [(k0, (1.0 - tk) * shell(k0)), (k0 + 1, tk * shell(k0 + 1))] {
+        for (k, wk) in [(k0, 1.0 - tk), (k0 + 1, tk)] {
             for (j, wj) in [(j0, 1.0 - tj), (j0 + 1, tj)] {
                 for (i, wi) in [(i0, 1.0 - ti), (i1, ti)] {
-                    let sample = &self.fiv[g.index(i, j, k)];
-                    (0..3).for_each(|c| out[c] += sample[c] * (wi * wj * wk));
+                    let s = g.index(i, j, k);
+                    if valid.get(s) == Some(&true) {
+                        weight += wi * wj * wk;
+                        (0..3).for_each(|c| out[c] += values[s][c] * (wi * wj * wk * shell(k)));
+                    }
                 }
             }
+        }
+        if weight < VALID_WEIGHT_MIN {
+            return None;
         }
         let scale = match (distance > self.distance_max, beyond) {
             (false, _) => 1.0,
             (true, Beyond::Scale) => (self.distance_max / distance).powi(2),
             (true, Beyond::Drop) => 0.0,
         };
-        out.map(|f| f * scale)
+        Some(out.map(|f| f * scale / weight))
     }
 }
 
@@ -129,6 +169,11 @@ pub fn lens_area(distance: f32, r1: f32, r2: f32) -> f32 {
     r1 * r1 * a1 + r2 * r2 * a2 - 0.5 * kite.max(0.0).sqrt()
 }
 
+/// N . f for each colour channel's vector.
+fn dots(n: Vec3, f: [Vec3; 3]) -> Vec3 {
+    Vec3::new(n.dot(f[0]), n.dot(f[1]), n.dot(f[2]))
+}
+
 /// A point that receives light: where it is, its unit normal (towards the viewer), and the
 /// occluder it lies on, if any (index into the occluders).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,16 +184,18 @@ pub struct Receiver {
 }
 
 impl FivBake {
-    /// Irradiance at `receiver` (003 §5): DifMap(N) less each occluder's N . FIV(EnvOcc) by
-    /// its case (A: d >= R whole, B: scaled by (d + R) / 2R when `partial`, C: d <= -R
-    /// nothing), plus the pairwise overlaps of eq. (13)-(14), written sum_a I_a sum_{b != a}
-    /// Ov%_ab so that each occluder's table is read once; the overlap is at most
-    /// sum I - max I, I_a >= 0 and the result in [0, DifMap(N)] (spec fiv.md B8). The
-    /// receiver's own occluder takes nothing (no self-shadowing), nor one dropped beyond its
-    /// table; pairs leave both out too.
+    /// Irradiance at `receiver` (003 §5): DifMap(N), or on a self-shadowing occluder its
+    /// [`Self::self_shadowed`] value, less each other occluder's N . FIV(EnvOcc) by its case
+    /// (A: d >= R whole, B: scaled by (d + R) / 2R when `partial`, C: d <= -R nothing; a
+    /// receiver inside it, all of DifMap(N)), plus the pairwise overlaps of eq. (13)-(14),
+    /// written sum_a I_a sum_{b != a} Ov%_ab so that each occluder's table is read once; the
+    /// overlap is at most sum I - max I, I_a >= 0 and the result in [0, DifMap(N)] (spec
+    /// fiv.md B8, B11). The receiver's own occluder and one dropped beyond its table take no
+    /// part in the sum or the pairs.
     pub fn irradiance(&self, occluders: &[Occluder], receiver: Receiver, options: SumOptions) -> Vec3 {
         let (p, n) = (receiver.point, receiver.normal);
         let total = self.environment.difmap_lookup(n);
+        let unoccluded = self.self_shadowed(occluders, receiver, options).unwrap_or(total);
         let (mut occluded, mut overlap, mut largest) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
         for (a, occluder) in occluders.iter().enumerate() {
             if !self.occludes(occluders, a, receiver, options) {
@@ -157,9 +204,11 @@ impl FivBake {
             let table = &self.tables[occluder.table];
             let v = occluder.centre - p;
             let d = n.dot(v);
-            let fiv = table.lookup(v, options.beyond, options.radial);
             let factor = if options.partial && d < table.radius { (d + table.radius) / (2.0 * table.radius) } else { 1.0 };
-            let share = Vec3::new(n.dot(fiv[0]), n.dot(fiv[1]), n.dot(fiv[2])).max(Vec3::ZERO) * factor;
+            let share = match table.lookup(v, options.beyond, options.radial) {
+                Some(fiv) => dots(n, fiv).max(Vec3::ZERO) * factor,
+                None => total,
+            };
             occluded += share;
             largest = largest.max(share);
             if options.overlap {
@@ -167,7 +216,21 @@ impl FivBake {
             }
         }
         let overlap = overlap.min(occluded - largest);
-        (total - occluded + overlap).clamp(Vec3::ZERO, total)
+        (unoccluded - occluded + overlap).clamp(Vec3::ZERO, total)
+    }
+
+    /// What a receiver on its own occluder sees of the environment past that occluder
+    /// (003 §5, spec fiv.md B11): max(0, N . (FIV(Env) - FIV_self)), the fullsphere sum being
+    /// the hemispherical one since the occluder hides every direction below the tangent plane
+    /// (eq. 7). None without self-shadowing, off an occluder, or where no valid sample is
+    /// near (then DifMap(N) stands); `Surface` falls back on `Paper` where it has none.
+    pub fn self_shadowed(&self, occluders: &[Occluder], receiver: Receiver, options: SumOptions) -> Option<Vec3> {
+        let own = &occluders[receiver.occluder.filter(|_| options.self_shadow != SelfShadow::Off)?];
+        let (table, v) = (&self.tables[own.table], own.centre - receiver.point);
+        let surface = if options.self_shadow == SelfShadow::Surface { table.lookup_surface(v) } else { None };
+        let fiv = surface.or_else(|| table.lookup(v, options.beyond, options.radial))?;
+        let open = [0, 1, 2].map(|c| self.environment.fiv[c] - fiv[c]);
+        Some(dots(receiver.normal, open).max(Vec3::ZERO))
     }
 
     /// Whether occluder `o` takes light from `receiver`: not its own, not in case C, not

@@ -73,9 +73,25 @@ pub struct OccluderTable {
     pub distance_max: f32,
     /// FIV(EnvOcc) per sample, one vector per colour channel (r, g, b), in `Grid::index` order.
     pub fiv: Vec<[Vec3; 3]>,
+    /// Per sample, whether a receiver there lies outside the type (spec fiv.md B10): inside
+    /// it every direction is hidden, no receiver can be there, and a lookup leaves the
+    /// sample out (its FIV is stored as zero).
+    pub valid: Vec<bool>,
+    /// For the first shells (those up to the first beyond R: where a receiver on the type's
+    /// surface looks up), FIV(EnvOcc) seen from the surface point nearest each sample along
+    /// its radial line, for self-shadowing (`SelfShadow::Surface`); `surface_valid` false
+    /// where that line meets no surface.
+    pub surface: Vec<[Vec3; 3]>,
+    pub surface_valid: Vec<bool>,
 }
 
 impl OccluderTable {
+    /// The number of shells `surface` covers: those no farther than R, and one more.
+    pub fn surface_shells(&self) -> u32 {
+        let within = (0..self.grid.distances).filter(|&k| self.distance(k) <= self.radius).count() as u32;
+        (within + 1).min(self.grid.distances)
+    }
+
     /// Distance k of the geometric sequence.
     pub fn distance(&self, k: u32) -> f32 {
         self.distance_min * (self.distance_max / self.distance_min).powf(k as f32 / (self.grid.distances - 1) as f32)
@@ -103,7 +119,8 @@ pub struct FivBake {
 
 pub const ENVIRONMENT_SECTION: &str = "fiv_environment";
 pub const OCCLUDER_SECTION: &str = "fiv_occluder";
-pub const SECTION_VERSION: u32 = 1;
+/// 2: tables carry the samples' validity and the surface points' masks (self-shadowing).
+pub const SECTION_VERSION: u32 = 2;
 const ENVIRONMENT_MAGIC: &[u8; 8] = b"RLFIVENV";
 const TABLE_MAGIC: &[u8; 8] = b"RLFIVOCC";
 
@@ -129,6 +146,9 @@ pub fn sections(bake: &FivBake, representatives: &[&str], summary: serde_json::V
         writer.u32s(&[table.grid.azimuths, table.grid.polar, table.grid.distances]);
         writer.f32s(&[table.radius, table.distance_min, table.distance_max]);
         writer.f32s(&table.fiv.iter().flat_map(|f| vectors(f).collect::<Vec<_>>()).collect::<Vec<_>>());
+        writer.u32s(&validity_words(&table.valid));
+        writer.f32s(&table.surface.iter().flat_map(|f| vectors(f).collect::<Vec<_>>()).collect::<Vec<_>>());
+        writer.u32s(&validity_words(&table.surface_valid));
         sections.push(Section {
             name: format!("{OCCLUDER_SECTION}_{k}"),
             version: SECTION_VERSION,
@@ -176,10 +196,25 @@ fn read_table(artifact: &Artifact, scene: &Scene, k: usize, mesh: &str) -> Resul
             REBAKE,
         ));
     }
-    let values = finite_vectors(&mut reader, 3 * grid.samples(), "the table")?;
+    let (fiv, valid) = read_samples(&mut reader, grid.samples(), "the table")?;
+    let mut table = OccluderTable { grid, radius, distance_min, distance_max, fiv, valid, surface: Vec::new(), surface_valid: Vec::new() };
+    let surface_samples = table.surface_shells() as usize * (grid.azimuths * grid.polar) as usize;
+    (table.surface, table.surface_valid) = read_samples(&mut reader, surface_samples, "the surface points' masks")?;
     reader.finish("the table")?;
-    let fiv = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    Ok(OccluderTable { grid, radius, distance_min, distance_max, fiv })
+    Ok(table)
+}
+
+/// `count` samples of 3 vectors, then their validity bits.
+fn read_samples(reader: &mut Reader, count: usize, what: &str) -> Result<(Vec<[Vec3; 3]>, Vec<bool>), ArtifactError> {
+    let values = finite_vectors(reader, 3 * count, what)?;
+    let words = (0..count.div_ceil(32)).map(|_| reader.u32(what)).collect::<Result<Vec<_>, _>>()?;
+    let valid = (0..count).map(|s| words[s / 32] >> (s % 32) & 1 == 1).collect();
+    Ok((values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(), valid))
+}
+
+/// The samples' validity as bits, sample s at bit s % 32 of word s / 32.
+fn validity_words(valid: &[bool]) -> Vec<u32> {
+    valid.chunks(32).map(|c| c.iter().enumerate().fold(0u32, |w, (b, v)| w | ((*v as u32) << b))).collect()
 }
 
 fn finite_vectors(reader: &mut Reader, count: usize, what: &str) -> Result<Vec<Vec3>, ArtifactError> {

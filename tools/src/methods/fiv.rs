@@ -10,7 +10,7 @@ use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::Artifact;
 use relume_bake::fiv::{
-    self as bake_fiv, Beyond, FivBake, FivBakeSettings, FivSceneSettings, Grid, Occluder, OccluderType, Radial, SumOptions,
+    self as bake_fiv, Beyond, FivBake, FivBakeSettings, FivSceneSettings, Grid, Occluder, OccluderType, Radial, SelfShadow, SumOptions,
 };
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -65,7 +65,16 @@ const RADIAL: Param = Param::choice(
 )
 .at_render();
 
-const PARAMS: [&Param; 9] = [&GRID, &DISTANCE_MIN, &DISTANCE_MAX, &MASK_SUPERSAMPLE, &DIFMAP_WIDTH, &PARTIAL, &OVERLAP, &BEYOND, &RADIAL];
+const SELF_SHADOW: Param = Param::choice(
+    "self-shadow",
+    "a receiver on an occluder shadowed by that occluder (003 §5): FIV_self from the masks of the surface points nearest the samples, from the table's samples (the paper's), or not",
+    &["surface", "paper", "off"],
+    Default::Value("surface"),
+)
+.at_render();
+
+const PARAMS: [&Param; 10] =
+    [&GRID, &DISTANCE_MIN, &DISTANCE_MAX, &MASK_SUPERSAMPLE, &DIFMAP_WIDTH, &PARTIAL, &OVERLAP, &BEYOND, &RADIAL, &SELF_SHADOW];
 
 pub(crate) struct Fiv;
 
@@ -87,6 +96,11 @@ fn sum_options(values: &Values) -> SumOptions {
         overlap: values.choice(&OVERLAP) == "on",
         beyond: if values.choice(&BEYOND) == "scale" { Beyond::Scale } else { Beyond::Drop },
         radial: if values.choice(&RADIAL) == "linear" { Radial::Linear } else { Radial::InverseSquare },
+        self_shadow: match values.choice(&SELF_SHADOW) {
+            "paper" => SelfShadow::Paper,
+            "off" => SelfShadow::Off,
+            _ => SelfShadow::Surface,
+        },
     }
 }
 

@@ -4,11 +4,13 @@
 //! the lighting pass as a pixel term (added as albedo / pi * I).
 //!
 //! Uploaded at creation (device-local, never written again):
-//! - `difmap`: W x W/2 vec4, rgb I(N) (relume_bake::fiv::EnvironmentTerms);
-//! - `tables`: every type's samples, 3 vec4 each (the r, g, b vectors of FIV(EnvOcc)), types
-//!   one after another;
+//! - `difmap`: W x W/2 vec4, rgb I(N) (relume_bake::fiv::EnvironmentTerms), then FIV(Env)'s
+//!   r, g and b vectors;
+//! - `tables`: per type its samples, 3 vec4 each (the r, g, b vectors of FIV(EnvOcc); the
+//!   first w 1 for a valid sample, 0 for one inside the type), then its surface points'
+//!   masks alike; types one after another;
 //! - `types`: per type { uvec4 grid (azimuths, polar, distances, first sample), vec4 (R,
-//!   distance_min, distance_max, ln(max / min)) }.
+//!   distance_min, distance_max, ln(max / min)), uvec4 (first surface sample, its shells) }.
 //!
 //! Written every frame, in order:
 //! - `occluders` (per occluder { vec4 centre, uvec4 type }), from the technique's array,
@@ -44,6 +46,7 @@ pub struct FivData<'d> {
 struct GpuType {
     grid: [u32; 4],
     facts: [f32; 4],
+    surface: [u32; 4],
 }
 
 #[repr(C)]
@@ -130,6 +133,11 @@ impl Technique for Fiv {
     }
 }
 
+/// Samples as the pass reads them: 3 vec4 each, the first's w 1 where valid.
+fn rows<'a>(fiv: &'a [[Vec3; 3]], valid: &'a [bool]) -> impl Iterator<Item = Vec4> + 'a {
+    fiv.iter().zip(valid).flat_map(|(f, valid)| [f[0].extend(*valid as u32 as f32), f[1].extend(0.0), f[2].extend(0.0)])
+}
+
 impl MakeTechnique for FivData<'_> {
     /// Uploads the bake in one submission that is waited for. Refused, by name: occluders of
     /// a type the bake lacks, more than [`MAX_OCCLUDERS`], and tables larger than one storage
@@ -144,7 +152,7 @@ impl MakeTechnique for FivData<'_> {
         if self.occluders.len() > MAX_OCCLUDERS {
             return refuse(format!("{} occluders; at most {MAX_OCCLUDERS} are moved per frame", self.occluders.len()));
         }
-        let samples: Vec<Vec4> = tables.iter().flat_map(|t| t.fiv.iter().flat_map(|f| f.map(|v| v.extend(0.0)))).collect();
+        let samples: Vec<Vec4> = tables.iter().flat_map(|t| rows(&t.fiv, &t.valid).chain(rows(&t.surface, &t.surface_valid))).collect();
         let limit = ctx.info.max_storage_buffer_range;
         if std::mem::size_of_val(samples.as_slice()) as u64 > limit {
             return refuse(format!(
@@ -158,13 +166,15 @@ impl MakeTechnique for FivData<'_> {
             .iter()
             .map(|t| {
                 let grid = [t.grid.azimuths, t.grid.polar, t.grid.distances, first];
-                first += t.grid.samples() as u32;
-                GpuType { grid, facts: [t.radius, t.distance_min, t.distance_max, (t.distance_max / t.distance_min).ln()] }
+                let surface = [first + t.grid.samples() as u32, t.surface_shells(), 0, 0];
+                first += (t.fiv.len() + t.surface.len()) as u32;
+                GpuType { grid, facts: [t.radius, t.distance_min, t.distance_max, (t.distance_max / t.distance_min).ln()], surface }
             })
             .collect();
         let occluders: Vec<GpuOccluder> =
             self.occluders.iter().map(|o| GpuOccluder { centre: o.centre.extend(1.0), table: [o.table as u32, 0, 0, 0] }).collect();
-        let difmap: Vec<Vec4> = self.bake.environment.difmap.iter().map(|i| i.extend(0.0)).collect();
+        let environment = &self.bake.environment;
+        let difmap: Vec<Vec4> = environment.difmap.iter().chain(&environment.fiv).map(|i| i.extend(0.0)).collect();
         // Never empty: a buffer of no bytes cannot be bound.
         let padded = |bytes: &[u8]| if bytes.is_empty() { vec![0u8; 32] } else { bytes.to_vec() };
         let [difmap, tables, types, occluders_buffer] = upload_buffers_blocking(

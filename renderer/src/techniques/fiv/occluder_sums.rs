@@ -5,7 +5,7 @@
 //! the occluders (rewritten in the command stream at the start of the pass, from the
 //! technique's own array: no allocation). Writes: `irradiance` (RGBA32F, one layer; rgb lux,
 //! 0 where no surface). Cost: per pixel one DifMap read and, per occluder not below the
-//! surface, 8 table samples of 3 vec4, plus with the overlap correction a disc per other
+//! surface (its own included, when self-shadowing), 8 table samples of 3 vec4, plus with the overlap correction a disc per other
 //! occluder: O(pixels x occluders^2) arithmetic, O(pixels x occluders) table reads.
 
 use super::surfaces::SurfacesPass;
@@ -14,7 +14,7 @@ use crate::passes::compute::{ComputePass, Slot};
 use crate::shaders;
 use crate::technique::Shared;
 use crate::vk::{Access, CommandRecorder, Image, Tracker, VkResult};
-use relume_bake::fiv::{Beyond, Radial, SumOptions};
+use relume_bake::fiv::{Beyond, Radial, SelfShadow, SumOptions};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -25,6 +25,7 @@ pub(super) struct OccluderSumsPush {
     overlap: u32,
     beyond_scale: u32,
     inverse_square: u32,
+    self_shadow: u32,
 }
 
 impl OccluderSumsPush {
@@ -36,6 +37,11 @@ impl OccluderSumsPush {
             overlap: options.overlap as u32,
             beyond_scale: (options.beyond == Beyond::Scale) as u32,
             inverse_square: (options.radial == Radial::InverseSquare) as u32,
+            self_shadow: match options.self_shadow {
+                SelfShadow::Off => 0,
+                SelfShadow::Paper => 1,
+                SelfShadow::Surface => 2,
+            },
         }
     }
 }
