@@ -134,16 +134,19 @@ vec4 table_lookup(uint t, vec3 v, vec3 n) {
     return interpolate(t, types[t].grid.w, types[t].grid.z, pc.beyond_scale == 1u, pc.inverse_square == 1u, v, n);
 }
 
-// max(0, N . (FIV(Env) - FIV_self)) for a receiver on its own occluder, FIV_self from the
-// surface points' masks or (self_shadow 1, or where those have none) the table; DifMap(N)
-// where there is no occluder, no self-shadowing or no valid sample.
+// For a receiver on its own occluder: DifMap(N) - max(0, N . FIV_above) from the surface
+// points' masks above their tangent planes (self_shadow 2), or max(0, N . (FIV(Env) -
+// FIV_self)) from the table (self_shadow 1, or where the surface has no valid sample);
+// DifMap(N) where there is no occluder, no self-shadowing or no valid sample.
 vec3 unoccluded(uint own, vec3 p, vec3 n, vec3 total) {
     if (pc.self_shadow == 0u || own >= pc.occluder_count) return total;
     uint t = occluders[own].type.x;
     vec3 v = occluders[own].centre.xyz - p;
-    vec4 self_fiv = vec4(0.0);
-    if (pc.self_shadow == 2u) self_fiv = interpolate(t, types[t].surface.x, types[t].surface.y, false, false, v, n);
-    if (self_fiv.w == 0.0) self_fiv = table_lookup(t, v, n);
+    if (pc.self_shadow == 2u) {
+        vec4 above = interpolate(t, types[t].surface.x, types[t].surface.y, false, false, v, n);
+        if (above.w != 0.0) return total - max(above.xyz, vec3(0.0));
+    }
+    vec4 self_fiv = table_lookup(t, v, n);
     if (self_fiv.w == 0.0) return total;
     uint e = pc.difmap_width * (pc.difmap_width / 2u);
     vec3 environment = vec3(dot(n, difmap[e].xyz), dot(n, difmap[e + 1u].xyz), dot(n, difmap[e + 2u].xyz));

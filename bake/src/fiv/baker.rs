@@ -111,7 +111,7 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
             let v = table.distance(k) * g.direction(i, j);
             match inside(&bvh, -v) {
                 true => ([Vec3::ZERO; 3], false),
-                false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample), true),
+                false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample, Vec3::ZERO), true),
             }
         })
         .unzip();
@@ -121,7 +121,7 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
             let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
             progress.inc(1);
             match surface_point(&bvh, -table.distance(k) * g.direction(i, j)) {
-                Some(point) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample), true),
+                Some((point, normal)) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample, normal), true),
                 None => ([Vec3::ZERO; 3], false),
             }
         })
@@ -131,15 +131,15 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
 }
 
 /// The surface point nearest `point` along its radial line (towards the centre or away
-/// from it), moved off the surface by the ray epsilon to the side its face faces: where a
-/// receiver on the surface near `point` sits. The line is tilted by a thousandth of a radian:
+/// from it), moved off the surface by the ray epsilon to the side its face faces, and that
+/// face's normal: where a receiver on the surface near `point` sits. The line is tilted by a thousandth of a radian:
 /// the grid's poles and seam meet a generated mesh's vertices exactly, where a ray may pass
 /// between triangles and report the far side.
-fn surface_point(bvh: &SceneBvh, point: Vec3) -> Option<Vec3> {
+fn surface_point(bvh: &SceneBvh, point: Vec3) -> Option<(Vec3, Vec3)> {
     let radial = (point.normalize_or(Vec3::Y) + Vec3::new(0.6e-3, 0.3e-3, 0.74e-3)).normalize();
     let hits = [-radial, radial].map(|d| bvh.closest_hit(point, d, f32::INFINITY));
     let nearest = hits.into_iter().flatten().min_by(|a, b| a.t.total_cmp(&b.t))?;
-    Some(nearest.position + nearest.geometric_normal * bvh.epsilon())
+    Some((nearest.position + nearest.geometric_normal * bvh.epsilon(), nearest.geometric_normal))
 }
 
 /// Whether `point` lies inside the closed mesh of `bvh` (spec fiv.md B10): from inside, the
@@ -153,8 +153,9 @@ fn inside(bvh: &SceneBvh, point: Vec3) -> bool {
 
 /// FIV(EnvOcc) for the occluder centred at `v` from the receiver: sum over texels of the
 /// share of its k x k rays that hit, times L_s dw_s w_s. Only rays inside the bounding
-/// sphere's cone can hit, so only they are traced.
-fn masked_sum(bvh: &SceneBvh, environment: &Environment, v: Vec3, radius: f32, k: u32) -> [Vec3; 3] {
+/// sphere's cone can hit, so only they are traced; with a nonzero `above`, only rays with
+/// w . above > 0.
+fn masked_sum(bvh: &SceneBvh, environment: &Environment, v: Vec3, radius: f32, k: u32, above: Vec3) -> [Vec3; 3] {
     let distance = v.length();
     let axis = v / distance.max(1e-20);
     // Inside the bounding sphere every direction may hit.
@@ -167,7 +168,7 @@ fn masked_sum(bvh: &SceneBvh, environment: &Environment, v: Vec3, radius: f32, k
         for (a, b) in (0..k).flat_map(|y| (0..k).map(move |x| (x, y))) {
             let sub = |texel: u32, i: u32| 2.0 * (texel as f32 + (i as f32 + 0.5) / k as f32) / n as f32 - 1.0;
             let w = face_point(face, sub(s, a), sub(t, b)).normalize();
-            if w.dot(axis) >= cos_cone && bvh.occluded(-v, w, f32::INFINITY) {
+            if w.dot(axis) >= cos_cone && (above == Vec3::ZERO || w.dot(above) > 0.0) && bvh.occluded(-v, w, f32::INFINITY) {
                 hits += 1;
             }
         }

@@ -46,9 +46,10 @@ pub enum SelfShadow {
     /// The table's samples lie off the surface, where the occluder no longer hides the whole
     /// lower hemisphere, and what it leaves open there counts against N (docs/BENCHMARKS.md).
     Paper,
-    /// FIV_self looked up among the masks of the surface points nearest the samples
-    /// (`OccluderTable::surface`): seen from the surface, the occluder hides the lower
-    /// hemisphere, as the paper's eq. (7) argument needs.
+    /// DifMap(N) less N . FIV_above, FIV_above looked up among the masks of the surface
+    /// points nearest the samples, of the directions above their tangent planes only
+    /// (`OccluderTable::surface`): what the occluder hides beyond the plane its own surface
+    /// already hides; nothing on a convex occluder.
     Surface,
 }
 
@@ -220,17 +221,20 @@ impl FivBake {
     }
 
     /// What a receiver on its own occluder sees of the environment past that occluder
-    /// (003 §5, spec fiv.md B11): max(0, N . (FIV(Env) - FIV_self)), the fullsphere sum being
-    /// the hemispherical one since the occluder hides every direction below the tangent plane
-    /// (eq. 7). None without self-shadowing, off an occluder, or where no valid sample is
-    /// near (then DifMap(N) stands); `Surface` falls back on `Paper` where it has none.
+    /// (003 §5, spec fiv.md B11). `Paper`: max(0, N . (FIV(Env) - FIV_self)), the fullsphere
+    /// sum being the hemispherical one since the occluder hides every direction below the
+    /// tangent plane (eq. 7). `Surface`: DifMap(N) - max(0, N . FIV_above), falling back on
+    /// `Paper` where no surface sample is valid. None without self-shadowing, off an
+    /// occluder, or where no valid sample is near (then DifMap(N) stands).
     pub fn self_shadowed(&self, occluders: &[Occluder], receiver: Receiver, options: SumOptions) -> Option<Vec3> {
         let own = &occluders[receiver.occluder.filter(|_| options.self_shadow != SelfShadow::Off)?];
-        let (table, v) = (&self.tables[own.table], own.centre - receiver.point);
-        let surface = if options.self_shadow == SelfShadow::Surface { table.lookup_surface(v) } else { None };
-        let fiv = surface.or_else(|| table.lookup(v, options.beyond, options.radial))?;
+        let (table, v, n) = (&self.tables[own.table], own.centre - receiver.point, receiver.normal);
+        if let Some(above) = table.lookup_surface(v).filter(|_| options.self_shadow == SelfShadow::Surface) {
+            return Some(self.environment.difmap_lookup(n) - dots(n, above).max(Vec3::ZERO));
+        }
+        let fiv = table.lookup(v, options.beyond, options.radial)?;
         let open = [0, 1, 2].map(|c| self.environment.fiv[c] - fiv[c]);
-        Some(dots(receiver.normal, open).max(Vec3::ZERO))
+        Some(dots(n, open).max(Vec3::ZERO))
     }
 
     /// Whether occluder `o` takes light from `receiver`: not its own, not in case C, not

@@ -79,8 +79,9 @@ pub struct OccluderTable {
     pub valid: Vec<bool>,
     /// For the first shells (those up to the first beyond R: where a receiver on the type's
     /// surface looks up), FIV(EnvOcc) seen from the surface point nearest each sample along
-    /// its radial line, for self-shadowing (`SelfShadow::Surface`); `surface_valid` false
-    /// where that line meets no surface.
+    /// its radial line, of the directions above that point's tangent plane only (what the
+    /// type hides beyond its own surface), for self-shadowing (`SelfShadow::Surface`);
+    /// `surface_valid` false where that line meets no surface.
     pub surface: Vec<[Vec3; 3]>,
     pub surface_valid: Vec<bool>,
 }

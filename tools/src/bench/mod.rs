@@ -319,7 +319,8 @@ impl<'s> SceneBench<'s> {
             scene: self.name.clone(),
             light: k,
             light_position: configuration.light_position.map(|p| p.to_array()),
-            occluder_translation: configuration.occluder.map(|(_, t)| t.to_array()),
+            occluder_translation: configuration.occluder.as_ref().map(|o| o.translation.to_array()),
+            occluder_turn_degrees: configuration.occluder.as_ref().map(|o| o.turn_degrees),
             method: config.method.name().to_string(),
             params: config.label.clone(),
             params_table: config.table.clone(),
@@ -397,18 +398,41 @@ fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Resu
 struct Configuration {
     lights: Vec<Light>,
     light_position: Option<Vec3>,
-    /// (mesh index, translation from where the scene has it).
-    occluder: Option<(usize, Vec3)>,
+    occluder: Option<MovedMesh>,
+}
+
+/// A mesh moved by an occluder path: turned about the vertical axis through its bounds'
+/// centre, then translated from where the scene has it.
+struct MovedMesh {
+    mesh: usize,
+    translation: Vec3,
+    turn_degrees: f32,
+    /// Its vertices turned (None without a turn).
+    turned: Option<(Vec<Vec3>, Vec<Vec3>)>,
+}
+
+impl MovedMesh {
+    fn new(scene: &Scene, mesh: usize, translation: Vec3, turn_degrees: f32) -> Self {
+        let m = &scene.meshes[mesh];
+        let turned = (turn_degrees != 0.0).then(|| {
+            let (lo, hi) = m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+            let (centre, turn) = ((lo + hi) * 0.5, glam::Quat::from_rotation_y(turn_degrees.to_radians()));
+            (m.positions.iter().map(|p| centre + turn * (*p - centre)).collect(), m.normals.iter().map(|n| turn * *n).collect())
+        });
+        MovedMesh { mesh, translation, turn_degrees, turned }
+    }
 }
 
 impl Configuration {
     /// The scene as this configuration has it, for the reference.
     fn apply_to(&self, scene: &Scene) -> Scene {
         let mut moved = Scene { lights: self.lights.clone(), ..scene.clone() };
-        if let Some((mesh, translation)) = self.occluder {
-            for p in &mut moved.meshes[mesh].positions {
-                *p += translation;
+        if let Some(o) = &self.occluder {
+            let mesh = &mut moved.meshes[o.mesh];
+            if let Some((positions, normals)) = &o.turned {
+                (mesh.positions, mesh.normals) = (positions.clone(), normals.clone());
             }
+            mesh.positions.iter_mut().for_each(|p| *p += o.translation);
         }
         moved
     }
@@ -416,8 +440,11 @@ impl Configuration {
     /// The renderer set to this configuration (the occluder first: set_lights refits the
     /// shadow maps to it).
     fn apply(&self, renderer: &mut Renderer) -> Result<()> {
-        if let Some((mesh, translation)) = self.occluder {
-            renderer.set_mesh_translation(mesh, translation)?;
+        if let Some(o) = &self.occluder {
+            if let Some((positions, normals)) = &o.turned {
+                renderer.set_mesh_vertices(o.mesh, positions, normals)?;
+            }
+            renderer.set_mesh_translation(o.mesh, o.translation)?;
         }
         renderer.set_lights(&self.lights)?;
         Ok(())
@@ -446,9 +473,11 @@ fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration
             let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
             bail!("{}: occluder_path.mesh \"{}\": no such mesh; the scene has {}", entry.path.display(), path.mesh, names.join(", "));
         };
+        let turns = sweep::spread(&[[0.0; 3], [path.turn_degrees, 0.0, 0.0]], path.frames);
         return Ok(sweep::spread(&path.points, path.frames)
             .into_iter()
-            .map(|t| Configuration { occluder: Some((mesh, t)), ..at_rest() })
+            .zip(turns)
+            .map(|(t, turn)| Configuration { occluder: Some(MovedMesh::new(scene, mesh, t, turn.x)), ..at_rest() })
             .collect());
     }
     Ok(vec![at_rest()])
@@ -547,5 +576,24 @@ mod tests {
         assert!(failure.contains("2 NaN"), "a NaN image must not be scored: {failure}");
         let black = Reference { indirect: Image::new(4, 4), combined: Image::new(4, 4) };
         assert!(accuracy(&grey, &black, &Image::new(4, 4)).unwrap().unwrap_err().contains("black"));
+    }
+
+    #[test]
+    fn an_occluder_path_turns_its_mesh_about_its_bounds_centre_then_moves_it() {
+        use relume_bake::testing::{closed_box, look_at, scene, Facing};
+        let block = closed_box(Vec3::new(1.0, 0.0, 1.0), Vec3::new(3.0, 1.0, 2.0), 1, Facing::Outward, 0);
+        let s = scene("block", vec![block], vec![], vec![], look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 0.8));
+        let turned = MovedMesh::new(&s, 0, Vec3::new(0.0, 2.0, 0.0), 90.0);
+        let configuration = Configuration { lights: vec![], light_position: None, occluder: Some(turned) };
+        let moved = configuration.apply_to(&s).meshes.remove(0);
+        let (lo, hi) = moved.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        // 2 x 1 x 1 about (2, 0.5, 1.5): turned a quarter, 1 x 1 x 2 about the same centre, 2 m up.
+        assert!(
+            (lo - Vec3::new(1.5, 2.0, 0.5)).abs().max_element() < 1e-5 && (hi - Vec3::new(2.5, 3.0, 2.5)).abs().max_element() < 1e-5,
+            "{lo} {hi}"
+        );
+        let x_face = s.meshes[0].normals.iter().position(|n| *n == Vec3::X).unwrap();
+        assert!((moved.normals[x_face] - Vec3::NEG_Z).length() < 1e-6, "{}", moved.normals[x_face]);
+        assert!(MovedMesh::new(&s, 0, Vec3::ZERO, 0.0).turned.is_none());
     }
 }

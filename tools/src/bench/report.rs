@@ -429,6 +429,7 @@ mod tests {
             light,
             light_position: None,
             occluder_translation: None,
+            occluder_turn_degrees: None,
             method: "m".into(),
             params: params.into(),
             params_table: toml::Table::new(),

@@ -90,6 +90,8 @@ pub(crate) struct Row {
     pub light_position: Option<[f32; 3]>,
     /// The moving occluder's translation (None without an occluder path).
     pub occluder_translation: Option<[f32; 3]>,
+    /// Its turn about the vertical axis, degrees (None without an occluder path).
+    pub occluder_turn_degrees: Option<f32>,
     pub method: String,
     pub params: String,
     #[serde(skip)]
@@ -148,6 +150,7 @@ pub(crate) fn csv_header(passes: &[String]) -> Vec<String> {
         "occluder_dx",
         "occluder_dy",
         "occluder_dz",
+        "occluder_turn_degrees",
         "method",
         "params",
         "status",
@@ -184,6 +187,7 @@ fn csv_cells(row: &Row, passes: &[String]) -> Vec<String> {
         translation(0),
         translation(1),
         translation(2),
+        row.occluder_turn_degrees.map(|t| t.to_string()).unwrap_or_default(),
         row.method.clone(),
         row.params.clone(),
         row.status.clone(),

@@ -83,6 +83,10 @@ pub(crate) struct OccluderPath {
     /// evenly by length along the polyline, both ends included.
     pub points: Vec<[f32; 3]>,
     pub frames: u32,
+    /// Degrees the mesh turns about the vertical axis through its bounds' centre over the
+    /// frames, spread evenly (0: it only translates).
+    #[serde(default)]
+    pub turn_degrees: f32,
 }
 
 #[derive(Deserialize, Debug)]
@@ -138,6 +142,9 @@ impl Sweep {
             }
             if let Some(j) = self.scenes[..i].iter().position(|other| other.name() == name) {
                 bail!("scenes[{j}] and scenes[{i}] are both named \"{name}\": give each its own `name`");
+            }
+            if scene.occluder_path.as_ref().is_some_and(|p| !p.turn_degrees.is_finite()) {
+                bail!("scenes[{i}].occluder_path.turn_degrees must be a finite number of degrees");
             }
             let paths = [
                 ("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))),
@@ -207,6 +214,7 @@ mod tests {
             ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 2, turn_degrees = nan }\n[[methods]]\nmethod = 'direct'", "turn_degrees must be a finite"),
         ] {
             let path = dir.join("sweep.toml");
             std::fs::write(&path, text).unwrap();

@@ -67,7 +67,7 @@ const RADIAL: Param = Param::choice(
 
 const SELF_SHADOW: Param = Param::choice(
     "self-shadow",
-    "a receiver on an occluder shadowed by that occluder (003 §5): FIV_self from the masks of the surface points nearest the samples, from the table's samples (the paper's), or not",
+    "a receiver on an occluder shadowed by that occluder (003 §5): DifMap less what it hides above the tangent planes of the surface points nearest the samples, the paper's N . (FIV(Env) - FIV_self) from the table's samples, or not",
     &["surface", "paper", "off"],
     Default::Value("surface"),
 )
@@ -170,7 +170,8 @@ impl Method for Fiv {
             .map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.display()))?;
         let reps = representatives(scene, &types);
         let samples = settings.grid.samples();
-        let table_bytes = samples * 36 * types.len();
+        // 36 bytes a sample as 003 Table 1, and the surface points' masks of self-shadowing.
+        let table_bytes: usize = fiv.tables.iter().map(|t| (t.fiv.len() + t.surface.len()) * 36).sum();
         let facts = json!({ "grid": settings.grid.name(), "types": types.len(), "occluders": bake_fiv::occluders(scene, &types).len() });
         let summary = format!(
             "{} occluder types ({} occluders), grid {} ({samples} samples per type), tables {:.2} MiB\n",

@@ -111,6 +111,33 @@ impl Builder {
         self.accessors.len() - 1
     }
 
+    /// A smooth mesh: triangles that share a corner (the same numbers) share its vertex, and
+    /// no normals are written, so the loader computes them area-weighted (docs/FORMATS.md);
+    /// for the large stand-ins, a quarter of the flat-shaded file.
+    pub(super) fn smooth_mesh(&mut self, name: &str, triangles: &[[DVec3; 3]], material: usize) -> usize {
+        let mut index_of = std::collections::HashMap::new();
+        let mut positions: Vec<[f32; 3]> = Vec::new();
+        let mut indices: Vec<u8> = Vec::with_capacity(triangles.len() * 12);
+        for p in triangles.iter().flatten() {
+            let position = p.as_vec3().to_array();
+            let index = *index_of.entry(position.map(f32::to_bits)).or_insert_with(|| {
+                positions.push(position);
+                positions.len() as u32 - 1
+            });
+            indices.extend(index.to_le_bytes());
+        }
+        let position = self.vec3_accessor(&positions, true);
+        let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
+        self.accessors
+            .push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": triangles.len() * 3, "type": "SCALAR" }));
+        let index_accessor = self.accessors.len() - 1;
+        self.meshes.push(json!({
+            "name": name,
+            "primitives": [{ "attributes": { "POSITION": position }, "indices": index_accessor, "material": material, "mode": 4 }],
+        }));
+        self.meshes.len() - 1
+    }
+
     /// A flat-shaded mesh: three vertices per triangle carrying the face normal.
     pub(super) fn mesh(&mut self, name: &str, triangles: &[[DVec3; 3]], material: usize) -> usize {
         let mut positions = Vec::with_capacity(triangles.len() * 3);

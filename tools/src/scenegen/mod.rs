@@ -18,6 +18,9 @@
 //! - `fiv-blobs`: two lumpy blobs and a box over a ground plane, lit only by a sky with a
 //!   small sun (`envs/sky.exr`): a stand-in for the fullsphere-irradiance paper's Fig. 12,
 //!   the blobs and the box its occluders.
+//! - `fiv-garden`: a bunny-sized blob (81,920 triangles) and two instances of a tree-like
+//!   occluder (a trunk under three blobs) over the ground under the sky: the paper's
+//!   Table 1 mesh sizes and its self-shadowing (Fig. 18).
 //! - `fiv-crowd-<N>`, N = 1, 10, 20, 30, 40, 60: N instances of that blob on a grid under the
 //!   sky, the occluder counts of that paper's Table 2 (cost against occluders).
 //! - `cornell-wall-light`: the `cornell` geometry with its spot light 5 cm from the red wall,
@@ -31,7 +34,8 @@
 //!
 //! Geometry is flat shaded: every triangle has its own three vertices carrying its face
 //! normal, so shading normals equal geometric normals and the path tracer and the renderer
-//! see the same surface. Bytes are deterministic: JSON keys are written in a fixed (sorted)
+//! see the same surface; `fiv-garden`'s large meshes alone are smooth (shared vertices,
+//! normals computed by the loader, which both then interpolate alike). Bytes are deterministic: JSON keys are written in a fixed (sorted)
 //! order, every JSON number is an f32 written in its shortest round-trip form, and the `.bin`
 //! holds little-endian f32 and u32 data.
 
@@ -47,11 +51,11 @@ use glam::Vec3;
 use relume_bake::environment::lat_long_image;
 use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::testing::{sky, two_area_lights};
-use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, fiv_crowd, occluder_plane, occluder_stacked, table_chair};
+use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane, occluder_stacked, table_chair};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 13] = [
+pub const SCENE_NAMES: [&str; 14] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -59,6 +63,7 @@ pub const SCENE_NAMES: [&str; 13] = [
     "classroom",
     "cornell-wall-light",
     "fiv-blobs",
+    "fiv-garden",
     "fiv-crowd-1",
     "fiv-crowd-10",
     "fiv-crowd-20",
@@ -69,14 +74,18 @@ pub const SCENE_NAMES: [&str; 13] = [
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
 /// `sky` (a blue-to-white gradient over a dim ground with a sun 2 degrees in radius and
-/// radiance 400, 50 degrees up: on open ground about a third of the light), `two-area-lights` (003 Fig. 14's red and green lights) and
-/// `uniform` (radiance 1 everywhere: the furnace).
-pub const ENVIRONMENT_NAMES: [&str; 3] = ["sky", "two-area-lights", "uniform"];
+/// radiance 400, 50 degrees up: on open ground about a third of the light), `sun` (the same
+/// sky with a sun 0.7 degrees in radius, radiance 3200: one or two lat-long texels, within
+/// one texel of a 32-texel working cube: 003 Fig. 13's directional light),
+/// `two-area-lights` (003 Fig. 14's red and green lights) and `uniform` (radiance 1
+/// everywhere: the furnace).
+pub const ENVIRONMENT_NAMES: [&str; 4] = ["sky", "sun", "two-area-lights", "uniform"];
 
 /// The image of a named environment.
 fn environment(name: &str) -> Option<Image> {
     let image = match name {
         "sky" => lat_long_image(256, sky(Vec3::new(0.45, 0.77, 0.45), Vec3::splat(400.0), 2.0)),
+        "sun" => lat_long_image(256, sky(Vec3::new(0.45, 0.77, 0.45), Vec3::splat(3200.0), 0.7)),
         "two-area-lights" => lat_long_image(256, two_area_lights(5.0)),
         "uniform" => lat_long_image(256, |_| Vec3::ONE),
         _ => return None,
@@ -119,6 +128,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "classroom" => classroom(),
         "cornell-wall-light" => cornell_wall_light(),
         "fiv-blobs" => fiv_blobs(),
+        "fiv-garden" => fiv_garden(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
         _ => return None,
     };

@@ -66,9 +66,17 @@ fn generated_scenes_load() {
                 let longest = (b - a).length().max((c - b).length()).max((a - c).length());
                 let rounding = [a, b, c].iter().map(|p| p.abs().max_element()).fold(0.0f32, f32::max) * f32::EPSILON;
                 let tolerance = 1e-5 + 4.0 * rounding * longest / double_area;
+                // A smooth mesh (shared vertices: fiv-garden's) has the loader's area-weighted
+                // normals, which may only lean from the face, not turn from it.
+                let smooth = m.positions.len() < m.indices.len();
                 for i in tri {
-                    let off = (n - m.normals[*i as usize]).length();
-                    assert!(off < tolerance, "{name}: {}: winding and normal disagree by {off} (tolerance {tolerance})", m.name);
+                    let normal = m.normals[*i as usize];
+                    let off = (n - normal).length();
+                    assert!(
+                        if smooth { n.dot(normal) > 0.5 } else { off < tolerance },
+                        "{name}: {}: winding and normal disagree by {off} (tolerance {tolerance}, smooth {smooth})",
+                        m.name
+                    );
                 }
             }
         }
