@@ -276,12 +276,35 @@ fn staging_folder(dir: &Path) -> PathBuf {
     dir.with_file_name(name)
 }
 
-fn refuse_foreign_folder(dir: &Path) -> Result<(), ArtifactError> {
-    let Ok(mut entries) = std::fs::read_dir(dir) else { return Ok(()) };
-    if entries.next().is_some() && !dir.join("manifest.json").is_file() {
-        return Err(fail(dir, "exists, is not empty and holds no bake artifact (no manifest.json)", "choose another --out folder"));
+/// A bake replaces only what a bake wrote: `dir` must be new, empty, or a bake artifact
+/// whose every entry its manifest names (the manifest, the stats and the sections' files);
+/// anything else in it (a user's file, a folder) refuses the bake, by name.
+pub fn refuse_foreign_folder(dir: &Path) -> Result<(), ArtifactError> {
+    const FIX: &str = "choose an empty or new --out folder";
+    match std::fs::symlink_metadata(dir) {
+        Err(_) => return Ok(()),
+        Ok(m) if !m.is_dir() => return Err(fail(dir, "exists and is not a folder", FIX)),
+        Ok(_) => {}
     }
-    Ok(())
+    let entries: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| fail(dir, format!("cannot be listed ({e})"), FIX))?
+        .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+        .collect::<Result<_, _>>()
+        .map_err(|e| fail(dir, format!("cannot be listed ({e})"), FIX))?;
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let manifest: Option<Value> = std::fs::read(dir.join("manifest.json")).ok().and_then(|b| serde_json::from_slice(&b).ok());
+    let Some(manifest) = manifest.filter(|m| m["format"] == FORMAT) else {
+        return Err(fail(dir, "exists, is not empty and holds no bake artifact (no relume manifest.json)", FIX));
+    };
+    let sections = manifest["sections"].as_array().into_iter().flatten();
+    let listed: Vec<&str> = sections.filter_map(|s| s["files"].as_object()).flat_map(|f| f.keys().map(String::as_str)).collect();
+    let foreign = entries.iter().find(|e| !["manifest.json", "stats.json"].contains(&e.as_str()) && !listed.contains(&e.as_str()));
+    match foreign {
+        Some(name) => Err(fail(dir, format!("holds \"{name}\", which no bake wrote there; a bake replaces the whole folder"), FIX)),
+        None => Ok(()),
+    }
 }
 
 fn replace_folder(staging: &Path, dir: &Path) -> Result<(), ArtifactError> {

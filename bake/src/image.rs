@@ -40,10 +40,24 @@ fn io_error(path: &Path, message: impl std::fmt::Display) -> ImageError {
     ImageError::Io { path: path.to_path_buf(), message: message.to_string() }
 }
 
+/// Inputs are regular files: a FIFO would block the read for ever, a device such as
+/// /dev/zero read without end. Err names what the path is not, for the caller's message.
+pub fn refuse_irregular_input(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err("is not a regular file (a folder, a device, a FIFO or a socket); give a file".into()),
+        _ => Ok(()),
+    }
+}
+
 /// Writes a file through a temporary sibling and a rename, so a failure never leaves a
-/// half-written file under the final name.
+/// half-written file under the final name. Outputs are regular files: anything else under
+/// the name (a folder, a device such as /dev/null, a FIFO, a socket) is refused, not
+/// replaced.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
     let file_name = path.file_name().ok_or_else(|| io_error(path, "not a file path"))?;
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return Err(io_error(path, "exists and is not a regular file (a folder, a device, a FIFO or a socket); relume writes only regular files: choose a file path"));
+    }
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
     tmp_name.push(format!(".{}.tmp", std::process::id()));
@@ -107,6 +121,7 @@ fn encode(layers: &[(&str, LayerPixels)], size: (usize, usize)) -> Result<Vec<u8
 /// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb"),
 /// streaming it from the file.
 pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
+    refuse_irregular_input(path).map_err(|e| io_error(path, e))?;
     let open = || std::fs::File::open(path).map(std::io::BufReader::new).map_err(|e| io_error(path, format!("cannot read ({e})")));
     check_exr_size(open()?).map_err(|e| io_error(path, e))?;
     decode_exr_layers(open()?).map_err(|e| io_error(path, e))

@@ -197,7 +197,21 @@ fn a_folder_that_is_not_an_artifact_is_never_replaced() {
         stats: json!({}),
     };
     let error = output.write(&dir).unwrap_err().to_string();
-    assert!(error.contains("choose another --out"), "{error}");
+    assert!(error.contains("choose an empty or new --out folder"), "{error}");
     assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
+    // An artifact with a user's file beside it is not replaced either (issue: a folder that
+    // merely holds a manifest.json lost everything else in it); its own bake may replace it.
+    std::fs::remove_file(dir.join("notes.txt")).unwrap();
+    write(&scene, &dir);
+    write(&scene, &dir);
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let error = output.write(&dir).unwrap_err().to_string();
+    assert!(error.contains("\"notes.txt\", which no bake wrote there") && error.contains("empty or new"), "{error}");
+    assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
+    assert!(Artifact::read(&dir).is_ok(), "the artifact beside it is intact");
+    // Something other than a folder in the way is refused too.
+    let file = dir.join("notes.txt");
+    assert!(output.write(&file).unwrap_err().to_string().contains("is not a folder"));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -650,6 +650,28 @@ fn png_base_color_texture_is_decoded_to_linear() {
     let e = load_err(&dir.join("y.gltf"));
     assert_eq!(e.kind, ErrorKind::Unsupported);
     assert!(e.to_string().contains("JPEG"));
+    // A small PNG whose header claims 100000 x 100000 pixels is refused before anything is
+    // allocated (30 GB would abort the process).
+    let mut bomb = png_bytes.clone();
+    bomb[16..20].copy_from_slice(&100_000u32.to_be_bytes());
+    bomb[20..24].copy_from_slice(&100_000u32.to_be_bytes());
+    let crc = crc32(&bomb[12..29]);
+    bomb[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(dir.join("tex.png"), &bomb).unwrap();
+    let e = load_err(&dir.join("y.gltf"));
+    assert!(e.to_string().contains("100000 x 100000") && e.to_string().contains("downscale"), "{e}");
+}
+
+/// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
 }
 
 /// Corrupted and truncated files are refused (or loaded), never a panic.

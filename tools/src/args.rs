@@ -223,3 +223,27 @@ pub(crate) fn frame_count(frames: u32) -> Result<u32> {
     }
     Ok(frames)
 }
+
+/// Refuses a command whose outputs would replace one of its inputs (`reference --out
+/// scene.gltf`, `compare --error-image` on its image): the paths are compared after
+/// resolving links and `..`, an output that does not exist yet by its folder.
+pub(crate) fn refuse_writing_over(outputs: &[PathBuf], inputs: &[&Path]) -> Result<()> {
+    let resolved = |p: &Path| -> Option<PathBuf> {
+        std::fs::canonicalize(p).ok().or_else(|| {
+            let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            Some(std::fs::canonicalize(parent).ok()?.join(p.file_name()?))
+        })
+    };
+    for output in outputs {
+        let Some(target) = resolved(output) else { continue };
+        if let Some(input) = inputs.iter().find(|i| resolved(i).as_ref() == Some(&target)) {
+            bail!("{}: this output would replace the input {}; write it elsewhere", output.display(), input.display());
+        }
+    }
+    Ok(())
+}
+
+/// The files a scene's command reads by name: the scene and the environment it is given.
+pub(crate) fn scene_inputs(scene: &SceneArgs) -> Vec<&Path> {
+    [Some(scene.scene.as_path()), scene.environment.as_deref()].into_iter().flatten().collect()
+}

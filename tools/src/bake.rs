@@ -69,6 +69,8 @@ pub(crate) fn bake_scene(
     work: WorkOptions,
     out: &Path,
 ) -> Result<String> {
+    // Refused before the work, not after it (the write checks again).
+    relume_bake::artifact::refuse_foreign_folder(out)?;
     let mut stages = Stages::default();
     let bake = method.bake(scene, values, work, &mut stages)?;
     let mut stats = bake.stats;

@@ -1,7 +1,7 @@
 //! `relume reference` (the CPU path tracer's ground truth) and `relume compare` (RMSE and
 //! NRMSE of one EXR against another, with a false-colour error image).
 
-use crate::args::{load_scene, positive, reference_settings, PathTracerArgs, SceneArgs};
+use crate::args::{load_scene, positive, reference_settings, refuse_writing_over, scene_inputs, PathTracerArgs, SceneArgs};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use relume_bake::bvh::SceneBvh;
@@ -70,6 +70,7 @@ pub(crate) fn write_reference(path: &Path, run: &ReferenceRun, exposure: f32) ->
 }
 
 pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
+    refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
     positive("--exposure", args.exposure)?;
@@ -84,6 +85,7 @@ pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
 
 pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
     positive("--error-scale", args.error_scale)?;
+    refuse_writing_over(args.error_image.as_slice(), &[&args.image, &args.reference])?;
     let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
     let reference = match &args.reference_layer {
         Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,
@@ -91,6 +93,16 @@ pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
     };
     let stats =
         metrics::compare(&image, &reference).with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
+    let unusable = reference.pixels.iter().filter(|p| !p.is_finite()).count();
+    if unusable > 0 {
+        bail!("{}: {unusable} pixel(s) of the reference are NaN or infinite; compare against a finite reference", args.reference.display());
+    }
+    if reference.pixels.iter().all(|p| *p == glam::Vec3::ZERO) {
+        bail!(
+            "{}: the reference is black everywhere, and an error relative to it has no meaning; compare against a lit reference",
+            args.reference.display()
+        );
+    }
     println!("RMSE  {:.6}\nNRMSE {:.6}", stats.rmse, stats.nrmse);
     if stats.dark_pixels > 0 {
         println!("light where the reference is black: {:.6} of its RMS over {} pixels", stats.dark_leak, stats.dark_pixels);

@@ -1,7 +1,7 @@
 //! `relume render`: one scene through the Vulkan renderer, headless, to EXR and PNG, with the
 //! techniques of the method that baked `--bake` (or none: constant ambient light).
 
-use crate::args::{frame_count, load_scene, render_settings, GpuArgs, SceneArgs};
+use crate::args::{frame_count, load_scene, refuse_writing_over, render_settings, scene_inputs, GpuArgs, SceneArgs};
 use crate::gpu::{print_timings, render_on_gpu, write_render_outputs, GpuJob};
 use crate::methods;
 use crate::methods::params::{RenderParams, Stage};
@@ -32,6 +32,7 @@ pub(crate) struct RenderArgs {
 }
 
 pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
+    refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
     let frames = frame_count(args.frames)?;
     let artifact = args.bake.as_deref().map(Artifact::read).transpose()?;

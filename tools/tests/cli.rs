@@ -230,3 +230,86 @@ fn render_takes_a_light_path_maps_bake_and_its_composition() {
         assert!(!dir.join("none.exr").exists(), "{args:?} left an output");
     }
 }
+
+/// Runs `relume reference` on `scene` at 8 x 8, 1 spp, into `out`.
+fn reference_into(scene: &Path, out: &Path) -> std::process::Output {
+    let args = ["reference", "--width", "8", "--height", "8", "--spp", "1", "--out"];
+    Command::new(env!("CARGO_BIN_EXE_relume")).args(args).arg(out).arg(scene).output().expect("run relume")
+}
+
+/// Exit code 1 and one error line (warnings aside) holding every one of `words`.
+fn assert_one_error(result: &std::process::Output, words: &[&str]) {
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    let lines: Vec<_> = stderr.lines().filter(|l| !l.trim().is_empty() && !l.starts_with("warning:")).collect();
+    assert_eq!(lines.len(), 1, "one error line expected, got:\n{stderr}");
+    for word in words {
+        assert!(lines[0].contains(word), "\"{word}\" missing from: {stderr}");
+    }
+}
+
+#[test]
+fn outputs_never_replace_inputs_devices_or_a_users_folder() {
+    let dir = temp_dir("outputs");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let scene_bytes = std::fs::read(&scene).unwrap();
+    // The scene itself as the output, also by another spelling of its path.
+    assert_one_error(&reference_into(&scene, &scene), &["would replace the input", "scene.gltf"]);
+    assert_one_error(&reference_into(&scene, &dir.join("../").join(dir.file_name().unwrap()).join("scene.gltf")), &["would replace"]);
+    assert_eq!(std::fs::read(&scene).unwrap(), scene_bytes);
+    // A device (run as root, /dev/null was replaced by a regular file).
+    assert_one_error(&reference_into(&scene, Path::new("/dev/null")), &["/dev/null", "not a regular file"]);
+    assert!(!std::fs::metadata("/dev/null").unwrap().is_file(), "/dev/null is no longer a device");
+    // compare's error image over one of its inputs.
+    assert!(reference_into(&scene, &dir.join("a.exr")).status.success());
+    let a_bytes = std::fs::read(dir.join("a.exr")).unwrap();
+    let compare = |image: &str, reference: &str, error_image: &str| {
+        let args = ["compare", image, reference, "--error-image", error_image];
+        Command::new(env!("CARGO_BIN_EXE_relume")).args(args).current_dir(&dir).output().unwrap()
+    };
+    assert_one_error(&compare("a.exr", "a.exr", "a.exr"), &["a.exr", "would replace the input"]);
+    assert_eq!(std::fs::read(dir.join("a.exr")).unwrap(), a_bytes);
+    // A bake into a folder holding a user's file is refused before any work.
+    let mine = dir.join("bake-out");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "mine").unwrap();
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
+    let bake = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .args(["bake", "--method", "obscurance", "--out"])
+        .arg(&mine)
+        .arg(&cornell)
+        .output()
+        .unwrap();
+    assert_one_error(&bake, &["bake-out", "no relume manifest.json", "empty or new"]);
+    assert_eq!(std::fs::read_dir(&mine).unwrap().count(), 1);
+    assert_eq!(std::fs::read_to_string(mine.join("notes.txt")).unwrap(), "mine");
+}
+
+#[test]
+fn compare_refuses_a_black_or_non_finite_reference() {
+    use relume_bake::image::{write_exr_layers, Image};
+    let dir = temp_dir("compare-reference");
+    let mut image = Image::new(4, 4);
+    image.pixels.iter_mut().for_each(|p| *p = glam::Vec3::splat(0.5));
+    let mut nan = image.clone();
+    nan.pixels[3] = glam::Vec3::new(f32::NAN, 0.0, 0.0);
+    for (name, picture) in [("image.exr", &image), ("black.exr", &Image::new(4, 4)), ("nan.exr", &nan)] {
+        write_exr_layers(&dir.join(name), &[("combined", picture)]).unwrap();
+    }
+    let compare = |reference: &str| relume(&["compare", "image.exr", reference], &dir);
+    assert_one_error(&compare("black.exr"), &["black.exr", "black everywhere"]);
+    assert_one_error(&compare("nan.exr"), &["nan.exr", "1 pixel(s)", "NaN"]);
+    assert!(compare("image.exr").status.success());
+}
+
+#[test]
+fn a_fifo_or_a_device_as_an_input_is_refused_without_blocking() {
+    let dir = temp_dir("fifo");
+    let fifo = dir.join("pipe.gltf");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo").success());
+    assert_refused(&fifo, &["pipe.gltf", "not a regular file"]);
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let endless = std::fs::read_to_string(&scene).unwrap().replace("\"uri\": \"scene.bin\"", "\"uri\": \"/dev/zero\"");
+    std::fs::write(&scene, endless).unwrap();
+    assert_refused(&scene, &["scene.gltf", "/dev/zero", "not a regular file"]);
+}

@@ -102,6 +102,11 @@ impl Loader<'_> {
     }
 }
 
+/// The most pixels a texture may have: decoded to linear RGBA f32, 1 GiB. Checked against
+/// the PNG's header before anything is allocated, so a small file that claims a huge image
+/// is refused, not a failed allocation.
+const MAX_TEXTURE_PIXELS: u64 = 8192 * 8192;
+
 /// Decodes a PNG base-colour image to linear RGBA (sRGB transfer undone on rgb; alpha is
 /// linear already). Other formats are refused by their signature, whatever the mimeType says.
 pub(super) fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Texture, SceneError> {
@@ -116,6 +121,15 @@ pub(super) fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Re
     // Palette to RGB, tRNS to alpha, low bit depths to 8; 16-bit stays 16-bit.
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(bad)?;
+    let (width, height) = (reader.info().width, reader.info().height);
+    if u64::from(width) * u64::from(height) > MAX_TEXTURE_PIXELS {
+        return Err(ctx.fail(
+            ErrorKind::Image,
+            item,
+            format!("its header says {width} x {height} pixels, more than relume decodes ({MAX_TEXTURE_PIXELS} pixels, 8192 x 8192)"),
+            "downscale the image",
+        ));
+    }
     let Some(size) = reader.output_buffer_size() else {
         return Err(ctx.fail(ErrorKind::Image, item, "the PNG is too large", "use a smaller image"));
     };

@@ -116,6 +116,8 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
 
 /// Loads a scene; `camera`, when given, replaces the file's camera.
 pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
+    crate::image::refuse_irregular_input(path)
+        .map_err(|e| Ctx { path }.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
     let bytes = std::fs::read(path).map_err(|e| {
         let err = Ctx { path };
         if e.kind() == std::io::ErrorKind::NotFound {
