@@ -19,7 +19,7 @@ pub(crate) struct SceneArgs {
     /// A glTF 2.0 scene (.gltf or .glb).
     pub scene: PathBuf,
     /// Camera instead of the scene's: "eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]".
-    #[arg(long)]
+    #[arg(long, value_parser = |text: &str| CameraOverride::parse(text).map(|_| text.to_string()).map_err(|e| e.to_string()))]
     pub camera: Option<String>,
     #[arg(long, default_value_t = 512)]
     pub width: u32,

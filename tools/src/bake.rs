@@ -18,7 +18,7 @@ pub(crate) struct BakeArgs {
     /// A glTF 2.0 scene (.gltf or .glb).
     scene: PathBuf,
     /// The method to bake: one of the registry's with a bake (`relume methods` lists them).
-    #[arg(long)]
+    #[arg(long, value_parser = |name: &str| baking_method(name).map(|m| m.name().to_string()).map_err(|e| e.to_string()))]
     method: String,
     #[command(flatten)]
     work: WorkArgs,

@@ -42,6 +42,7 @@ enum Command {
     /// List the methods and their parameters (bake and run time, with ranges and defaults).
     Methods {
         /// One method's name (default: every method).
+        #[arg(value_parser = methods::method_name)]
         name: Option<String>,
     },
     /// Regenerate the shipped scenes (scenes/*.gltf) from their generator.

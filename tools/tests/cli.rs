@@ -313,3 +313,25 @@ fn a_fifo_or_a_device_as_an_input_is_refused_without_blocking() {
     std::fs::write(&scene, endless).unwrap();
     assert_refused(&scene, &["scene.gltf", "/dev/zero", "not a regular file"]);
 }
+
+/// A value its flag cannot read is a usage error, exit code 2, whichever flag: a number, a
+/// choice, a method's name, a camera.
+#[test]
+fn every_value_that_cannot_be_read_exits_with_2() {
+    let dir = temp_dir("usage");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let scene = scene.to_str().unwrap();
+    for args in [
+        vec!["reference", scene, "--spp", "abc"],
+        vec!["bake", scene, "--method", "foo"],
+        vec!["bake", scene, "--method", "direct"],
+        vec!["methods", "foo"],
+        vec!["reference", scene, "--camera", "eye=1"],
+        vec!["bake", scene, "--method", "fiv", "--grid", "7x7"],
+    ] {
+        let result = relume(&args, &dir);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(args[args.len() - 1]), "{args:?}: {stderr}");
+    }
+}

@@ -171,6 +171,12 @@ impl Stages {
 }
 
 /// The method of that name, or a refusal that lists them.
+/// A method's name as a flag's value: checked by the flag's parser, so an unknown name is a
+/// usage error (exit code 2) like any value that cannot be read.
+pub(crate) fn method_name(name: &str) -> std::result::Result<String, String> {
+    find(name).map(|m| m.name().to_string()).map_err(|e| e.to_string())
+}
+
 pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
     METHODS.iter().copied().find(|m| m.name() == name).with_context(|| {
         format!("method \"{name}\": not a relume method; use one of {}", METHODS.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "))
