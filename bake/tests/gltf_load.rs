@@ -662,6 +662,27 @@ fn png_base_color_texture_is_decoded_to_linear() {
     assert!(e.to_string().contains("100000 x 100000") && e.to_string().contains("downscale"), "{e}");
 }
 
+#[test]
+fn files_outside_the_scenes_folder_are_read_only_when_allowed() {
+    let dir = temp_dir("outside");
+    let inner = dir.join("scene");
+    std::fs::create_dir_all(inner.join("sub")).unwrap();
+    let (mut json, bin) = read_scene("occluder-plane");
+    std::fs::write(dir.join("outside.bin"), &bin).unwrap();
+    for uri in ["../outside.bin", "sub/../../outside.bin"] {
+        json["buffers"][0]["uri"] = json!(uri);
+        let path = write_scene(&inner, "x", &json, None);
+        let e = load_err(&path);
+        assert!(e.to_string().contains("outside the scene's folder") && e.to_string().contains("--allow-outside-files"), "{e}");
+        let options = gltf_load::LoadOptions { camera: None, outside_files: true };
+        assert_eq!(gltf_load::load_with_options(&path, &options).unwrap().scene.meshes.len(), 2);
+    }
+    // Inside its folder, a path through .. is fine.
+    std::fs::write(inner.join("in.bin"), &bin).unwrap();
+    json["buffers"][0]["uri"] = json!("sub/../in.bin");
+    assert_eq!(load_ok(&write_scene(&inner, "y", &json, None)).scene.meshes.len(), 2);
+}
+
 /// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
 fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = !0u32;

@@ -6,7 +6,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::Vec3;
 use relume_bake::environment::{Environment, EnvironmentSettings};
-use relume_bake::gltf_load::{load_with_camera, CameraOverride};
+use relume_bake::gltf_load::{load_with_options, CameraOverride, LoadOptions};
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -29,6 +29,10 @@ pub(crate) struct SceneArgs {
     /// names (the scene must declare one; its intensity, rotation and cube face stay).
     #[arg(long)]
     pub environment: Option<PathBuf>,
+    /// Let the scene read buffers, images and its environment outside its own folder (an
+    /// absolute path or one up through ..); without it such a scene is refused.
+    #[arg(long)]
+    pub allow_outside_files: bool,
 }
 
 #[derive(Args, Clone)]
@@ -116,7 +120,7 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
         bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
-    let mut scene = load(&args.scene, camera.as_ref())?;
+    let mut scene = load(&args.scene, &LoadOptions { camera: camera.as_ref(), outside_files: args.allow_outside_files })?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     Ok(scene)
 }
@@ -150,8 +154,8 @@ fn replaced_environment(scene: &Scene, image: &Path) -> Result<Environment> {
 }
 
 /// The scene at `path`, its load warnings printed.
-pub(crate) fn load(path: &Path, camera: Option<&CameraOverride>) -> Result<Scene> {
-    let loaded = load_with_camera(path, camera)?;
+pub(crate) fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let loaded = load_with_options(path, options)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }

@@ -8,6 +8,7 @@ use crate::methods::{self, Method, Stages};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::BakeOutput;
+use relume_bake::gltf_load::LoadOptions;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use serde_json::json;
@@ -29,6 +30,9 @@ pub(crate) struct BakeArgs {
     /// `render --environment`; a bake keyed to the environment is read only with the same).
     #[arg(long)]
     environment: Option<PathBuf>,
+    /// As `render --allow-outside-files`.
+    #[arg(long)]
+    allow_outside_files: bool,
     #[command(flatten)]
     params: BakeParams,
 }
@@ -53,7 +57,7 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let method = baking_method(&args.method)?;
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Bake))?;
     let work = args.work.options()?;
-    let mut scene = load(&args.scene, None)?;
+    let mut scene = load(&args.scene, &LoadOptions { camera: None, outside_files: args.allow_outside_files })?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
     print!("{}", bake_scene(&scene, method, &values, work, &out)?);

@@ -311,7 +311,12 @@ fn a_fifo_or_a_device_as_an_input_is_refused_without_blocking() {
     let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
     let endless = std::fs::read_to_string(&scene).unwrap().replace("\"uri\": \"scene.bin\"", "\"uri\": \"/dev/zero\"");
     std::fs::write(&scene, endless).unwrap();
-    assert_refused(&scene, &["scene.gltf", "/dev/zero", "not a regular file"]);
+    // Outside the scene's folder: refused as such, and, allowed, as no regular file.
+    assert_refused(&scene, &["scene.gltf", "/dev/zero", "outside the scene's folder", "--allow-outside-files"]);
+    let scene = scene.to_str().unwrap();
+    let allowed =
+        relume(&["reference", scene, "--width", "8", "--height", "8", "--spp", "1", "--allow-outside-files", "--out", "x.exr"], &dir);
+    assert_one_error(&allowed, &["scene.gltf", "/dev/zero", "not a regular file"]);
 }
 
 /// A value its flag cannot read is a usage error, exit code 2, whichever flag: a number, a

@@ -140,6 +140,7 @@ pub(super) fn read_uri(ctx: Ctx, item: &str, uri: &str) -> Result<Vec<u8>, Scene
     }
     let decoded = percent_decode(uri);
     let relative = String::from_utf8_lossy(&decoded).into_owned();
+    refuse_outside(ctx, item, &relative)?;
     let file = ctx.path.parent().unwrap_or(Path::new("")).join(&relative);
     crate::image::refuse_irregular_input(&file)
         .map_err(|e| ctx.fail(ErrorKind::Io, item, format!("{} {e}", file.display()), "point the uri at a file"))?;
@@ -150,6 +151,32 @@ pub(super) fn read_uri(ctx: Ctx, item: &str, uri: &str) -> Result<Vec<u8>, Scene
             ctx.fail(ErrorKind::Io, item, format!("cannot read {}: {e}", file.display()), "check the file's permissions")
         }
     })
+}
+
+/// Refuses a file path of the scene's that leaves its folder (absolute, or up through `..`
+/// past it), unless the load allows outside files: a downloaded scene must not read
+/// `/etc/passwd` or `../../secrets` as a buffer.
+pub(super) fn refuse_outside(ctx: Ctx, item: &str, relative: &str) -> Result<(), SceneError> {
+    use std::path::Component;
+    let mut depth = 0i32;
+    let leaves = Path::new(relative).components().any(|c| {
+        depth += match c {
+            Component::ParentDir => -1,
+            Component::Normal(_) => 1,
+            Component::CurDir => 0,
+            Component::RootDir | Component::Prefix(_) => return true,
+        };
+        depth < 0
+    });
+    if leaves && !ctx.outside_files {
+        return Err(ctx.fail(
+            ErrorKind::Unsupported,
+            item,
+            format!("\"{relative}\" lies outside the scene's folder"),
+            "put the file beside the scene, or pass --allow-outside-files if you trust the scene",
+        ));
+    }
+    Ok(())
 }
 
 pub(super) fn percent_decode(s: &str) -> Vec<u8> {
@@ -227,7 +254,7 @@ mod tests {
 
     #[test]
     fn glb_splitter_refuses_damaged_headers_without_panicking() {
-        let ctx = Ctx { path: Path::new("x.glb") };
+        let ctx = Ctx { path: Path::new("x.glb"), outside_files: false };
         for bytes in
             [&b"glTF"[..], b"glTF\x02\0\0\0\x04\0\0\0", b"glTF\x02\0\0\0\xff\xff\xff\xff", b"glTF\x02\0\0\0\x20\0\0\0\xff\xff\0\0JSON"]
         {

@@ -116,10 +116,27 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
 
 /// Loads a scene; `camera`, when given, replaces the file's camera.
 pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
+    load_with_options(path, &LoadOptions { camera, outside_files: false })
+}
+
+/// How a scene is loaded.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LoadOptions<'c> {
+    /// Replaces the file's camera.
+    pub camera: Option<&'c CameraOverride>,
+    /// Lets the scene's buffers, images and environment lie outside its folder (an
+    /// absolute path or one through `..`): off, a scene a user downloaded reads only its own
+    /// folder.
+    pub outside_files: bool,
+}
+
+/// Loads a scene as `options` say.
+pub fn load_with_options(path: &Path, options: &LoadOptions) -> Result<Loaded, SceneError> {
+    let (camera, outside_files) = (options.camera, options.outside_files);
     crate::image::refuse_irregular_input(path)
-        .map_err(|e| Ctx { path }.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
+        .map_err(|e| Ctx { path, outside_files }.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
     let bytes = std::fs::read(path).map_err(|e| {
-        let err = Ctx { path };
+        let err = Ctx { path, outside_files };
         if e.kind() == std::io::ErrorKind::NotFound {
             err.fail(
                 ErrorKind::NotFound,
@@ -131,7 +148,7 @@ pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<
             err.fail(ErrorKind::Io, "", format!("cannot read the file: {e}"), "check its permissions")
         }
     })?;
-    Loader::new(path, &bytes)?.load(camera)
+    Loader::new(Ctx { path, outside_files }, &bytes)?.load(camera)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -140,6 +157,8 @@ pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<
 #[derive(Clone, Copy)]
 struct Ctx<'a> {
     path: &'a Path,
+    /// LoadOptions::outside_files.
+    outside_files: bool,
 }
 
 impl Ctx<'_> {
@@ -179,8 +198,8 @@ fn quoted_name(kind: &str, name: Option<&str>, index: usize) -> String {
 }
 
 impl<'a> Loader<'a> {
-    fn new(path: &'a Path, bytes: &'a [u8]) -> Result<Self, SceneError> {
-        let ctx = Ctx { path };
+    fn new(ctx: Ctx<'a>, bytes: &'a [u8]) -> Result<Self, SceneError> {
+        let path = ctx.path;
         let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(ctx, bytes)? } else { (bytes, None) };
         let root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json).map_err(|e| {
             ctx.fail(
@@ -361,6 +380,7 @@ impl<'a> Loader<'a> {
 /// The scene's environment, or the refusal naming its file and the fix.
 fn load_environment(ctx: Ctx, scene_item: &str, settings: &EnvironmentSettings) -> Result<Environment, SceneError> {
     let item = format!("{scene_item} extras.relume.environment");
+    files::refuse_outside(ctx, &item, &settings.image.to_string_lossy())?;
     Environment::load(settings, ctx.path).map_err(|e| match &e {
         EnvironmentError::NotFound(_) => {
             ctx.fail(ErrorKind::NotFound, item, e.to_string(), "fix environment.image (a lat-long EXR, relative to the glTF file)")

@@ -143,6 +143,7 @@ fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
         width: sweep.width,
         height: sweep.height,
         environment: entry.environment.clone(),
+        allow_outside_files: false,
     }
 }
 
