@@ -101,14 +101,20 @@ impl Scene {
 
     /// Axis-aligned bounds of every vertex in the scene.
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for p in self.meshes.iter().flat_map(|m| &m.positions) {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        (lo, hi)
+        bounds_of(self.meshes.iter().flat_map(|m| &m.positions))
     }
+}
+
+impl Mesh {
+    /// Axis-aligned bounds of the mesh's vertices.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        bounds_of(&self.positions)
+    }
+}
+
+/// Axis-aligned bounds of `positions`.
+pub(crate) fn bounds_of<'p>(positions: impl IntoIterator<Item = &'p Vec3>) -> (Vec3, Vec3) {
+    positions.into_iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
 }
 
 impl Material {

@@ -69,7 +69,7 @@ pub struct OccluderType {
 /// distance from it (spec fiv.md B3 takes the minimal sphere; this one is exact for the
 /// symmetric stand-ins and never smaller than the shape).
 pub fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
-    let (lo, hi) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let (lo, hi) = crate::scene::bounds_of(positions);
     let centre = (lo + hi) * 0.5;
     (centre, positions.iter().map(|p| p.distance(centre)).fold(0.0, f32::max))
 }

@@ -416,7 +416,7 @@ impl MovedMesh {
     fn new(scene: &Scene, mesh: usize, translation: Vec3, turn_degrees: f32) -> Self {
         let m = &scene.meshes[mesh];
         let turned = (turn_degrees != 0.0).then(|| {
-            let (lo, hi) = m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+            let (lo, hi) = m.bounds();
             let (centre, turn) = ((lo + hi) * 0.5, glam::Quat::from_rotation_y(turn_degrees.to_radians()));
             (m.positions.iter().map(|p| centre + turn * (*p - centre)).collect(), m.normals.iter().map(|n| turn * *n).collect())
         });
@@ -587,7 +587,7 @@ mod tests {
         let turned = MovedMesh::new(&s, 0, Vec3::new(0.0, 2.0, 0.0), 90.0);
         let configuration = Configuration { lights: vec![], light_position: None, occluder: Some(turned) };
         let moved = configuration.apply_to(&s).meshes.remove(0);
-        let (lo, hi) = moved.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let (lo, hi) = moved.bounds();
         // 2 x 1 x 1 about (2, 0.5, 1.5): turned a quarter, 1 x 1 x 2 about the same centre, 2 m up.
         assert!(
             (lo - Vec3::new(1.5, 2.0, 0.5)).abs().max_element() < 1e-5 && (hi - Vec3::new(2.5, 3.0, 2.5)).abs().max_element() < 1e-5,

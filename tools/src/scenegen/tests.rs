@@ -130,7 +130,7 @@ fn generated_scenes_load() {
         assert_eq!(light.kind, LightKind::Spot { inner_cone: 35f32.to_radians(), outer_cone: 45f32.to_radians() });
         // Every occluder lies straight under the light, between it and the ground.
         for m in scene.meshes.iter().filter(|m| m.name != "Ground") {
-            let (lo, hi) = m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+            let (lo, hi) = m.bounds();
             assert!(lo.x < 0.0 && hi.x > 0.0 && lo.z < 0.0 && hi.z > 0.0, "{name}: {} is not under the light", m.name);
             assert!(lo.y > 0.5 && hi.y < light.position.y, "{name}: {}", m.name);
             // The occluder and the shadow below it are in view.
@@ -247,10 +247,6 @@ fn every_light_gives_the_surface_in_front_of_it_pi_lux() {
 
 const ROOM_SURFACES: [&str; 6] = ["Floor", "Ceiling", "BackWall", "FrontWall", "LeftWall", "RightWall"];
 
-fn mesh_bounds(m: &relume_bake::scene::Mesh) -> (Vec3, Vec3) {
-    m.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
-}
-
 /// Room surfaces face the room's inside, every piece of furniture is a closed box facing
 /// outward, no two boxes overlap, and everything (lights and camera too) is in the room.
 fn check_furnished_room(scene: &Scene, name: &str, lo: Vec3, hi: Vec3) {
@@ -258,7 +254,7 @@ fn check_furnished_room(scene: &Scene, name: &str, lo: Vec3, hi: Vec3) {
     let mut boxes = Vec::new();
     for m in &scene.meshes {
         let triangles: Vec<[Vec3; 3]> = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]].map(|i| m.positions[i as usize])).collect();
-        let (mlo, mhi) = mesh_bounds(m);
+        let (mlo, mhi) = m.bounds();
         assert!(mlo.cmpge(lo - 1e-5).all() && mhi.cmple(hi + 1e-5).all(), "{name}: {} leaves the room", m.name);
         if ROOM_SURFACES.contains(&m.name.as_str()) {
             for [a, b, c] in &triangles {
@@ -312,7 +308,7 @@ fn in_view(scene: &Scene, p: Vec3) -> bool {
 
 fn centre(scene: &Scene, mesh: &str) -> Vec3 {
     let m = scene.meshes.iter().find(|m| m.name == mesh).unwrap_or_else(|| panic!("no mesh {mesh}"));
-    let (lo, hi) = mesh_bounds(m);
+    let (lo, hi) = m.bounds();
     (lo + hi) * 0.5
 }
 
@@ -334,8 +330,8 @@ fn furnished_rooms_match_the_papers_sizes_and_face_the_right_way() {
         assert!(in_view(&scene, centre(&scene, mesh)), "table-chair: {mesh} is out of view");
     }
     // The chair is pushed under the table: seat below the top, overlapping it in z.
-    let seat = mesh_bounds(scene.meshes.iter().find(|m| m.name == "ChairSeat").unwrap());
-    let top = mesh_bounds(scene.meshes.iter().find(|m| m.name == "TableTop").unwrap());
+    let seat = scene.meshes.iter().find(|m| m.name == "ChairSeat").unwrap().bounds();
+    let top = scene.meshes.iter().find(|m| m.name == "TableTop").unwrap().bounds();
     assert!(seat.1.y < top.0.y && seat.0.z < top.1.z && seat.1.z > top.1.z);
 
     let scene = load(&dir, "classroom");
