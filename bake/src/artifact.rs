@@ -11,6 +11,7 @@
 
 use crate::environment::Environment;
 use crate::image::{read_exr_layer, Image};
+use crate::outputs::{write_staged, OutputError, Outputs};
 use crate::scene::{Mesh, Scene};
 use serde_json::{json, Map, Value};
 use std::io::Read;
@@ -202,20 +203,17 @@ impl Key {
 
 impl BakeOutput<'_> {
     /// Writes the artifact into `dir` (created if missing). Files are first written into a
-    /// sibling folder, which then replaces `dir`, so `dir` never holds a half-written
-    /// artifact. A non-empty `dir` that is not an artifact is never replaced.
+    /// hidden sibling folder, which then replaces `dir` ([`Outputs::folder`]), so `dir` never
+    /// holds a half-written artifact. A non-empty `dir` that is not an artifact is never
+    /// replaced.
     pub fn write(&self, dir: &Path) -> Result<(), ArtifactError> {
         refuse_foreign_folder(dir)?;
         let manifest = self.manifest(dir)?;
-        let staging = staging_folder(dir);
-        let _ = std::fs::remove_dir_all(&staging);
-        std::fs::create_dir_all(&staging)
-            .map_err(|e| fail(&staging, format!("cannot create the folder ({e})"), "check the path and permissions"))?;
-        let written = self.write_files(&staging, &manifest).and_then(|()| replace_folder(&staging, dir));
-        if written.is_err() {
-            let _ = std::fs::remove_dir_all(&staging);
-        }
-        written
+        let unwritten = |e: OutputError| fail(&e.path, e.message, "check the path, free space and permissions");
+        let mut outputs = Outputs::new();
+        let staging = outputs.folder(dir).map_err(unwritten)?;
+        self.write_files(&staging, &manifest)?;
+        outputs.commit().map_err(unwritten)
     }
 
     fn manifest(&self, dir: &Path) -> Result<Value, ArtifactError> {
@@ -257,7 +255,7 @@ impl BakeOutput<'_> {
     fn write_files(&self, dir: &Path, manifest: &Value) -> Result<(), ArtifactError> {
         for (name, bytes) in self.sections.iter().flat_map(|s| &s.files) {
             let path = dir.join(name);
-            std::fs::write(&path, bytes).map_err(|e| fail(&path, format!("cannot write ({e})"), "check free space and permissions"))?;
+            write_staged(&path, bytes).map_err(|e| fail(&path, format!("cannot write ({e})"), "check free space and permissions"))?;
         }
         write_json(&dir.join("stats.json"), &self.stats)?;
         write_json(&dir.join("manifest.json"), manifest)
@@ -267,13 +265,7 @@ impl BakeOutput<'_> {
 fn write_json(path: &Path, value: &Value) -> Result<(), ArtifactError> {
     let mut text = serde_json::to_string_pretty(value).map_err(|e| fail(path, e.to_string(), "report this as a bug"))?;
     text.push('\n');
-    std::fs::write(path, text).map_err(|e| fail(path, format!("cannot write ({e})"), "check free space and permissions"))
-}
-
-fn staging_folder(dir: &Path) -> PathBuf {
-    let mut name = dir.file_name().map(|n| n.to_os_string()).unwrap_or_else(|| "bake".into());
-    name.push(format!(".partial-{}", std::process::id()));
-    dir.with_file_name(name)
+    write_staged(path, text.as_bytes()).map_err(|e| fail(path, format!("cannot write ({e})"), "check free space and permissions"))
 }
 
 /// A bake replaces only what a bake wrote: `dir` must be new, empty, or a bake artifact
@@ -305,13 +297,6 @@ pub fn refuse_foreign_folder(dir: &Path) -> Result<(), ArtifactError> {
         Some(name) => Err(fail(dir, format!("holds \"{name}\", which no bake wrote there; a bake replaces the whole folder"), FIX)),
         None => Ok(()),
     }
-}
-
-fn replace_folder(staging: &Path, dir: &Path) -> Result<(), ArtifactError> {
-    if dir.exists() {
-        std::fs::remove_dir_all(dir).map_err(|e| fail(dir, format!("cannot replace the old artifact ({e})"), "check permissions"))?;
-    }
-    std::fs::rename(staging, dir).map_err(|e| fail(dir, format!("cannot move the new artifact in place ({e})"), "check permissions"))
 }
 
 // --- reading ------------------------------------------------------------------------------------
@@ -431,6 +416,12 @@ fn read_section(dir: &Path, manifest_path: &Path, entry: &Value) -> Result<Store
             return Err(fail(manifest_path, format!("section {name} names a file outside the folder: {file}"), REBAKE));
         }
         let path = dir.join(file);
+        let size = std::fs::metadata(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?.len();
+        if facts["bytes"].as_u64() != Some(size) {
+            let problem =
+                format!("is {size} bytes, where the manifest says {}: the file is truncated or from another bake", facts["bytes"]);
+            return Err(fail(&path, problem, REBAKE));
+        }
         let expected = facts["checksum"].as_str().unwrap_or("(none)");
         let actual = file_checksum(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?;
         if actual != expected {

@@ -1,5 +1,6 @@
 //! Linear RGB float images, and their files: multi-layer EXR (exact) and tonemapped sRGB PNG.
 
+use crate::outputs::{OutputError, Outputs};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -49,29 +50,6 @@ pub fn refuse_irregular_input(path: &Path) -> Result<(), String> {
     }
 }
 
-/// Writes a file through a temporary sibling and a rename, so a failure never leaves a
-/// half-written file under the final name. Outputs are regular files: anything else under
-/// the name (a folder, a device such as /dev/null, a FIFO, a socket) is refused, not
-/// replaced.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
-    let file_name = path.file_name().ok_or_else(|| io_error(path, "not a file path"))?;
-    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
-        return Err(io_error(path, "exists and is not a regular file (a folder, a device, a FIFO or a socket); relume writes only regular files: choose a file path"));
-    }
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = path.with_file_name(tmp_name);
-    if let Err(message) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_error(path, message));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_error(path, e)
-    })
-}
-
 /// Pixels, row by row, `width` to a row: an image's or a slice's, written without a copy.
 #[derive(Clone, Copy)]
 struct LayerPixels<'a> {
@@ -87,13 +65,19 @@ impl exr::prelude::GetPixel for LayerPixels<'_> {
     }
 }
 
-/// Writes named RGB float layers (all the same size) into one EXR file, losslessly.
-pub fn write_exr_layers(path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
+impl From<OutputError> for ImageError {
+    fn from(e: OutputError) -> ImageError {
+        ImageError::Io { path: e.path, message: e.message }
+    }
+}
+
+/// Stages named RGB float layers (all the same size) as one EXR file, losslessly.
+pub fn write_exr_layers(outputs: &mut Outputs, path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
     let Some((_, first)) = layers.first() else { return Err(io_error(path, "no layers to write")) };
     let views: Vec<_> =
         layers.iter().map(|(name, image)| (*name, LayerPixels { width: image.width as usize, pixels: &image.pixels })).collect();
     let bytes = encode(&views, (first.width as usize, first.height as usize)).map_err(|e| io_error(path, e))?;
-    write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| e.to_string()))
+    Ok(outputs.bytes(path, &bytes)?)
 }
 
 /// The bytes of an EXR file of one named RGB float layer, `width` pixels wide, losslessly.
@@ -217,23 +201,22 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-/// Writes 8-bit RGB pixels (row-major, top row first) as a PNG file.
-pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+/// Stages 8-bit RGB pixels (row-major, top row first) as a PNG file.
+pub fn write_png_rgb8(outputs: &mut Outputs, path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
+    Ok(outputs.file(path, |file| {
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
         writer.write_image_data(rgb).map_err(|e| e.to_string())?;
         writer.finish().map_err(|e| e.to_string())
-    })
+    })?)
 }
 
-/// Tonemaps a linear image (see [`tonemap_to_srgb8`]) and writes it as PNG.
-pub fn write_png_tonemapped(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+/// Tonemaps a linear image (see [`tonemap_to_srgb8`]) and stages it as PNG.
+pub fn write_png_tonemapped(outputs: &mut Outputs, path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
     let rgb: Vec<u8> = image.pixels.iter().flat_map(|p| tonemap_to_srgb8(*p, exposure)).collect();
-    write_png_rgb8(path, image.width, image.height, &rgb)
+    write_png_rgb8(outputs, path, image.width, image.height, &rgb)
 }
 
 #[cfg(test)]
@@ -260,9 +243,14 @@ mod tests {
     fn exr_layers_round_trip_exactly_and_deterministically() {
         let (a, b) = (gradient(7, 5, 0.1), gradient(7, 5, 1e3));
         let path = temp_path("round-trip.exr");
-        write_exr_layers(&path, &[("direct", &a), ("combined", &b)]).unwrap();
+        let write = || {
+            let mut outputs = Outputs::new();
+            write_exr_layers(&mut outputs, &path, &[("direct", &a), ("combined", &b)]).unwrap();
+            outputs.commit().unwrap();
+        };
+        write();
         let first = std::fs::read(&path).unwrap();
-        write_exr_layers(&path, &[("direct", &a), ("combined", &b)]).unwrap();
+        write();
         assert_eq!(first, std::fs::read(&path).unwrap(), "same image, same bytes");
         assert_eq!(read_exr_layer(&path, Some("combined")).unwrap(), b);
         assert_eq!(read_exr_layer(&path, None).unwrap(), a);
@@ -276,19 +264,6 @@ mod tests {
         std::fs::write(&path, b"not an image").unwrap();
         let error = read_exr_layers(&path).unwrap_err().to_string();
         assert!(error.contains("garbage.exr") && error.contains("EXR"), "{error}");
-    }
-
-    #[test]
-    fn a_failed_write_leaves_no_file() {
-        let path = temp_path("never.png");
-        let result = write_atomically(&path, |_| Err("disk full".into()));
-        assert!(result.unwrap_err().to_string().contains("disk full"));
-        assert!(!path.exists());
-        let leftovers = std::fs::read_dir(path.parent().unwrap())
-            .unwrap()
-            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains("never.png"))
-            .count();
-        assert_eq!(leftovers, 0, "temporary file left behind");
     }
 
     #[test]

@@ -13,6 +13,7 @@ pub mod gltf_load;
 pub mod image;
 pub mod methods;
 pub mod metrics;
+pub mod outputs;
 pub mod scene;
 pub mod settings;
 pub mod testing;

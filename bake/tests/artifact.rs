@@ -94,7 +94,7 @@ fn corrupt_old_foreign_and_mismatched_artifacts_are_refused() {
     let error = refusal(&dir, &scene);
     assert!(error.contains("atlas.bin") && error.contains("checksum"), "{error}");
     std::fs::write(&atlas_bin, &original[..original.len() / 2]).unwrap();
-    assert!(refusal(&dir, &scene).contains("checksum"));
+    assert!(refusal(&dir, &scene).contains("truncated"));
     std::fs::write(&atlas_bin, &original).unwrap();
 
     let error = refusal(&dir, &test_scene(2.5));
@@ -114,6 +114,52 @@ fn corrupt_old_foreign_and_mismatched_artifacts_are_refused() {
     assert!(refusal(&dir, &scene).contains("not valid JSON"));
     std::fs::remove_file(&manifest_path).unwrap();
     assert!(refusal(&dir, &scene).contains("manifest.json"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Data whose checksum matches but whose values a bake never makes is refused by name:
+/// a texel's coverage, normal or triangle out of range, a NaN lightmap texel; and a file whose
+/// size is not the manifest's.
+#[test]
+fn decoded_values_out_of_range_are_refused() {
+    let scene = test_scene(2.0);
+    let dir = temp_dir("ranges");
+    let atlas = write(&scene, &dir);
+    let covered = atlas.texels.iter().position(|t| t.coverage > 0.0).unwrap();
+    type Spoil = fn(&mut relume_bake::atlas::Texel);
+    let texel_errors: [(&str, Spoil); 4] = [
+        ("coverage 2", |t| t.coverage = 2.0),
+        ("unit normal", |t| t.normal = Vec3::new(f32::NAN, 0.0, 0.0)),
+        ("names triangle 4000000000", |t| t.triangle = 4_000_000_000),
+        ("unit normal", |t| t.normal *= 3.0),
+    ];
+    for (words, spoil) in texel_errors {
+        let mut section = atlas.to_section();
+        spoil(&mut section.texels[covered]);
+        let output = BakeOutput {
+            method: "obscurance",
+            scene: Some(&scene),
+            parameters: json!({}),
+            sections: vec![section.section(json!({}))],
+            stats: json!({}),
+        };
+        output.write(&dir).unwrap();
+        let error = refusal(&dir, &scene);
+        assert!(error.contains("atlas.bin") && error.contains(&format!("texel {covered}")) && error.contains(words), "{error}");
+    }
+    let mut values = vec![Vec3::ONE; atlas.texels.len()];
+    values[7] = Vec3::new(0.0, f32::INFINITY, 0.0);
+    let section = obscurance::section(&values, atlas.layout(), json!({})).unwrap();
+    let output = BakeOutput { method: "obscurance", scene: Some(&scene), parameters: json!({}), sections: vec![section], stats: json!({}) };
+    output.write(&dir).unwrap();
+    let error = obscurance::read(&Artifact::read(&dir).unwrap(), &scene, atlas.layout()).err().unwrap().to_string();
+    assert!(error.contains("obscurance.exr") && error.contains("texel 7") && error.contains("finite"), "{error}");
+    let manifest_path = dir.join("manifest.json");
+    let manifest = std::fs::read_to_string(&manifest_path).unwrap();
+    let bytes = std::fs::metadata(dir.join("obscurance.exr")).unwrap().len();
+    std::fs::write(&manifest_path, manifest.replace(&format!("\"bytes\": {bytes}"), "\"bytes\": 12")).unwrap();
+    let error = Artifact::read(&dir).unwrap_err().to_string();
+    assert!(error.contains("obscurance.exr") && error.contains(&format!("is {bytes} bytes")) && error.contains("says 12"), "{error}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

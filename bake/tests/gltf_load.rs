@@ -521,7 +521,11 @@ fn an_environment_is_light_enough_and_a_bad_one_is_refused_by_name() {
         n.as_object_mut().unwrap().remove("extensions");
     }
     std::fs::create_dir_all(dir.join("envs")).unwrap();
-    let write = |name: &str, image: &Image| image::write_exr_layers(&dir.join("envs").join(name), &[("rgb", image)]).unwrap();
+    let write = |name: &str, image: &Image| {
+        let mut outputs = relume_bake::outputs::Outputs::new();
+        image::write_exr_layers(&mut outputs, &dir.join("envs").join(name), &[("rgb", image)]).unwrap();
+        outputs.commit().unwrap();
+    };
     write("sky.exr", &lat_long_image(64, |d| Vec3::splat(d.y.max(0.0))));
     json["scenes"][0]["extras"]["relume"]["environment"] = json!({ "image": "envs/sky.exr", "intensity": 2.0, "cube_face": 8 });
     let s = load_ok(&write_scene(&dir, "lit", &json, Some(&bin))).scene;

@@ -6,6 +6,7 @@ use crate::args::GpuArgs;
 use crate::methods::Loaded;
 use anyhow::{bail, Context as _, Result};
 use relume_bake::image::{self, Image};
+use relume_bake::outputs::Outputs;
 use relume_renderer::vk::{Context, ContextOptions};
 use relume_renderer::{FrameTimings, Headless, MakeTechnique, RenderSettings, Renderer};
 use std::path::Path;
@@ -80,13 +81,12 @@ pub(crate) fn warm_up(renderer: &mut Headless, seconds: f64) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn write_render_outputs(exr_path: &Path, out: &GpuRender) -> Result<()> {
-    image::write_exr_layers(exr_path, &[("radiance", &out.radiance)])?;
-    let png = exr_path.with_extension("png");
+/// Stages a render's EXR at `exr_path` and its displayed PNG beside it.
+pub(crate) fn write_render_outputs(outputs: &mut Outputs, exr_path: &Path, out: &GpuRender) -> Result<()> {
+    image::write_exr_layers(outputs, exr_path, &[("radiance", &out.radiance)])?;
     let (w, h) = (out.radiance.width, out.radiance.height);
     let rgb: Vec<u8> = out.display_rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-    image::write_png_rgb8(&png, w, h, &rgb)?;
-    println!("wrote {} and {}", exr_path.display(), png.display());
+    image::write_png_rgb8(outputs, &exr_path.with_extension("png"), w, h, &rgb)?;
     Ok(())
 }
 

@@ -54,6 +54,7 @@ enum Command {
 
 fn main() -> ExitCode {
     end_quietly_when_stdout_closes();
+    remove_unfinished_outputs_when_interrupted();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
@@ -70,6 +71,19 @@ fn end_quietly_when_stdout_closes() {
     // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid action.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// Ctrl-C, SIGTERM or SIGHUP: every output not yet committed is removed (what was there
+/// before stays), then relume exits with 130, as a shell reports an interrupted command.
+fn remove_unfinished_outputs_when_interrupted() {
+    let handler = || {
+        relume_bake::outputs::remove_unfinished();
+        eprintln!("relume: interrupted; outputs not yet moved in place were removed (none is left half-written)");
+        std::process::exit(130);
+    };
+    if let Err(e) = ctrlc::set_handler(handler) {
+        eprintln!("relume: warning: cannot handle interrupts ({e}); an interrupted run may leave hidden temporary files");
     }
 }
 

@@ -7,6 +7,7 @@ use clap::Args;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image;
 use relume_bake::metrics;
+use relume_bake::outputs::Outputs;
 use relume_bake::reference::{render_reference, ReferenceImages, ReferenceSettings};
 use relume_bake::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -60,12 +61,11 @@ pub(crate) fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> Re
     ReferenceRun { images, seconds: start.elapsed().as_secs_f64() }
 }
 
-pub(crate) fn write_reference(path: &Path, run: &ReferenceRun, exposure: f32) -> Result<()> {
+/// Stages the reference's EXR at `path` and its tonemapped PNG beside it.
+pub(crate) fn write_reference(outputs: &mut Outputs, path: &Path, run: &ReferenceRun, exposure: f32) -> Result<()> {
     let i = &run.images;
-    image::write_exr_layers(path, &[("direct", &i.direct), ("indirect", &i.indirect), ("combined", &i.combined)])?;
-    let png = path.with_extension("png");
-    image::write_png_tonemapped(&png, &i.combined, exposure)?;
-    println!("wrote {} and {}", path.display(), png.display());
+    image::write_exr_layers(outputs, path, &[("direct", &i.direct), ("indirect", &i.indirect), ("combined", &i.combined)])?;
+    image::write_png_tonemapped(outputs, &path.with_extension("png"), &i.combined, exposure)?;
     Ok(())
 }
 
@@ -75,7 +75,10 @@ pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
     positive("--exposure", args.exposure)?;
     let run = trace_reference(&scene, &settings);
-    write_reference(&args.out, &run, args.exposure)?;
+    let mut outputs = Outputs::new();
+    write_reference(&mut outputs, &args.out, &run, args.exposure)?;
+    outputs.commit()?;
+    println!("wrote {} and {}", args.out.display(), args.out.with_extension("png").display());
     println!("{} samples per pixel in {:.2} s, {:.0} paths/s", run.images.samples_per_pixel, run.seconds, run.images.paths_per_second);
     if run.images.nonfinite_samples > 0 {
         bail!("{} samples were NaN or infinite; the scene holds degenerate data", run.images.nonfinite_samples);
@@ -107,13 +110,15 @@ pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
     if stats.dark_pixels > 0 {
         println!("light where the reference is black: {:.6} of its RMS over {} pixels", stats.dark_leak, stats.dark_pixels);
     }
-    if let Some(path) = &args.error_image {
-        let rgb = metrics::false_colour(&image, &reference, args.error_scale)?;
-        image::write_png_rgb8(path, image.width, image.height, &rgb)?;
-        println!("wrote {}", path.display());
-    }
     if stats.non_finite_pixels > 0 {
         bail!("{}: {} pixel(s) are NaN or infinite", args.image.display(), stats.non_finite_pixels);
+    }
+    if let Some(path) = &args.error_image {
+        let rgb = metrics::false_colour(&image, &reference, args.error_scale)?;
+        let mut outputs = Outputs::new();
+        image::write_png_rgb8(&mut outputs, path, image.width, image.height, &rgb)?;
+        outputs.commit()?;
+        println!("wrote {}", path.display());
     }
     Ok(())
 }

@@ -8,6 +8,7 @@ use crate::methods::params::{RenderParams, Stage};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::Artifact;
+use relume_bake::outputs::Outputs;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -49,7 +50,10 @@ pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
     let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
     let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
     let (renders, device) = render_on_gpu(&[GpuJob { loaded: loaded.as_ref(), settings, frames }], &args.gpu)?;
-    write_render_outputs(&args.out, &renders[0])?;
+    let mut outputs = Outputs::new();
+    write_render_outputs(&mut outputs, &args.out, &renders[0])?;
+    outputs.commit()?;
+    println!("wrote {} and {}", args.out.display(), args.out.with_extension("png").display());
     println!("device: {device}");
     for (work, ms) in &renders[0].creation_ms {
         println!("{work} (once, at creation): {ms:.3} ms");

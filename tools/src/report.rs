@@ -13,6 +13,7 @@ use clap::Args;
 use relume_bake::artifact::Artifact;
 use relume_bake::image::{self, Image};
 use relume_bake::metrics;
+use relume_bake::outputs::Outputs;
 use relume_renderer::RenderSettings;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -79,25 +80,27 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     jobs.extend(models.iter().map(|m| GpuJob { loaded: m.loaded.as_ref(), settings: m.settings.clone(), frames }));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
     let (direct, renders) = renders.split_first().expect("the direct-only job");
+    let mut outputs = Outputs::new();
     for (name, render) in names.iter().zip(renders) {
-        write_render_outputs(&args.out.join(format!("{name}.exr")), render)?;
+        write_render_outputs(&mut outputs, &args.out.join(format!("{name}.exr")), render)?;
     }
 
     println!("rendering the reference ({} spp)", args.trace.spp);
     let reference = trace_reference(&scene, &reference_settings);
     let exposure = args.gpu.exposure;
-    write_reference(&args.out.join("reference.exr"), &reference, exposure)?;
+    write_reference(&mut outputs, &args.out.join("reference.exr"), &reference, exposure)?;
 
     let rows = names.iter().zip(renders).map(|(name, render)| score(name, render, direct, &reference)).collect::<Result<Vec<_>>>()?;
     for (name, render) in names.iter().zip(renders) {
         let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
-        image::write_png_rgb8(&args.out.join(format!("error_{name}.png")), args.scene.width, args.scene.height, &rgb)?;
+        image::write_png_rgb8(&mut outputs, &args.out.join(format!("error_{name}.png")), args.scene.width, args.scene.height, &rgb)?;
     }
     let report = report_text(args, &device, &models, renders, &rows, &reference, &bake_summary);
     let report_path = args.out.join("report.md");
-    image::write_atomically(&report_path, |tmp| std::fs::write(tmp, &report).map_err(|e| e.to_string()))?;
+    outputs.bytes(&report_path, report.as_bytes())?;
+    outputs.commit()?;
     print!("{report}");
-    println!("wrote {}", report_path.display());
+    println!("wrote the images, the reference and {} in {}", report_path.display(), args.out.display());
     if let Some(row) = rows.iter().find(|r| r.combined.non_finite_pixels > 0) {
         bail!("the {} image has {} NaN or infinite pixel(s)", row.method, row.combined.non_finite_pixels);
     }

@@ -285,17 +285,37 @@ fn outputs_never_replace_inputs_devices_or_a_users_folder() {
     assert_eq!(std::fs::read_to_string(mine.join("notes.txt")).unwrap(), "mine");
 }
 
+/// A command writes all its outputs or none: the reference's PNG path taken by a folder
+/// refuses the run, and the EXR (written first) is neither made nor, if there was one,
+/// changed; no temporary is left.
+#[test]
+fn a_command_writes_all_its_outputs_or_none() {
+    let dir = temp_dir("all-or-none");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    std::fs::create_dir(dir.join("r.png")).unwrap();
+    assert_one_error(&reference_into(&scene, &dir.join("r.exr")), &["r.png", "not a regular file"]);
+    assert!(!dir.join("r.exr").exists(), "the EXR was written without its PNG");
+    std::fs::write(dir.join("r.exr"), "an earlier image").unwrap();
+    assert_one_error(&reference_into(&scene, &dir.join("r.exr")), &["r.png", "not a regular file"]);
+    assert_eq!(std::fs::read_to_string(dir.join("r.exr")).unwrap(), "an earlier image");
+    let hidden = std::fs::read_dir(&dir).unwrap().filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with('.')).count();
+    assert_eq!(hidden, 0, "a temporary is left");
+}
+
 #[test]
 fn compare_refuses_a_black_or_non_finite_reference() {
     use relume_bake::image::{write_exr_layers, Image};
+    use relume_bake::outputs::Outputs;
     let dir = temp_dir("compare-reference");
     let mut image = Image::new(4, 4);
     image.pixels.iter_mut().for_each(|p| *p = glam::Vec3::splat(0.5));
     let mut nan = image.clone();
     nan.pixels[3] = glam::Vec3::new(f32::NAN, 0.0, 0.0);
+    let mut outputs = Outputs::new();
     for (name, picture) in [("image.exr", &image), ("black.exr", &Image::new(4, 4)), ("nan.exr", &nan)] {
-        write_exr_layers(&dir.join(name), &[("combined", picture)]).unwrap();
+        write_exr_layers(&mut outputs, &dir.join(name), &[("combined", picture)]).unwrap();
     }
+    outputs.commit().unwrap();
     let compare = |reference: &str| relume(&["compare", "image.exr", reference], &dir);
     assert_one_error(&compare("black.exr"), &["black.exr", "black everywhere"]);
     assert_one_error(&compare("nan.exr"), &["nan.exr", "1 pixel(s)", "NaN"]);

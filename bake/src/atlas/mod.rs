@@ -151,9 +151,31 @@ impl AtlasSection {
                 normal: Vec3::new(f[4], f[5], f[6]),
                 triangle: f[7].to_bits(),
             })
-            .collect();
+            .collect::<Vec<_>>();
         r.finish("the texels")?;
+        if let Some((t, problem)) = texels.iter().enumerate().find_map(|(t, texel)| texel_problem(texel, scene).map(|p| (t, p))) {
+            return Err(fail(&path, format!("texel {t} {problem}"), REBAKE));
+        }
         Ok(AtlasSection { meshes, layout, texels })
+    }
+}
+
+/// What is wrong with a texel read back, if anything: an empty one has coverage 0; a covered
+/// one a coverage in (0, 1], a finite centre, a unit normal (zero where the pieces' normals
+/// cancel) and a triangle of `scene`.
+fn texel_problem(texel: &Texel, scene: &Scene) -> Option<String> {
+    if texel.triangle == EMPTY {
+        return (texel.coverage != 0.0).then(|| format!("is empty but has coverage {}", texel.coverage));
+    }
+    let length = texel.normal.length();
+    if !(texel.coverage > 0.0 && texel.coverage <= 1.0) {
+        Some(format!("has coverage {}, outside (0, 1]", texel.coverage))
+    } else if !texel.centre.is_finite() || !(length == 0.0 || (length - 1.0).abs() < 1e-3) {
+        Some(format!("has centre {} and normal {}: not a finite point and a unit normal", texel.centre, texel.normal))
+    } else if texel.triangle as usize >= scene.triangle_count() {
+        Some(format!("names triangle {}, but the scene has {}", texel.triangle, scene.triangle_count()))
+    } else {
+        None
     }
 }
 

@@ -4,7 +4,8 @@
 use anyhow::{bail, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use relume_bake::image::{write_atomically, write_png_rgb8};
+use relume_bake::image::write_png_rgb8;
+use relume_bake::outputs::Outputs;
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -42,16 +43,16 @@ fn register_font() -> Result<()> {
     result.clone().map_err(anyhow::Error::msg)
 }
 
-/// Writes `stem`.svg and `stem`.png.
-pub(crate) fn write(stem: &Path, chart: &Chart) -> Result<()> {
+/// Stages `stem`.svg and `stem`.png.
+pub(crate) fn write(outputs: &mut Outputs, stem: &Path, chart: &Chart) -> Result<()> {
     register_font()?;
     let mut svg = String::new();
     draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), chart)?;
     let svg_path = stem.with_extension("svg");
-    write_atomically(&svg_path, |tmp| std::fs::write(tmp, &svg).map_err(|e| e.to_string()))?;
+    outputs.bytes(&svg_path, svg.as_bytes())?;
     let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), chart)?;
-    write_png_rgb8(&stem.with_extension("png"), SIZE.0, SIZE.1, &rgb)?;
+    write_png_rgb8(outputs, &stem.with_extension("png"), SIZE.0, SIZE.1, &rgb)?;
     Ok(())
 }
 

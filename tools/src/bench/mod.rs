@@ -24,6 +24,7 @@ use relume_bake::artifact::Artifact;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::{self, Image};
 use relume_bake::metrics;
+use relume_bake::outputs::Outputs;
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::{Light, Scene};
 use relume_bake::work::WorkOptions;
@@ -240,11 +241,10 @@ impl<'s> SceneBench<'s> {
                 None => cache.get(&moved, &bvh, &settings)?,
             };
             let exposure = perceptual::exposure_for(&reference.combined);
-            image::write_png_tonemapped(
-                &args.out.join("images").join(format!("{name}_light{k}_reference.png")),
-                &reference.combined,
-                exposure,
-            )?;
+            let mut outputs = Outputs::new();
+            let path = args.out.join("images").join(format!("{name}_light{k}_reference.png"));
+            image::write_png_tonemapped(&mut outputs, &path, &reference.combined, exposure)?;
+            outputs.commit()?;
             references.push(reference);
         }
         Ok(SceneBench { sweep, ctx, out: &args.out, threads: args.threads, name, scene, configurations, references, bakes: Vec::new() })
@@ -362,9 +362,11 @@ impl<'s> SceneBench<'s> {
         let reference = &self.references[k];
         let exposure = perceptual::exposure_for(&reference.combined);
         let images = self.out.join("images");
-        image::write_png_tonemapped(&images.join(format!("{point_id}.png")), image, exposure)?;
+        let mut outputs = Outputs::new();
+        image::write_png_tonemapped(&mut outputs, &images.join(format!("{point_id}.png")), image, exposure)?;
         let rgb = metrics::false_colour(image, &reference.combined, 0.5)?;
-        image::write_png_rgb8(&images.join(format!("{point_id}_error.png")), image.width, image.height, &rgb)?;
+        image::write_png_rgb8(&mut outputs, &images.join(format!("{point_id}_error.png")), image.width, image.height, &rgb)?;
+        outputs.commit()?;
         accuracy(image, reference, direct)
     }
 }

@@ -4,6 +4,7 @@
 use anyhow::Result;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::{self, Image};
+use relume_bake::outputs::Outputs;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -47,7 +48,10 @@ impl ReferenceCache {
                 images.nonfinite_samples
             );
         }
-        image::write_exr_layers(&path, &[("direct", &images.direct), ("indirect", &images.indirect), ("combined", &images.combined)])?;
+        let mut outputs = Outputs::new();
+        let layers = [("direct", &images.direct), ("indirect", &images.indirect), ("combined", &images.combined)];
+        image::write_exr_layers(&mut outputs, &path, &layers)?;
+        outputs.commit()?;
         self.traced += 1;
         Ok(Reference { indirect: images.indirect, combined: images.combined })
     }

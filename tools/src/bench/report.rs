@@ -5,7 +5,7 @@ use super::charts::{self, Chart, Series};
 use super::results::{self, percentile, Row};
 use super::{pareto, Outcome};
 use anyhow::Result;
-use relume_bake::image::write_atomically;
+use relume_bake::outputs::Outputs;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -122,8 +122,10 @@ fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
     std::iter::once(results::csv_line(&header)).chain(lines).collect()
 }
 
+/// Writes the results, summary, charts and report, all or none.
 pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> Result<()> {
-    let save = |name: &str, text: &str| write_atomically(&out.join(name), |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()));
+    let mut outputs = Outputs::new();
+    let mut save = |name: &str, text: &str| outputs.bytes(&out.join(name), text.as_bytes());
     save("results.csv", &results::csv(&outcome.rows))?;
     let json = serde_json::json!({
         "sweep": outcome.sweep.name,
@@ -140,22 +142,26 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     let summaries = summaries(&outcome.rows);
     let fronts = fronts(&summaries);
     save("summary.csv", &summary_csv(&summaries, &fronts))?;
+    let recommendations = budget.map(|b| recommend(&summaries, b));
+    if let Some(recommendations) = &recommendations {
+        save("recommended.toml", &recommended_toml(recommendations))?;
+    }
     let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
     scenes.dedup();
     let mut charts_md = String::new();
     for scene in &scenes {
         let of_scene: Vec<&Summary> = summaries.iter().filter(|s| s.first().scene == *scene && s.ok()).collect();
-        for (stem, md) in write_scene_charts(out, scene, &of_scene)? {
+        for (stem, md) in write_scene_charts(&mut outputs, out, scene, &of_scene)? {
             let _ = writeln!(charts_md, "![{md}]({stem}.png) ([SVG]({stem}.svg))\n");
         }
     }
-    let recommendations = budget.map(|b| recommend(&summaries, b));
-    match &recommendations {
-        Some(recommendations) => save("recommended.toml", &recommended_toml(recommendations))?,
+    let report = report_text(outcome, &summaries, &fronts, &charts_md, recommendations.as_deref(), budget);
+    outputs.bytes(&out.join("report.md"), report.as_bytes())?;
+    outputs.commit()?;
+    if recommendations.is_none() {
         // An earlier run's choices must not pass for this run's.
-        None => remove_stale(&out.join("recommended.toml"))?,
+        remove_stale(&out.join("recommended.toml"))?;
     }
-    save("report.md", &report_text(outcome, &summaries, &fronts, &charts_md, recommendations.as_deref(), budget))?;
     Ok(())
 }
 
@@ -187,7 +193,7 @@ fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>
 type ChartCost<'f> = (&'static str, &'static str, &'f dyn Fn(&Summary) -> f64);
 
 /// The scene's charts; returns (file stem, caption) of each.
-fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<Vec<(String, String)>> {
+fn write_scene_charts(outputs: &mut Outputs, out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<Vec<(String, String)>> {
     if of_scene.is_empty() {
         return Ok(Vec::new());
     }
@@ -202,6 +208,7 @@ fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<
         let stem = format!("{scene}_error_vs_{name}");
         let title = format!("{scene}: error against {}", x_label.split(',').next().unwrap_or(name));
         charts::write(
+            outputs,
             &out.join(&stem),
             &Chart { title: title.clone(), x_label, y_label: "NRMSE vs reference (mean over lights)", series, lines: false, front },
         )?;
@@ -218,6 +225,7 @@ fn write_scene_charts(out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<
         let stem = format!("{scene}_error_along_path");
         let title = format!("{scene}: error along the path");
         charts::write(
+            outputs,
             &out.join(&stem),
             &Chart {
                 title: title.clone(),

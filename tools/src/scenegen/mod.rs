@@ -50,6 +50,7 @@ use anyhow::Context;
 use glam::Vec3;
 use relume_bake::environment::lat_long_image;
 use relume_bake::image::{write_exr_layers, Image};
+use relume_bake::outputs::Outputs;
 use relume_bake::testing::{sky, two_area_lights};
 use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane, occluder_stacked, table_chair};
 use std::path::{Path, PathBuf};
@@ -98,12 +99,12 @@ fn environment(name: &str) -> Option<Image> {
 /// each scene, then each environment's `.exr`.
 pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(out_dir).with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
-    let mut written = Vec::new();
+    let (mut outputs, mut written) = (Outputs::new(), Vec::new());
     for name in SCENE_NAMES {
         let (gltf, bin) = generate(name).with_context(|| format!("no generator for scene {name}"))?;
         for (file, bytes) in [(format!("{name}.gltf"), gltf.into_bytes()), (format!("{name}.bin"), bin)] {
             let path = out_dir.join(file);
-            std::fs::write(&path, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
+            outputs.bytes(&path, &bytes)?;
             written.push(path);
         }
     }
@@ -112,9 +113,10 @@ pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     for name in ENVIRONMENT_NAMES {
         let image = environment(name).with_context(|| format!("no generator for environment {name}"))?;
         let path = envs.join(format!("{name}.exr"));
-        write_exr_layers(&path, &[("rgb", &image)])?;
+        write_exr_layers(&mut outputs, &path, &[("rgb", &image)])?;
         written.push(path);
     }
+    outputs.commit()?;
     Ok(written)
 }
 

@@ -1,0 +1,281 @@
+//! A command's outputs, written all or none. Each output is first written as a hidden
+//! temporary beside its final path (`.NAME.PID.tmp`); `commit` then moves every one in place
+//! together, so until then nothing under a final name has changed, and a failure on the way
+//! (an encoder error, a path that is a folder, a full disk) leaves every output as it was.
+//!
+//! Temporaries are registered process-wide: `remove_unfinished` (the interrupt handler's
+//! work) removes them and holds back any commit from starting, and one that a killed run left
+//! behind (its process id no longer running) is removed by the next run that writes the same
+//! output.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+/// Why an output could not be written: the path and what went wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct OutputError {
+    pub path: PathBuf,
+    pub message: String,
+}
+
+fn fail(path: &Path, message: impl std::fmt::Display) -> OutputError {
+    OutputError { path: path.to_path_buf(), message: message.to_string() }
+}
+
+/// Temporaries of this process not yet moved in place or removed.
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn unfinished() -> MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes every temporary this process has made and not committed, and keeps any commit
+/// from starting after it: for an interrupt, just before the process exits.
+pub fn remove_unfinished() {
+    let held = unfinished();
+    held.iter().for_each(|path| remove(path));
+    std::mem::forget(held);
+}
+
+fn remove(path: &Path) {
+    let _ = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => std::fs::remove_dir_all(path),
+        _ => std::fs::remove_file(path),
+    };
+}
+
+/// Outputs staged together; dropped without `commit`, their temporaries are removed.
+#[derive(Default)]
+pub struct Outputs {
+    /// (temporary, final path), in staging order.
+    staged: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Outputs {
+    pub fn new() -> Outputs {
+        Outputs::default()
+    }
+
+    /// Stages the file `path`, written by `write` into its temporary. Outputs are regular
+    /// files: anything else under the name (a folder, a device such as /dev/null, a FIFO, a
+    /// socket) is refused, not replaced.
+    pub fn file(&mut self, path: &Path, write: impl FnOnce(&mut File) -> Result<(), String>) -> Result<(), OutputError> {
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+            return Err(fail(path, "exists and is not a regular file (a folder, a device, a FIFO or a socket); relume writes only regular files: choose a file path"));
+        }
+        let temporary = self.stage(path)?;
+        let mut file = {
+            // Created under the lock, so an interrupt either removes it or finds it not yet made.
+            let mut held = unfinished();
+            let file = File::create(&temporary).map_err(|e| fail(path, format!("cannot write ({e})")))?;
+            held.push(temporary.clone());
+            file
+        };
+        self.staged.push((temporary, path.to_path_buf()));
+        write(&mut file).map_err(|e| fail(path, e))
+    }
+
+    /// Stages the file `path` holding `bytes`.
+    pub fn bytes(&mut self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+        self.file(path, |file| std::io::Write::write_all(file, bytes).map_err(|e| e.to_string()))
+    }
+
+    /// Stages the folder `path` (which the caller has checked may be replaced): returns the
+    /// empty temporary folder to fill.
+    pub fn folder(&mut self, path: &Path) -> Result<PathBuf, OutputError> {
+        let temporary = self.stage(path)?;
+        {
+            let mut held = unfinished();
+            std::fs::create_dir_all(&temporary).map_err(|e| fail(&temporary, format!("cannot create the folder ({e})")))?;
+            held.push(temporary.clone());
+        }
+        self.staged.push((temporary.clone(), path.to_path_buf()));
+        Ok(temporary)
+    }
+
+    /// The temporary for `path`, after removing what killed runs left for it.
+    fn stage(&self, path: &Path) -> Result<PathBuf, OutputError> {
+        if self.staged.iter().any(|(_, staged)| staged == path) {
+            return Err(fail(path, "is written twice by one command; give each output its own path"));
+        }
+        remove_stale(path);
+        sibling(path, std::process::id(), "tmp").ok_or_else(|| fail(path, "not a file path"))
+    }
+
+    /// Moves every staged output in place. A folder replaces the one under its name (moved
+    /// aside first, then removed), a file replaces the file by a rename.
+    pub fn commit(mut self) -> Result<(), OutputError> {
+        let mut held = unfinished();
+        let staged = std::mem::take(&mut self.staged);
+        let result = staged.iter().try_for_each(|(temporary, path)| move_in_place(temporary, path));
+        held.retain(|p| !staged.iter().any(|(temporary, _)| temporary == p));
+        if result.is_err() {
+            staged.iter().for_each(|(temporary, _)| remove(temporary));
+        }
+        result
+    }
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        if self.staged.is_empty() {
+            return;
+        }
+        let mut held = unfinished();
+        for (temporary, _) in &self.staged {
+            remove(temporary);
+            held.retain(|p| p != temporary);
+        }
+    }
+}
+
+/// Writes `bytes` as the file `path` inside a folder staged by [`Outputs::folder`]. The file
+/// is created under the lock, so an interrupt removing the folder never races a new entry.
+pub fn write_staged(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut file = {
+        let _held = unfinished();
+        File::create(path)?
+    };
+    std::io::Write::write_all(&mut file, bytes)
+}
+
+fn move_in_place(temporary: &Path, path: &Path) -> Result<(), OutputError> {
+    if !std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+        return std::fs::rename(temporary, path).map_err(|e| fail(path, format!("cannot move the output in place ({e})")));
+    }
+    let aside = sibling(path, std::process::id(), "old").ok_or_else(|| fail(path, "not a folder path"))?;
+    std::fs::rename(path, &aside).map_err(|e| fail(path, format!("cannot move the old folder aside ({e})")))?;
+    if let Err(e) = std::fs::rename(temporary, path) {
+        let _ = std::fs::rename(&aside, path);
+        return Err(fail(path, format!("cannot move the new folder in place ({e})")));
+    }
+    remove(&aside);
+    Ok(())
+}
+
+/// `.NAME.PID.KIND` beside `path`.
+fn sibling(path: &Path, pid: u32, kind: &str) -> Option<PathBuf> {
+    let name = path.file_name()?.to_string_lossy();
+    Some(path.with_file_name(format!(".{name}.{pid}.{kind}")))
+}
+
+/// Removes the temporaries and set-aside folders for `path` whose process is gone; a folder
+/// set aside by a run killed before its new one moved in goes back in place.
+fn remove_stale(path: &Path) {
+    let (Some(name), Some(parent)) = (path.file_name(), path.parent()) else { return };
+    let parent = if parent.as_os_str().is_empty() { Path::new(".") } else { parent };
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let Ok(entries) = std::fs::read_dir(parent) else { return };
+    for entry in entries.flatten() {
+        let entry_name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = entry_name.strip_prefix(&prefix) else { continue };
+        let (pid, set_aside) = match (rest.strip_suffix(".tmp"), rest.strip_suffix(".old")) {
+            (Some(pid), _) => (pid, false),
+            (_, Some(pid)) => (pid, true),
+            _ => continue,
+        };
+        let gone = pid.parse::<u32>().is_ok_and(|pid| pid != std::process::id() && !process_running(pid));
+        let put_back = || set_aside && std::fs::symlink_metadata(path).is_err() && std::fs::rename(entry.path(), path).is_ok();
+        if gone && !put_back() {
+            remove(&entry.path());
+        }
+    }
+}
+
+/// Whether process `pid` runs (Linux: /proc); without /proc every process counts as running,
+/// so nothing is removed that might be another run's.
+fn process_running(pid: u32) -> bool {
+    !Path::new("/proc/self").exists() || Path::new(&format!("/proc/{pid}")).exists()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn folder(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("relume-outputs-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+        names.sort();
+        names
+    }
+
+    fn text(text: &'static str) -> impl FnOnce(&mut File) -> Result<(), String> {
+        move |file| file.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn nothing_moves_until_commit_and_a_failure_keeps_every_old_output() {
+        let dir = folder("all-or-none");
+        std::fs::write(dir.join("a.txt"), "old a").unwrap();
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("a.txt"), text("new a")).unwrap();
+        std::fs::create_dir(dir.join("b.txt")).unwrap();
+        let error = outputs.file(&dir.join("b.txt"), text("new b")).unwrap_err().to_string();
+        assert!(error.contains("b.txt") && error.contains("not a regular file"), "{error}");
+        assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "old a");
+        drop(outputs);
+        assert_eq!(entries(&dir), ["a.txt", "b.txt"], "the temporary of a.txt is removed");
+
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("a.txt"), text("new a")).unwrap();
+        outputs.file(&dir.join("c.txt"), text("new c")).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "old a");
+        outputs.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(dir.join("a.txt")).unwrap(), "new a");
+        assert_eq!(entries(&dir), ["a.txt", "b.txt", "c.txt"]);
+    }
+
+    #[test]
+    fn a_folder_replaces_the_old_one_whole() {
+        let dir = folder("folder");
+        let out = dir.join("bake");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("old.bin"), "old").unwrap();
+        let mut outputs = Outputs::new();
+        let staging = outputs.folder(&out).unwrap();
+        std::fs::write(staging.join("new.bin"), "new").unwrap();
+        assert_eq!(entries(&out), ["old.bin"]);
+        outputs.commit().unwrap();
+        assert_eq!(entries(&out), ["new.bin"]);
+        assert_eq!(entries(&dir), ["bake"], "no temporary or set-aside folder is left");
+    }
+
+    #[test]
+    fn what_a_killed_run_left_is_removed_and_a_running_ones_kept() {
+        let dir = folder("stale");
+        let dead = (2_000_000..).find(|pid| !process_running(*pid)).unwrap();
+        let running = 1;
+        for (name, pid, kind) in [("out.exr", dead, "tmp"), ("bake", dead, "tmp"), ("bake", dead, "old"), ("out.exr", running, "tmp")] {
+            let path = sibling(&dir.join(name), pid, kind).unwrap();
+            match name {
+                "bake" => std::fs::create_dir(&path).unwrap(),
+                _ => std::fs::write(&path, "left").unwrap(),
+            }
+        }
+        std::fs::write(dir.join(".other.exr.1.tmp"), "not ours to judge").unwrap();
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("out.exr"), text("new")).unwrap();
+        outputs.commit().unwrap();
+        remove_stale(&dir.join("bake"));
+        assert!(dir.join("bake").is_dir(), "a folder set aside by a killed run goes back where it was");
+        assert_eq!(entries(&dir), [".other.exr.1.tmp", ".out.exr.1.tmp", "bake", "out.exr"]);
+    }
+
+    #[test]
+    fn one_path_twice_is_refused() {
+        let dir = folder("twice");
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("x.png"), text("1")).unwrap();
+        let error = outputs.file(&dir.join("x.png"), text("2")).unwrap_err().to_string();
+        assert!(error.contains("written twice"), "{error}");
+    }
+}
