@@ -649,6 +649,17 @@ fn png_base_color_texture_is_decoded_to_linear() {
     let ground = mesh(&s, "Ground");
     assert_eq!(s.materials[ground.material].base_color_texture, Some(0));
     assert!((ground.uv0.as_ref().unwrap()[1] - glam::Vec2::new(0.1, 0.5)).length() < 1e-6);
+    // The pixel limit is the caller's: this 2 x 1 image passes a limit of 2, not one of 1.
+    let limited = |pixels| {
+        gltf_load::load_with_options(
+            &dir.join("y.gltf"),
+            &gltf_load::LoadOptions { max_texture_pixels: Some(pixels), ..Default::default() },
+        )
+    };
+    assert!(limited(2).is_ok());
+    let Err(e) = limited(1) else { panic!("a 2-pixel texture passed a limit of 1") };
+    let e = e.to_string();
+    assert!(e.contains("2 x 1 pixels") && e.contains("limit of 1 pixels") && e.contains("--max-texture-pixels"), "{e}");
     // JPEG is refused by its signature.
     std::fs::write(dir.join("tex.png"), [0xFF, 0xD8, 0xFF, 0xE0, 0, 0]).unwrap();
     let e = load_err(&dir.join("y.gltf"));
@@ -663,7 +674,7 @@ fn png_base_color_texture_is_decoded_to_linear() {
     bomb[29..33].copy_from_slice(&crc.to_be_bytes());
     std::fs::write(dir.join("tex.png"), &bomb).unwrap();
     let e = load_err(&dir.join("y.gltf"));
-    assert!(e.to_string().contains("100000 x 100000") && e.to_string().contains("downscale"), "{e}");
+    assert!(e.to_string().contains("100000 x 100000") && e.to_string().contains("limit of 67108864"), "{e}");
 }
 
 #[test]
@@ -678,7 +689,7 @@ fn files_outside_the_scenes_folder_are_read_only_when_allowed() {
         let path = write_scene(&inner, "x", &json, None);
         let e = load_err(&path);
         assert!(e.to_string().contains("outside the scene's folder") && e.to_string().contains("--allow-outside-files"), "{e}");
-        let options = gltf_load::LoadOptions { camera: None, outside_files: true };
+        let options = gltf_load::LoadOptions { outside_files: true, ..Default::default() };
         assert_eq!(gltf_load::load_with_options(&path, &options).unwrap().scene.meshes.len(), 2);
     }
     // Inside its folder, a path through .. is fine.

@@ -6,7 +6,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::Vec3;
 use relume_bake::environment::{Environment, EnvironmentSettings};
-use relume_bake::gltf_load::{load_with_options, CameraOverride, LoadOptions};
+use relume_bake::gltf_load::{load_with_options, CameraOverride, LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -33,6 +33,10 @@ pub(crate) struct SceneArgs {
     /// absolute path or one up through ..); without it such a scene is refused.
     #[arg(long)]
     pub allow_outside_files: bool,
+    /// The most pixels a scene's texture may have (checked before decoding; 8192 x 8192,
+    /// 1 GiB decoded, by default).
+    #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS)]
+    pub max_texture_pixels: u64,
 }
 
 #[derive(Args, Clone)]
@@ -120,7 +124,9 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
         bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
     }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
-    let mut scene = load(&args.scene, &LoadOptions { camera: camera.as_ref(), outside_files: args.allow_outside_files })?;
+    let options =
+        LoadOptions { camera: camera.as_ref(), outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels) };
+    let mut scene = load(&args.scene, &options)?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     Ok(scene)
 }

@@ -8,7 +8,7 @@ use crate::methods::{self, Method, Stages};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::BakeOutput;
-use relume_bake::gltf_load::LoadOptions;
+use relume_bake::gltf_load::{LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use serde_json::json;
@@ -33,6 +33,9 @@ pub(crate) struct BakeArgs {
     /// As `render --allow-outside-files`.
     #[arg(long)]
     allow_outside_files: bool,
+    /// As `render --max-texture-pixels`.
+    #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS)]
+    max_texture_pixels: u64,
     #[command(flatten)]
     params: BakeParams,
 }
@@ -57,7 +60,9 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let method = baking_method(&args.method)?;
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Bake))?;
     let work = args.work.options()?;
-    let mut scene = load(&args.scene, &LoadOptions { camera: None, outside_files: args.allow_outside_files })?;
+    let options =
+        LoadOptions { outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels), ..Default::default() };
+    let mut scene = load(&args.scene, &options)?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
     print!("{}", bake_scene(&scene, method, &values, work, &out)?);

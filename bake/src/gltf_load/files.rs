@@ -254,7 +254,7 @@ mod tests {
 
     #[test]
     fn glb_splitter_refuses_damaged_headers_without_panicking() {
-        let ctx = Ctx { path: Path::new("x.glb"), outside_files: false };
+        let ctx = Ctx { path: Path::new("x.glb"), outside_files: false, max_texture_pixels: 1 };
         for bytes in
             [&b"glTF"[..], b"glTF\x02\0\0\0\x04\0\0\0", b"glTF\x02\0\0\0\xff\xff\xff\xff", b"glTF\x02\0\0\0\x20\0\0\0\xff\xff\0\0JSON"]
         {

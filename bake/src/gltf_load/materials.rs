@@ -102,11 +102,6 @@ impl Loader<'_> {
     }
 }
 
-/// The most pixels a texture may have: decoded to linear RGBA f32, 1 GiB. Checked against
-/// the PNG's header before anything is allocated, so a small file that claims a huge image
-/// is refused, not a failed allocation.
-const MAX_TEXTURE_PIXELS: u64 = 8192 * 8192;
-
 /// Decodes a PNG base-colour image to linear RGBA (sRGB transfer undone on rgb; alpha is
 /// linear already). Other formats are refused by their signature, whatever the mimeType says.
 pub(super) fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Result<Texture, SceneError> {
@@ -122,12 +117,14 @@ pub(super) fn decode_png(ctx: Ctx, item: &str, bytes: &[u8], name: String) -> Re
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(bad)?;
     let (width, height) = (reader.info().width, reader.info().height);
-    if u64::from(width) * u64::from(height) > MAX_TEXTURE_PIXELS {
+    // Checked against the header before anything is allocated, so a small file that claims
+    // a huge image is refused, not a failed allocation.
+    if u64::from(width) * u64::from(height) > ctx.max_texture_pixels {
         return Err(ctx.fail(
             ErrorKind::Image,
             item,
-            format!("its header says {width} x {height} pixels, more than relume decodes ({MAX_TEXTURE_PIXELS} pixels, 8192 x 8192)"),
-            "downscale the image",
+            format!("its header says {width} x {height} pixels, more than the limit of {} pixels", ctx.max_texture_pixels),
+            "downscale the image, or raise the limit with --max-texture-pixels",
         ));
     }
     let Some(size) = reader.output_buffer_size() else {

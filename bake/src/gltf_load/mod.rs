@@ -116,7 +116,7 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
 
 /// Loads a scene; `camera`, when given, replaces the file's camera.
 pub fn load_with_camera(path: &Path, camera: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
-    load_with_options(path, &LoadOptions { camera, outside_files: false })
+    load_with_options(path, &LoadOptions { camera, ..Default::default() })
 }
 
 /// How a scene is loaded.
@@ -128,15 +128,24 @@ pub struct LoadOptions<'c> {
     /// absolute path or one through `..`): off, a scene a user downloaded reads only its own
     /// folder.
     pub outside_files: bool,
+    /// The most pixels a texture may have (its PNG header is checked before decoding);
+    /// None: [`DEFAULT_MAX_TEXTURE_PIXELS`].
+    pub max_texture_pixels: Option<u64>,
 }
+
+/// 8192 x 8192: decoded to linear RGBA f32, 1 GiB.
+pub const DEFAULT_MAX_TEXTURE_PIXELS: u64 = 8192 * 8192;
 
 /// Loads a scene as `options` say.
 pub fn load_with_options(path: &Path, options: &LoadOptions) -> Result<Loaded, SceneError> {
-    let (camera, outside_files) = (options.camera, options.outside_files);
-    crate::image::refuse_irregular_input(path)
-        .map_err(|e| Ctx { path, outside_files }.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
+    let ctx = Ctx {
+        path,
+        outside_files: options.outside_files,
+        max_texture_pixels: options.max_texture_pixels.unwrap_or(DEFAULT_MAX_TEXTURE_PIXELS),
+    };
+    crate::image::refuse_irregular_input(path).map_err(|e| ctx.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
     let bytes = std::fs::read(path).map_err(|e| {
-        let err = Ctx { path, outside_files };
+        let err = ctx;
         if e.kind() == std::io::ErrorKind::NotFound {
             err.fail(
                 ErrorKind::NotFound,
@@ -148,7 +157,7 @@ pub fn load_with_options(path: &Path, options: &LoadOptions) -> Result<Loaded, S
             err.fail(ErrorKind::Io, "", format!("cannot read the file: {e}"), "check its permissions")
         }
     })?;
-    Loader::new(Ctx { path, outside_files }, &bytes)?.load(camera)
+    Loader::new(ctx, &bytes)?.load(options.camera)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -159,6 +168,8 @@ struct Ctx<'a> {
     path: &'a Path,
     /// LoadOptions::outside_files.
     outside_files: bool,
+    /// LoadOptions::max_texture_pixels, its default applied.
+    max_texture_pixels: u64,
 }
 
 impl Ctx<'_> {

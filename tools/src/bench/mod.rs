@@ -145,6 +145,7 @@ fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
         height: sweep.height,
         environment: entry.environment.clone(),
         allow_outside_files: false,
+        max_texture_pixels: relume_bake::gltf_load::DEFAULT_MAX_TEXTURE_PIXELS,
     }
 }
 
