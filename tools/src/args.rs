@@ -21,9 +21,9 @@ pub(crate) struct SceneArgs {
     /// Camera instead of the scene's: "eye=x,y,z;target=x,y,z[;up=x,y,z][;yfov=degrees]".
     #[arg(long, value_parser = |text: &str| CameraOverride::parse(text).map(|_| text.to_string()).map_err(|e| e.to_string()))]
     pub camera: Option<String>,
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub width: u32,
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub height: u32,
     /// Light the scene by this lat-long EXR instead of the one its extras.relume.environment
     /// names (the scene must declare one; its intensity, rotation and cube face stay).
@@ -35,28 +35,28 @@ pub(crate) struct SceneArgs {
     pub allow_outside_files: bool,
     /// The most pixels a scene's texture may have (checked before decoding; 8192 x 8192,
     /// 1 GiB decoded, by default).
-    #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS)]
+    #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_texture_pixels: u64,
 }
 
 #[derive(Args, Clone)]
 pub(crate) struct GpuArgs {
     /// Shadow-map size in texels per layer.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192))]
     pub shadow_map_size: u32,
     /// Gaussian blur radius of the shadow moments, texels (0: none).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=64))]
     pub blur_radius: u32,
     /// Floor on the variance in the Chebyshev bound (m^2).
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value_t = 1e-5, value_parser = at_least_zero)]
     pub min_variance: f32,
     /// Light-bleeding reduction in [0, 1).
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = 0.2, value_parser = fraction)]
     pub bleeding_reduction: f32,
     /// Turn shadows off (shading only).
     #[arg(long)]
     pub no_shadows: bool,
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = positive::<f32>)]
     pub exposure: f32,
     /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe;
     /// the RELUME_DEVICE variable does the same).
@@ -72,7 +72,7 @@ pub(crate) struct GpuArgs {
     pub ambient: Option<String>,
     /// beta of the ambient light's share of every light (001 eq. 7), in [0, 1) (default: as
     /// --ambient).
-    #[arg(long)]
+    #[arg(long, value_parser = fraction)]
     pub beta: Option<f32>,
     /// Direct light only: no ambient light (ambient and beta 0).
     #[arg(long, conflicts_with_all = ["ambient", "beta"])]
@@ -84,21 +84,18 @@ pub(crate) struct GpuArgs {
 pub(crate) struct WorkArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads, 1..=1024 (default: all cores).
+    #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
     /// Stop after this many seconds, at a whole pass of the work (at least one is made).
-    #[arg(long)]
+    #[arg(long, value_parser = positive::<f64>)]
     pub time_limit: Option<f64>,
 }
 
 impl WorkArgs {
     /// The options, refused by name when impossible; a progress bar on a terminal.
     pub fn options(&self) -> Result<WorkOptions> {
-        let time_limit = match self.time_limit {
-            Some(s) if !(s.is_finite() && s > 0.0) => bail!("--time-limit {s}: give a positive number of seconds"),
-            s => s.map(Duration::from_secs_f64),
-        };
+        let time_limit = self.time_limit.map(Duration::from_secs_f64);
         let options = WorkOptions { seed: self.seed, threads: self.threads, time_limit, progress: true };
         options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
         Ok(options)
@@ -108,7 +105,7 @@ impl WorkArgs {
 #[derive(Args, Clone)]
 pub(crate) struct PathTracerArgs {
     /// Samples per pixel.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
     #[command(flatten)]
     pub work: WorkArgs,
@@ -205,9 +202,6 @@ pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, defaults: Option
 }
 
 pub(crate) fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shadows: bool) -> Result<ReferenceSettings> {
-    if trace.spp == 0 {
-        bail!("--spp 0: take at least one sample per pixel");
-    }
     Ok(ReferenceSettings {
         samples_per_pixel: trace.spp,
         width: scene.width,
@@ -219,20 +213,35 @@ pub(crate) fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shad
     })
 }
 
-pub(crate) fn positive(flag: &str, value: f32) -> Result<f32> {
-    if !(value.is_finite() && value > 0.0) {
-        bail!("{flag} {value}: give a finite number above 0");
-    }
-    Ok(value)
+// Parsers of flags with a range: a value outside it is a usage error (exit 2), as one that
+// is not a number is, whatever the flag.
+
+/// A finite number above 0.
+pub(crate) fn positive<T: std::str::FromStr + Into<f64> + Copy>(text: &str) -> Result<T, String> {
+    number(text, |v| v > 0.0).ok_or_else(|| "give a finite number above 0".into())
+}
+
+/// A finite number >= 0.
+fn at_least_zero(text: &str) -> Result<f32, String> {
+    number(text, |v| v >= 0.0).ok_or_else(|| "give a finite number >= 0".into())
+}
+
+/// A number in [0, 1).
+fn fraction(text: &str) -> Result<f32, String> {
+    number(text, |v| (0.0..1.0).contains(&v)).ok_or_else(|| "give a number in [0, 1)".into())
+}
+
+fn number<T: std::str::FromStr + Into<f64> + Copy>(text: &str, allowed: impl Fn(f64) -> bool) -> Option<T> {
+    text.parse::<T>().ok().filter(|v| (*v).into().is_finite() && allowed((*v).into()))
+}
+
+/// Worker threads: 1..=1024 (more only slows the work and can exhaust the machine).
+pub(crate) fn threads(text: &str) -> Result<usize, String> {
+    text.parse::<usize>().ok().filter(|n| (1..=1024).contains(n)).ok_or_else(|| "give 1..=1024 worker threads".into())
 }
 
 /// Timed frames: at least one, at most a number that cannot exhaust memory.
-pub(crate) fn frame_count(frames: u32) -> Result<u32> {
-    if !(1..=100_000).contains(&frames) {
-        bail!("--frames {frames}: render 1..=100000 frames");
-    }
-    Ok(frames)
-}
+pub(crate) const FRAMES: std::ops::RangeInclusive<i64> = 1..=100_000;
 
 /// Refuses a command whose outputs would replace one of its inputs (`reference --out
 /// scene.gltf`, `compare --error-image` on its image): the paths are compared after

@@ -24,7 +24,7 @@ pub(crate) struct ReferenceArgs {
     no_shadows: bool,
     #[arg(long, short, default_value = "reference.exr")]
     out: PathBuf,
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = positive::<f32>)]
     exposure: f32,
 }
 
@@ -44,7 +44,7 @@ pub(crate) struct CompareArgs {
     #[arg(long)]
     error_image: Option<PathBuf>,
     /// Error that maps to red in the error image, relative to the reference RMS.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = positive::<f32>)]
     error_scale: f32,
 }
 
@@ -73,7 +73,6 @@ pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
     refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
-    positive("--exposure", args.exposure)?;
     let run = trace_reference(&scene, &settings);
     let mut outputs = Outputs::new();
     write_reference(&mut outputs, &args.out, &run, args.exposure)?;
@@ -87,7 +86,6 @@ pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
 }
 
 pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
-    positive("--error-scale", args.error_scale)?;
     refuse_writing_over(args.error_image.as_slice(), &[&args.image, &args.reference])?;
     let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
     let reference = match &args.reference_layer {

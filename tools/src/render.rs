@@ -1,15 +1,15 @@
 //! `relume render`: one scene through the Vulkan renderer, headless, to EXR and PNG, with the
 //! techniques of the method that baked `--bake` (or none: constant ambient light).
 
-use crate::args::{frame_count, load_scene, refuse_writing_over, render_settings, scene_inputs, GpuArgs, SceneArgs};
+use crate::args::{load_scene, refuse_writing_over, render_settings, scene_inputs, GpuArgs, SceneArgs, FRAMES};
 use crate::gpu::{print_timings, render_on_gpu, write_render_outputs, GpuJob};
 use crate::methods;
 use crate::methods::params::{RenderParams, Stage};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use relume_bake::artifact::Artifact;
 use relume_bake::outputs::Outputs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub(crate) struct RenderArgs {
@@ -21,7 +21,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, short, default_value = "render.exr")]
     out: PathBuf,
     /// Render this many frames and report the median GPU time of every pass.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(FRAMES))]
     frames: u32,
     /// A bake artifact folder (`relume bake --out`): the method that baked it renders, with
     /// its own ambient light unless --ambient or --beta say otherwise. Without one: direct light
@@ -35,10 +35,13 @@ pub(crate) struct RenderArgs {
 pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
     refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
-    let frames = frame_count(args.frames)?;
+    let frames = args.frames;
     let artifact = args.bake.as_deref().map(Artifact::read).transpose()?;
     let method = match &artifact {
-        Some(artifact) => methods::find(artifact.method())?,
+        Some(artifact) => methods::find(artifact.method()).with_context(|| {
+            let manifest = args.bake.as_deref().unwrap_or(Path::new("")).join("manifest.json");
+            format!("{}: the bake names a method this relume lacks; bake it again with `relume bake`", manifest.display())
+        })?,
         None => {
             if let Some((name, _)) = args.params.pairs.first() {
                 bail!("--{name}: a run-time parameter of {}; render a bake of it (--bake)", methods::takers(name).join(", "));

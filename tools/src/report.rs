@@ -3,7 +3,7 @@
 //! reference, over the whole image and over its indirect part (its image minus direct light
 //! alone); the images and `report.md` written into one folder.
 
-use crate::args::{frame_count, load_scene, reference_settings, render_settings, GpuArgs, PathTracerArgs, SceneArgs};
+use crate::args::{load_scene, reference_settings, render_settings, GpuArgs, PathTracerArgs, SceneArgs, FRAMES};
 use crate::bake::bake_scene;
 use crate::gpu::{median_timings, render_on_gpu, write_render_outputs, GpuJob, GpuRender};
 use crate::methods::{self, Loaded, Method, Plain};
@@ -30,7 +30,7 @@ pub(crate) struct RunArgs {
     #[arg(long, short, default_value = "out")]
     out: PathBuf,
     /// Frames to time the Vulkan renderer over.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(FRAMES))]
     frames: u32,
     /// Rays per texel of the bakes that trace them (obscurances).
     #[arg(long, default_value_t = 256)]
@@ -47,7 +47,7 @@ struct Model {
 pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
-    let frames = frame_count(args.frames)?;
+    let frames = args.frames;
     let work = relume_bake::work::WorkOptions { threads: reference_settings.work.threads, progress: true, ..Default::default() };
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 

@@ -131,22 +131,43 @@ fn a_scene_without_lights_is_refused() {
     assert_refused(&scene, &["scene.gltf", "light"]);
 }
 
+/// A bake whose manifest names a method relume lacks is refused naming the manifest.
+#[test]
+fn a_bake_of_an_unknown_method_is_refused_by_its_manifest() {
+    let dir = temp_dir("unknown-method");
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
+    let cornell = cornell.to_str().unwrap();
+    let bake = relume(&["bake", cornell, "--method", "obscurance", "--patches", "500", "--rays", "4", "--out", "bake"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let manifest = std::fs::read_to_string(dir.join("bake/manifest.json")).unwrap();
+    std::fs::write(dir.join("bake/manifest.json"), manifest.replace("\"method\": \"obscurance\"", "\"method\": \"nonsense\"")).unwrap();
+    let render = relume(&["render", cornell, "--bake", "bake", "--out", "r.exr"], &dir);
+    assert_one_error(&render, &["manifest.json", "nonsense", "relume bake"]);
+    assert!(!dir.join("r.exr").exists());
+}
+
+/// A value outside its flag's range is a usage error like one that is not a number: exit 2,
+/// the flag named, before any work (`--threads 10000` once ran for minutes).
 #[test]
 fn impossible_parameters_are_refused() {
     let dir = temp_dir("params");
     let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
-    for args in [["--spp", "0"], ["--time-limit=-3", ""], ["--threads", "0"], ["--width", "0"]] {
-        let result = Command::new(env!("CARGO_BIN_EXE_relume"))
-            .arg("reference")
-            .args(args.iter().filter(|a| !a.is_empty()))
-            .arg(&scene)
-            .current_dir(&dir)
-            .output()
-            .expect("run relume");
+    let scene = scene.to_str().unwrap();
+    for args in [
+        ["reference", "--spp", "0"],
+        ["reference", "--time-limit", "0"],
+        ["reference", "--threads", "0"],
+        ["reference", "--threads", "10000"],
+        ["reference", "--width", "0"],
+        ["reference", "--exposure", "nan"],
+        ["render", "--frames", "0"],
+        ["render", "--beta", "1"],
+        ["bench", "--budget", "0"],
+    ] {
+        let result = relume(&[args[0], scene, args[1], args[2]], &dir);
         let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
-        let flag = args[0].trim_start_matches("--").split(['-', '=']).next().unwrap();
-        assert!(stderr.contains(flag), "{args:?}: {stderr}");
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(args[1]) && stderr.contains(args[2]), "{args:?}: {stderr}");
     }
 }
 

@@ -12,7 +12,7 @@ mod report;
 mod results;
 mod sweep;
 
-use crate::args::{load_scene, SceneArgs};
+use crate::args::{load_scene, positive, threads, SceneArgs};
 use crate::gpu::{self, median_timings, warm_up};
 use crate::methods;
 use anyhow::{bail, Context as _, Result};
@@ -49,10 +49,10 @@ pub(crate) struct BenchArgs {
     cache: PathBuf,
     /// Pick, per scene and method, the cheapest parameter set whose mean NRMSE over the light
     /// configurations is within this; written to recommended.toml and the report.
-    #[arg(long)]
+    #[arg(long, value_parser = positive::<f64>)]
     budget: Option<f64>,
     /// Start no new method configuration after this many seconds (the report says which were skipped).
-    #[arg(long)]
+    #[arg(long, value_parser = positive::<f64>)]
     time_limit: Option<f64>,
     /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe).
     #[arg(long)]
@@ -61,7 +61,7 @@ pub(crate) struct BenchArgs {
     #[arg(long)]
     validation: bool,
     /// Worker threads of the reference path tracer and the bakes (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = threads)]
     threads: Option<usize>,
 }
 
@@ -79,13 +79,6 @@ pub(crate) struct Outcome {
 }
 
 pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
-    if let Some(budget) = args.budget.filter(|b| !(b.is_finite() && *b > 0.0)) {
-        bail!("--budget {budget}: give an NRMSE above 0");
-    }
-    if let Some(limit) = args.time_limit.filter(|s| !(s.is_finite() && *s > 0.0)) {
-        bail!("--time-limit {limit}: give a positive number of seconds");
-    }
-    WorkOptions { threads: args.threads, ..WorkOptions::default() }.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
     let sweep = Sweep::read(&args.sweep)?;
     let configs = configs(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
     check_scenes(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
