@@ -278,3 +278,29 @@ fn self_shadowing_takes_what_tracing_takes_on_the_open_and_the_shadowed_side_of_
     assert!(open[1] > 5.0 * open[0] && shadowed[1] > 2.0 * shadowed[0], "the paper's lookup {open:?} {shadowed:?}");
     assert!(shadowed[2] > 3.0 * shadowed[0] && open[2] < 0.01, "without self-shadowing {open:?} {shadowed:?}");
 }
+
+/// The sections read back as written; a DifMap texel below zero (no irradiance is) or a table
+/// value that is not finite is refused by name, though its checksum matches.
+#[test]
+fn sections_round_trip_and_values_out_of_range_are_refused() {
+    use relume_bake::artifact::{Artifact, BakeOutput};
+    let s = occluders_over_ground(&[(Vec3::new(0.0, 3.0, 0.0), 1.0)], |d| Vec3::splat(0.2 + d.y.max(0.0)), 8);
+    let (fiv, types) = bake(&s, &settings("6x4x3", 0.5, 8.0), &WorkOptions::default()).unwrap();
+    let representative = [s.meshes[types[0].meshes[0]].name.as_str()];
+    let dir = std::env::temp_dir().join(format!("relume-fiv-sections-{}", std::process::id()));
+    let read = |fiv: &FivBake| {
+        let sections = relume_bake::fiv::sections(fiv, &representative, json!({}));
+        BakeOutput { method: "fiv", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
+        relume_bake::fiv::read(&Artifact::read(&dir).unwrap(), &s, &representative).map_err(|e| e.to_string())
+    };
+    assert_eq!(read(&fiv).unwrap(), fiv);
+    let mut negative = fiv.clone();
+    negative.environment.difmap[3].y = -0.5;
+    let error = read(&negative).unwrap_err();
+    assert!(error.contains("fiv_environment.bin") && error.contains("DifMap texel 3") && error.contains(">= 0"), "{error}");
+    let mut nan = fiv.clone();
+    nan.tables[0].fiv[5][1].z = f32::NAN;
+    let error = read(&nan).unwrap_err();
+    assert!(error.contains("fiv_occluder_0.bin") && error.contains("not a finite number"), "{error}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -174,6 +174,10 @@ pub fn read(artifact: &Artifact, scene: &Scene, representatives: &[&str]) -> Res
     }
     let texels = width as usize * (width / 2) as usize;
     let difmap = finite_vectors(&mut reader, texels, "DifMap")?;
+    // DifMap is an irradiance: radiance summed times a clamped cosine (003 eq. 5).
+    if let Some(t) = difmap.iter().position(|e| e.min_element() < 0.0) {
+        return Err(fail(&path, format!("DifMap texel {t} holds {}, not an irradiance >= 0", difmap[t]), REBAKE));
+    }
     let fiv = finite_vectors(&mut reader, 3, "FIV(Env)")?;
     reader.finish("FIV(Env)")?;
     let environment = EnvironmentTerms { difmap_width: width, difmap, fiv: [fiv[0], fiv[1], fiv[2]] };
