@@ -154,50 +154,35 @@ fn killing_leaves_the_old_outputs_and_the_next_run_cleans_up(case: &Case) {
     assert_eq!(hidden_entries(case.dir), Vec::<String>::new(), "the next run left the killed runs' temporaries");
 }
 
-fn strings(args: &[&str]) -> Vec<String> {
-    args.iter().map(|s| s.to_string()).collect()
-}
-
-fn bake_args(out: &Path, rays: &str) -> Vec<String> {
-    let scene = repo_root().join("scenes/cornell.gltf");
-    let mut args = strings(&["bake", "--method", "obscurance", "--patches", "40000", "--rays", rays, "--out"]);
-    args.extend([out.display().to_string(), scene.display().to_string()]);
+/// `relume COMMAND ... ARGS --out OUT cornell.gltf`, where `vary` is the value of the flag
+/// that tells the old run from the new.
+fn cornell(command: &str, fixed: &[&str], flag: &str, vary: &str, out: &Path) -> Vec<String> {
+    let mut args: Vec<String> = [command].iter().chain(fixed).chain(&[flag, vary, "--out"]).map(|s| s.to_string()).collect();
+    args.extend([out.display().to_string(), repo_root().join("scenes/cornell.gltf").display().to_string()]);
     args
 }
 
-fn reference_args(out: &Path, spp: &str) -> Vec<String> {
-    let scene = repo_root().join("scenes/cornell.gltf");
-    let mut args = strings(&["reference", "--width", "512", "--height", "512", "--spp", spp, "--out"]);
-    args.extend([out.display().to_string(), scene.display().to_string()]);
-    args
+/// Runs every interruption on `command` writing `output`, old and new told apart by `flag`.
+fn interrupt_and_kill(command: &str, fixed: &[&str], output: &str, flag: &str, (old, new): (&str, &str)) {
+    let (dir, timed_dir) = (temp_dir(command), temp_dir(&format!("{command}-timed")));
+    let (out, timed_out) = (dir.join(output), timed_dir.join(output));
+    let case = Case {
+        dir: &dir,
+        timed_dir: &timed_dir,
+        old: cornell(command, fixed, flag, old, &out),
+        new: cornell(command, fixed, flag, new, &out),
+        timed: cornell(command, fixed, flag, new, &timed_out),
+    };
+    interrupting_changes_nothing(&case);
+    killing_leaves_the_old_outputs_and_the_next_run_cleans_up(&case);
 }
 
 #[test]
 fn an_interrupted_bake_keeps_the_previous_artifact() {
-    let (dir, timed_dir) = (temp_dir("bake"), temp_dir("bake-timed"));
-    let (out, timed_out) = (dir.join("bake"), timed_dir.join("bake"));
-    let case = Case {
-        dir: &dir,
-        timed_dir: &timed_dir,
-        old: bake_args(&out, "4"),
-        new: bake_args(&out, "256"),
-        timed: bake_args(&timed_out, "256"),
-    };
-    interrupting_changes_nothing(&case);
-    killing_leaves_the_old_outputs_and_the_next_run_cleans_up(&case);
+    interrupt_and_kill("bake", &["--method", "obscurance", "--patches", "40000"], "bake", "--rays", ("4", "256"));
 }
 
 #[test]
 fn an_interrupted_reference_keeps_the_previous_images() {
-    let (dir, timed_dir) = (temp_dir("reference"), temp_dir("reference-timed"));
-    let (out, timed_out) = (dir.join("reference.exr"), timed_dir.join("reference.exr"));
-    let case = Case {
-        dir: &dir,
-        timed_dir: &timed_dir,
-        old: reference_args(&out, "1"),
-        new: reference_args(&out, "8"),
-        timed: reference_args(&timed_out, "8"),
-    };
-    interrupting_changes_nothing(&case);
-    killing_leaves_the_old_outputs_and_the_next_run_cleans_up(&case);
+    interrupt_and_kill("reference", &["--width", "512", "--height", "512"], "reference.exr", "--spp", ("1", "8"));
 }
