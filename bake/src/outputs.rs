@@ -69,12 +69,24 @@ impl Outputs {
         let mut file = {
             // Created under the lock, so an interrupt either removes it or finds it not yet made.
             let mut held = unfinished();
-            let file = File::create(&temporary).map_err(|e| fail(path, format!("cannot write ({e})")))?;
+            let file = File::create_new(&temporary).map_err(|e| fail(path, format!("cannot write ({e})")))?;
             held.push(temporary.clone());
             file
         };
         self.staged.push((temporary, path.to_path_buf()));
-        write(&mut file).map_err(|e| fail(path, e))
+        write(&mut file).map_err(|e| {
+            // Not left staged: a caller that went on to commit would move a broken file in.
+            self.abandon_last();
+            fail(path, e)
+        })
+    }
+
+    fn abandon_last(&mut self) {
+        if let Some((temporary, _)) = self.staged.pop() {
+            let mut held = unfinished();
+            remove(&temporary);
+            held.retain(|p| *p != temporary);
+        }
     }
 
     /// Stages the file `path` holding `bytes`.
@@ -86,9 +98,12 @@ impl Outputs {
     /// empty temporary folder to fill.
     pub fn folder(&mut self, path: &Path) -> Result<PathBuf, OutputError> {
         let temporary = self.stage(path)?;
+        if let Some(parent) = temporary.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| fail(parent, format!("cannot create the folder ({e})")))?;
+        }
         {
             let mut held = unfinished();
-            std::fs::create_dir_all(&temporary).map_err(|e| fail(&temporary, format!("cannot create the folder ({e})")))?;
+            std::fs::create_dir(&temporary).map_err(|e| fail(&temporary, format!("cannot create the folder ({e})")))?;
             held.push(temporary.clone());
         }
         self.staged.push((temporary.clone(), path.to_path_buf()));
@@ -105,16 +120,20 @@ impl Outputs {
     }
 
     /// Moves every staged output in place. A folder replaces the one under its name (moved
-    /// aside first, then removed), a file replaces the file by a rename.
+    /// aside first, then removed), a file replaces the file by a rename. Should a move fail
+    /// (a permission, a mount point), the error names the outputs already moved in.
     pub fn commit(mut self) -> Result<(), OutputError> {
         let mut held = unfinished();
         let staged = std::mem::take(&mut self.staged);
-        let result = staged.iter().try_for_each(|(temporary, path)| move_in_place(temporary, path));
+        let failed = staged.iter().enumerate().find_map(|(k, (temporary, path))| move_in_place(temporary, path).err().map(|e| (k, e)));
         held.retain(|p| !staged.iter().any(|(temporary, _)| temporary == p));
-        if result.is_err() {
-            staged.iter().for_each(|(temporary, _)| remove(temporary));
+        let Some((k, mut error)) = failed else { return Ok(()) };
+        staged[k..].iter().for_each(|(temporary, _)| remove(temporary));
+        if k > 0 {
+            let moved: Vec<String> = staged[..k].iter().map(|(_, path)| path.display().to_string()).collect();
+            error.message.push_str(&format!("; already replaced: {} (the others are as they were)", moved.join(", ")));
         }
-        result
+        Err(error)
     }
 }
 
@@ -142,14 +161,22 @@ pub fn write_staged(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 fn move_in_place(temporary: &Path, path: &Path) -> Result<(), OutputError> {
-    if !std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+    let is_dir = |p: &Path| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir());
+    // A file replaces only a file: a folder that appeared under its name since is not removed.
+    if !is_dir(temporary) || !is_dir(path) {
         return std::fs::rename(temporary, path).map_err(|e| fail(path, format!("cannot move the output in place ({e})")));
     }
     let aside = sibling(path, std::process::id(), "old").ok_or_else(|| fail(path, "not a folder path"))?;
-    std::fs::rename(path, &aside).map_err(|e| fail(path, format!("cannot move the old folder aside ({e})")))?;
+    remove(&aside);
+    std::fs::rename(path, &aside).map_err(|e| {
+        fail(path, format!("cannot move the old folder aside ({e}); a mount point cannot be replaced: write into a folder inside it"))
+    })?;
     if let Err(e) = std::fs::rename(temporary, path) {
-        let _ = std::fs::rename(&aside, path);
-        return Err(fail(path, format!("cannot move the new folder in place ({e})")));
+        let put_back = match std::fs::rename(&aside, path) {
+            Ok(()) => String::new(),
+            Err(_) => format!("; the old folder is at {}", aside.display()),
+        };
+        return Err(fail(path, format!("cannot move the new folder in place ({e}){put_back}")));
     }
     remove(&aside);
     Ok(())
@@ -157,31 +184,37 @@ fn move_in_place(temporary: &Path, path: &Path) -> Result<(), OutputError> {
 
 /// `.NAME.PID.KIND` beside `path`.
 fn sibling(path: &Path, pid: u32, kind: &str) -> Option<PathBuf> {
-    let name = path.file_name()?.to_string_lossy();
-    Some(path.with_file_name(format!(".{name}.{pid}.{kind}")))
+    let mut name = std::ffi::OsString::from(".");
+    name.push(path.file_name()?);
+    name.push(format!(".{pid}.{kind}"));
+    Some(path.with_file_name(name))
 }
 
-/// Removes the temporaries and set-aside folders for `path` whose process is gone; a folder
-/// set aside by a run killed before its new one moved in goes back in place.
+/// Removes the temporaries and set-aside folders for `path` whose process is gone (or is this
+/// one, which registers all its own: an unregistered one is a killed run's whose process id
+/// this one reuses, as PID 1 in a container does); a folder set aside by a run killed before
+/// its new one moved in goes back in place.
 fn remove_stale(path: &Path) {
     let (Some(name), Some(parent)) = (path.file_name(), path.parent()) else { return };
     let parent = if parent.as_os_str().is_empty() { Path::new(".") } else { parent };
-    let prefix = format!(".{}.", name.to_string_lossy());
     let Ok(entries) = std::fs::read_dir(parent) else { return };
     for entry in entries.flatten() {
-        let entry_name = entry.file_name().to_string_lossy().into_owned();
-        let Some(rest) = entry_name.strip_prefix(&prefix) else { continue };
-        let (pid, set_aside) = match (rest.strip_suffix(".tmp"), rest.strip_suffix(".old")) {
-            (Some(pid), _) => (pid, false),
-            (_, Some(pid)) => (pid, true),
-            _ => continue,
-        };
-        let gone = pid.parse::<u32>().is_ok_and(|pid| pid != std::process::id() && !process_running(pid));
-        let put_back = || set_aside && std::fs::symlink_metadata(path).is_err() && std::fs::rename(entry.path(), path).is_ok();
-        if gone && !put_back() {
+        let Some((pid, kind)) = temporary_of(&entry.file_name(), name) else { continue };
+        let ours = pid == std::process::id() && sibling(path, pid, kind).is_some_and(|p| !unfinished().contains(&p));
+        let put_back = || kind == "old" && std::fs::symlink_metadata(path).is_err() && std::fs::rename(entry.path(), path).is_ok();
+        if (ours || pid != std::process::id() && !process_running(pid)) && !put_back() {
             remove(&entry.path());
         }
     }
+}
+
+/// The process id and kind ("tmp" or "old") of `entry` when it is named `.NAME.PID.KIND`.
+fn temporary_of(entry: &std::ffi::OsStr, name: &std::ffi::OsStr) -> Option<(u32, &'static str)> {
+    use std::os::unix::ffi::OsStrExt;
+    let rest = entry.as_bytes().strip_prefix(b".")?.strip_prefix(name.as_bytes())?.strip_prefix(b".")?;
+    let (pid, kind) = std::str::from_utf8(rest).ok()?.split_once('.')?;
+    let kind = ["tmp", "old"].into_iter().find(|k| *k == kind)?;
+    Some((pid.parse().ok()?, kind))
 }
 
 /// Whether process `pid` runs (Linux: /proc); without /proc every process counts as running,
@@ -268,6 +301,36 @@ mod tests {
         remove_stale(&dir.join("bake"));
         assert!(dir.join("bake").is_dir(), "a folder set aside by a killed run goes back where it was");
         assert_eq!(entries(&dir), [".other.exr.1.tmp", ".out.exr.1.tmp", "bake", "out.exr"]);
+    }
+
+    #[test]
+    fn a_failed_write_is_not_staged_and_a_failed_commit_names_what_it_replaced() {
+        let dir = folder("failures");
+        let mut outputs = Outputs::new();
+        assert!(outputs.file(&dir.join("x.png"), |_| Err("disk full".into())).unwrap_err().to_string().contains("disk full"));
+        outputs.commit().unwrap();
+        assert_eq!(entries(&dir), Vec::<String>::new(), "the broken file was moved in or left behind");
+
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("a.txt"), text("a")).unwrap();
+        outputs.file(&dir.join("b.txt"), text("b")).unwrap();
+        std::fs::create_dir(dir.join("b.txt")).unwrap();
+        std::fs::write(dir.join("b.txt/inside"), "in the way").unwrap();
+        let error = outputs.commit().unwrap_err().to_string();
+        assert!(error.contains("b.txt") && error.contains("already replaced") && error.contains("a.txt"), "{error}");
+        assert_eq!(entries(&dir), ["a.txt", "b.txt"], "a temporary is left");
+    }
+
+    #[test]
+    fn a_temporary_of_a_killed_run_under_this_process_id_is_removed() {
+        let dir = folder("reused-pid");
+        let left = sibling(&dir.join("out.exr"), std::process::id(), "tmp").unwrap();
+        std::fs::write(&left, "a killed run's").unwrap();
+        let mut outputs = Outputs::new();
+        outputs.file(&dir.join("out.exr"), text("new")).unwrap();
+        outputs.commit().unwrap();
+        assert_eq!(entries(&dir), ["out.exr"]);
+        assert_eq!(std::fs::read_to_string(dir.join("out.exr")).unwrap(), "new");
     }
 
     #[test]

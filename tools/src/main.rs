@@ -80,7 +80,10 @@ fn remove_unfinished_outputs_when_interrupted() {
     let handler = || {
         relume_bake::outputs::remove_unfinished();
         eprintln!("relume: interrupted; outputs not yet moved in place were removed (none is left half-written)");
-        std::process::exit(130);
+        // _exit, not exit: the main thread may be inside Vulkan or a worker pool, and exit's
+        // destructors must not run under it.
+        // SAFETY: ends the process; nothing after it runs.
+        unsafe { libc::_exit(130) };
     };
     if let Err(e) = ctrlc::set_handler(handler) {
         eprintln!("relume: warning: cannot handle interrupts ({e}); an interrupted run may leave hidden temporary files");

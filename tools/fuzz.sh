@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Fuzzes what relume reads (cargo fuzz, libFuzzer; docs/RELIABILITY.md): the glTF/GLB loader,
+# the bake artifact's manifest and sections, the EXR and PNG readers, and sweep files, each
+# for a fixed number of runs from seed corpora made of the shipped scenes, images, sweeps
+# and fresh bakes. Not part of the test command: it needs the nightly toolchain and takes
+# minutes. A crash stops the script and leaves its input in fuzz/artifacts/<target>/.
+#
+#   bash tools/fuzz.sh [RUNS]    (default 20000 runs per target)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RUNS="${1:-20000}"
+if ! rustup toolchain list | grep -q '^nightly'; then
+    echo "fuzz.sh: cargo fuzz needs the nightly toolchain: rustup toolchain install nightly" >&2
+    exit 1
+fi
+if ! cargo fuzz --version >/dev/null 2>&1; then
+    echo "installing cargo-fuzz"
+    cargo install cargo-fuzz --locked
+fi
+
+corpus=target/fuzz-corpus
+rm -rf "$corpus"
+mkdir -p "$corpus"/{gltf,artifact,image,sweep}
+
+echo "seeds: the shipped scenes, environments and sweeps"
+cp scenes/*.gltf "$corpus/gltf/"
+for exr in scenes/envs/*.exr; do
+    { printf '\x00'; cat "$exr"; } > "$corpus/image/$(basename "$exr")"
+done
+for sweep in tools/sweeps/*.toml; do cp "$sweep" "$corpus/sweep/"; done
+
+echo "seeds: small bakes of cornell (obscurance, light path maps) and fiv-blobs (fiv), and a PNG"
+cargo build --release --locked -p relume-tools
+relume=target/release/relume
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+"$relume" bake scenes/cornell.gltf --method obscurance --patches 2000 --rays 16 --out "$work/obscurance" >/dev/null
+"$relume" bake scenes/cornell.gltf --method light-path-maps --patches 2000 --rays 16 --entry-points 256 --clusters 4 --basis 2 --out "$work/lpm" >/dev/null
+"$relume" bake scenes/fiv-blobs.gltf --method fiv --grid 32x17x15 --difmap-width 16 --out "$work/fiv" >/dev/null
+"$relume" reference scenes/cornell.gltf --width 16 --height 16 --spp 1 --out "$work/small.exr" >/dev/null
+{ printf '\x01'; cat "$work/small.png"; } > "$corpus/image/small.png"
+python3 - "$work" "$corpus/artifact" <<'PY'
+import json, struct, sys, os
+work, out = sys.argv[1], sys.argv[2]
+def seed(name, selector, payload):
+    open(os.path.join(out, name), 'wb').write(bytes([selector]) + payload)
+def read(*parts):
+    return open(os.path.join(work, *parts), 'rb').read()
+def layout(bake):
+    manifest = json.load(open(os.path.join(work, bake, 'manifest.json')))
+    atlas = next(s for s in manifest['sections'] if s['name'] == 'atlas')['summary']
+    width, height = atlas['width'], atlas['height'] * atlas['pages']
+    return struct.pack('<HH', width, height)
+seed('manifest', 0, read('obscurance', 'manifest.json'))
+seed('atlas', 1, read('obscurance', 'atlas.bin'))
+seed('obscurance', 2, layout('obscurance') + read('obscurance', 'obscurance.exr'))
+seed('light-path-maps', 3, layout('lpm') + read('lpm', 'light-path-maps.bin'))
+environment = read('fiv', 'fiv_environment.bin')
+seed('fiv-environment', 4, environment)
+seed('fiv-table', 5, struct.pack('<I', len(environment)) + environment + read('fiv', 'fiv_occluder_0.bin'))
+PY
+
+for target in gltf artifact image sweep; do
+    echo "fuzzing $target: $RUNS runs"
+    start=$(date +%s)
+    (cd fuzz && cargo +nightly fuzz run "$target" "../$corpus/$target" -- \
+        -runs="$RUNS" -seed=1 -max_len=4194304 -rss_limit_mb=4096 -timeout=30 -print_final_stats=1 2>&1) |
+        grep -E '^(Done|INFO: Seed|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==|SUMMARY|thread .* panicked)' || true
+    echo "$target: $(( $(date +%s) - start )) s"
+    if ls fuzz/artifacts/"$target"/crash-* fuzz/artifacts/"$target"/oom-* fuzz/artifacts/"$target"/timeout-* >/dev/null 2>&1; then
+        echo "fuzz.sh: $target found an input that fails; see fuzz/artifacts/$target/" >&2
+        exit 1
+    fi
+done
+echo "fuzz.sh: every target ran $RUNS runs with no crash, hang or memory blow-up"
