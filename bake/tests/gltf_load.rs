@@ -503,7 +503,7 @@ fn no_light() {
     }
     let e = load_err(&write_scene(&dir, "x", &json, Some(&bin)));
     assert_eq!(e.kind, ErrorKind::NoLight);
-    assert!(e.to_string().ends_with("scene \"occluder-plane\": has no light; add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient)"), "{e}");
+    assert!(e.to_string().ends_with("scene \"occluder-plane\": has no light; add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient), or give a lights file (--lights)"), "{e}");
     // An emissive material is light enough.
     json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
     json["materials"][1]["emissiveFactor"] = json!([1.0, 0.5, 0.25]);

@@ -6,7 +6,8 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::Vec3;
 use relume_bake::environment::{Environment, EnvironmentSettings};
-use relume_bake::gltf_load::{load_with_options, CameraOverride, LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
+use relume_bake::gltf_load::{load_with_options, CameraOverride, LightChoice, LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
+use relume_bake::lights_file;
 use relume_bake::reference::ReferenceSettings;
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -37,6 +38,10 @@ pub(crate) struct SceneArgs {
     /// 1 GiB decoded, by default).
     #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_texture_pixels: u64,
+    /// Light the scene by this lights file (docs/FORMATS.md) instead of its own punctual
+    /// lights; a scene without any light and without this gets a default rig (a headlight).
+    #[arg(long)]
+    pub lights: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -117,13 +122,14 @@ pub(crate) struct PathTracerArgs {
 }
 
 pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
-    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
-        bail!("--width {} --height {}: use 1..=16384 pixels per side", args.width, args.height);
-    }
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
-    let options =
-        LoadOptions { camera: camera.as_ref(), outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels) };
-    let mut scene = load(&args.scene, &options)?;
+    let options = LoadOptions {
+        camera: camera.as_ref(),
+        outside_files: args.allow_outside_files,
+        max_texture_pixels: Some(args.max_texture_pixels),
+        ..Default::default()
+    };
+    let mut scene = load(&args.scene, args.lights.as_deref(), options)?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     Ok(scene)
 }
@@ -156,9 +162,12 @@ fn replaced_environment(scene: &Scene, image: &Path) -> Result<Environment> {
     Ok(environment)
 }
 
-/// The scene at `path`, its load warnings printed.
-pub(crate) fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let loaded = load_with_options(path, options)?;
+/// The scene at `path`, its load warnings printed; lit by `lights_file` when given, else by
+/// its own lights or, having none, the default rig.
+pub(crate) fn load(path: &Path, lights_file: Option<&Path>, options: LoadOptions) -> Result<Scene> {
+    let given = lights_file.map(lights_file::read).transpose()?;
+    let lights = given.as_deref().map_or(LightChoice::SceneOrDefaultRig, LightChoice::Given);
+    let loaded = load_with_options(path, &LoadOptions { lights, ..options })?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
@@ -264,5 +273,5 @@ pub(crate) fn refuse_writing_over(outputs: &[PathBuf], inputs: &[&Path]) -> Resu
 
 /// The files a scene's command reads by name: the scene and the environment it is given.
 pub(crate) fn scene_inputs(scene: &SceneArgs) -> Vec<&Path> {
-    [Some(scene.scene.as_path()), scene.environment.as_deref()].into_iter().flatten().collect()
+    [Some(scene.scene.as_path()), scene.environment.as_deref(), scene.lights.as_deref()].into_iter().flatten().collect()
 }

@@ -33,6 +33,9 @@ pub(crate) struct BakeArgs {
     /// As `render --allow-outside-files`.
     #[arg(long)]
     allow_outside_files: bool,
+    /// As `render --lights`.
+    #[arg(long)]
+    lights: Option<PathBuf>,
     /// As `render --max-texture-pixels`.
     #[arg(long, default_value_t = DEFAULT_MAX_TEXTURE_PIXELS)]
     max_texture_pixels: u64,
@@ -62,7 +65,7 @@ pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
     let work = args.work.options()?;
     let options =
         LoadOptions { outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels), ..Default::default() };
-    let mut scene = load(&args.scene, &options)?;
+    let mut scene = load(&args.scene, args.lights.as_deref(), options)?;
     replace_environment(&mut scene, args.environment.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
     print!("{}", bake_scene(&scene, method, &values, work, &out)?);

@@ -124,11 +124,33 @@ fn an_index_out_of_range_is_refused() {
     assert_refused(&scene, &["scene.gltf", "Tri", "7"]);
 }
 
+/// A scene without any light renders with the default rig, saying so; with `--lights` it
+/// renders exactly as with those lights in the glTF; a bad lights file is refused by item.
 #[test]
-fn a_scene_without_lights_is_refused() {
+fn a_scene_without_lights_takes_the_default_rig_or_a_lights_file() {
     let dir = temp_dir("dark");
     let scene = write_scene(&dir, GOOD, [0, 1, 2], false);
-    assert_refused(&scene, &["scene.gltf", "light"]);
+    let scene = scene.to_str().unwrap();
+    let reference = |extra: &[&str], out: &str| {
+        let mut args = vec!["reference", scene, "--width", "8", "--height", "8", "--spp", "2", "--out", out];
+        args.extend(extra);
+        relume(&args, &dir)
+    };
+    let rigged = reference(&[], "rig.exr");
+    assert!(rigged.status.success() && String::from_utf8_lossy(&rigged.stderr).contains("default rig"), "{rigged:?}");
+    // The glTF light of write_scene (a point light of 10 cd at (0, 2, 0)) as a lights file.
+    let file =
+        r#"{"format": "relume-lights", "version": 1, "lights": [{"type": "point", "position": [0, 2, 0], "intensity": [10, 10, 10]}]}"#;
+    std::fs::write(dir.join("lights.json"), file).unwrap();
+    let filed = reference(&["--lights", "lights.json"], "filed.exr");
+    assert!(filed.status.success(), "{filed:?}");
+    assert!(!String::from_utf8_lossy(&filed.stderr).contains("default rig"));
+    let lit = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let own = relume(&["reference", lit.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "2", "--out", "own.exr"], &dir);
+    assert!(own.status.success());
+    assert_eq!(std::fs::read(dir.join("filed.exr")).unwrap(), std::fs::read(dir.join("own.exr")).unwrap());
+    std::fs::write(dir.join("bad.json"), file.replace("point", "torch")).unwrap();
+    assert_one_error(&reference(&["--lights", "bad.json"], "bad.exr"), &["bad.json", "lights[0]", "\"type\""]);
 }
 
 /// A bake whose manifest names a method relume lacks is refused naming the manifest.

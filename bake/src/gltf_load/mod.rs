@@ -26,7 +26,7 @@ mod primitives;
 pub use camera::{CameraOverride, CameraOverrideError};
 
 use crate::environment::{Environment, EnvironmentError, EnvironmentSettings};
-use crate::scene::{Camera, Material, Scene};
+use crate::scene::{Camera, Light, Material, Scene};
 use crate::settings::SceneSettings;
 use camera::{framing_camera, perspective_camera, Perspective};
 use files::{load_buffers, split_glb};
@@ -131,6 +131,21 @@ pub struct LoadOptions<'c> {
     /// The most pixels a texture may have (its PNG header is checked before decoding);
     /// None: [`DEFAULT_MAX_TEXTURE_PIXELS`].
     pub max_texture_pixels: Option<u64>,
+    /// Where the lights come from.
+    pub lights: LightChoice<'c>,
+}
+
+/// Where a scene's lights come from.
+#[derive(Clone, Copy, Debug, Default)]
+pub enum LightChoice<'c> {
+    /// The file's own; a scene with no light of any kind is refused.
+    #[default]
+    Scene,
+    /// The file's own, or, for a scene with no light of any kind (most downloaded models),
+    /// [`crate::lights_file::default_rig`], with a warning saying so.
+    SceneOrDefaultRig,
+    /// These (a lights file's), in place of the file's punctual lights.
+    Given(&'c [Light]),
 }
 
 /// 8192 x 8192: decoded to linear RGBA f32, 1 GiB.
@@ -157,7 +172,7 @@ pub fn load_with_options(path: &Path, options: &LoadOptions) -> Result<Loaded, S
             err.fail(ErrorKind::Io, "", format!("cannot read the file: {e}"), "check its permissions")
         }
     })?;
-    Loader::new(ctx, &bytes)?.load(options.camera)
+    Loader::new(ctx, &bytes)?.load(options.camera, options.lights)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -273,7 +288,7 @@ impl<'a> Loader<'a> {
         })
     }
 
-    fn load(mut self, camera_override: Option<&CameraOverride>) -> Result<Loaded, SceneError> {
+    fn load(mut self, camera_override: Option<&CameraOverride>, lights: LightChoice) -> Result<Loaded, SceneError> {
         let ctx = self.ctx;
         let document = self.document.clone();
         let Some(gltf_scene) = document.default_scene().or_else(|| document.scenes().next()) else {
@@ -365,17 +380,6 @@ impl<'a> Loader<'a> {
             }
             self.scene.environment = Some(environment);
         }
-        let emissive = self.scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
-        let environment = self.scene.environment.as_ref().is_some_and(Environment::is_lit);
-        if self.scene.lights.is_empty() && !emissive && !environment && self.scene.settings.ambient.max_element() <= 0.0 {
-            return Err(ctx.fail(
-                ErrorKind::NoLight,
-                scene_item,
-                "has no light",
-                "add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient)",
-            ));
-        }
-
         self.scene.camera = match (camera_override, camera_node) {
             (Some(o), _) => o.camera(bounds),
             (None, Some((p, world, item))) => perspective_camera(ctx, &item, &p, world, bounds)?,
@@ -384,6 +388,24 @@ impl<'a> Loader<'a> {
                 framing_camera(bounds)
             }
         };
+        if let LightChoice::Given(given) = lights {
+            self.scene.lights = given.to_vec();
+        }
+        let emissive = self.scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
+        let environment = self.scene.environment.as_ref().is_some_and(Environment::is_lit);
+        if self.scene.lights.is_empty() && !emissive && !environment && self.scene.settings.ambient.max_element() <= 0.0 {
+            if !matches!(lights, LightChoice::SceneOrDefaultRig) {
+                return Err(ctx.fail(
+                    ErrorKind::NoLight,
+                    scene_item,
+                    "has no light",
+                    "add a KHR_lights_punctual light, an emissive material, an environment (extras.relume.environment) or an ambient light (extras.relume.ambient), or give a lights file (--lights)",
+                ));
+            }
+            self.scene.lights = crate::lights_file::default_rig(bounds, &self.scene.camera);
+            let rig = "has no light; lit by relume's default rig, a headlight at the camera (give --lights FILE to choose the lights)";
+            self.warnings.push(ctx.warning(&scene_item, rig));
+        }
         Ok(Loaded { scene: self.scene, warnings: self.warnings })
     }
 }

@@ -139,6 +139,7 @@ fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
         environment: entry.environment.clone(),
         allow_outside_files: false,
         max_texture_pixels: relume_bake::gltf_load::DEFAULT_MAX_TEXTURE_PIXELS,
+        lights: entry.lights.clone(),
     }
 }
 

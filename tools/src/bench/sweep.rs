@@ -56,6 +56,9 @@ pub(crate) struct SweepScene {
     /// A lat-long EXR lighting the scene instead of its own environment (`--environment`),
     /// relative to the sweep file's folder.
     pub environment: Option<PathBuf>,
+    /// A lights file lighting the scene instead of its own lights (`--lights`), relative to
+    /// the sweep file's folder.
+    pub lights: Option<PathBuf>,
     /// Move one light along a path; without it the scene's lights as they are.
     pub light_path: Option<LightPath>,
     /// Or move one mesh (an occluder) along a path of translations; the bakes stay as made.
@@ -114,6 +117,7 @@ impl Sweep {
         for scene in &mut sweep.scenes {
             scene.path = folder.join(&scene.path);
             scene.environment = scene.environment.as_ref().map(|e| folder.join(e));
+            scene.lights = scene.lights.as_ref().map(|l| folder.join(l));
         }
         sweep.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         Ok(sweep)
