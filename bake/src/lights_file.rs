@@ -75,22 +75,22 @@ pub fn to_json(lights: &[Light]) -> String {
     let entries: Vec<Value> = lights
         .iter()
         .map(|l| {
-            let mut entry = json!({ "name": l.name, "intensity": l.intensity.to_array() });
+            let mut entry = json!({ "name": l.name, "intensity": numbers(l.intensity) });
             match l.kind {
                 LightKind::Point => {
                     entry["type"] = json!("point");
-                    entry["position"] = json!(l.position.to_array());
+                    entry["position"] = numbers(l.position);
                 }
                 LightKind::Spot { inner_cone, outer_cone } => {
                     entry["type"] = json!("spot");
-                    entry["position"] = json!(l.position.to_array());
-                    entry["direction"] = json!(l.direction.to_array());
-                    entry["inner_cone_degrees"] = json!(inner_cone.to_degrees());
-                    entry["outer_cone_degrees"] = json!(outer_cone.to_degrees());
+                    entry["position"] = numbers(l.position);
+                    entry["direction"] = numbers(l.direction);
+                    entry["inner_cone_degrees"] = number(inner_cone.to_degrees());
+                    entry["outer_cone_degrees"] = number(outer_cone.to_degrees());
                 }
                 LightKind::Directional => {
                     entry["type"] = json!("directional");
-                    entry["direction"] = json!(l.direction.to_array());
+                    entry["direction"] = numbers(l.direction);
                 }
             }
             entry
@@ -99,6 +99,15 @@ pub fn to_json(lights: &[Light]) -> String {
     let mut text = serde_json::to_string_pretty(&json!({ "format": FORMAT, "version": VERSION, "lights": entries })).expect("JSON");
     text.push('\n');
     text
+}
+
+/// `v` as the shortest decimal that reads back as the same f32 (not its f64 expansion).
+fn number(v: f32) -> Value {
+    json!(v.to_string().parse::<f64>().unwrap_or(0.0))
+}
+
+fn numbers(v: Vec3) -> Value {
+    json!(v.to_array().map(number))
 }
 
 /// The rig a scene without any light is given: one white point light at the camera, a

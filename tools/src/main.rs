@@ -11,6 +11,7 @@ mod args;
 mod bake;
 mod bench;
 mod gpu;
+mod lights;
 mod methods;
 mod reference;
 mod render;
@@ -39,6 +40,10 @@ enum Command {
     /// Run a sweep (scenes x methods x parameters x lights, from a TOML file): costs and
     /// errors of every point, CSV/JSON, charts with the Pareto front, report.md.
     Bench(bench::BenchArgs),
+    /// Write the lights a scene is lit by (its punctual lights, those of --lights, or the
+    /// default rig of a scene without light) as a lights file to edit and give back with
+    /// --lights.
+    Lights(lights::LightsArgs),
     /// List the methods and their parameters (bake and run time, with ranges and defaults).
     Methods {
         /// One method's name (default: every method).
@@ -98,6 +103,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => reference::compare_command(&args),
         Command::Run(args) => report::run_main_job(&args),
         Command::Bench(args) => bench::bench_command(&args),
+        Command::Lights(args) => lights::lights_command(&args),
         Command::Methods { name } => {
             let listed = match name {
                 Some(name) => vec![methods::find(&name)?],

@@ -138,6 +138,11 @@ fn a_scene_without_lights_takes_the_default_rig_or_a_lights_file() {
     };
     let rigged = reference(&[], "rig.exr");
     assert!(rigged.status.success() && String::from_utf8_lossy(&rigged.stderr).contains("default rig"), "{rigged:?}");
+    // `relume lights` writes the rig out; given back, it renders the same image, silently.
+    assert!(relume(&["lights", scene, "--out", "rig.json"], &dir).status.success());
+    let again = reference(&["--lights", "rig.json"], "rig-again.exr");
+    assert!(again.status.success() && !String::from_utf8_lossy(&again.stderr).contains("default rig"), "{again:?}");
+    assert_eq!(std::fs::read(dir.join("rig.exr")).unwrap(), std::fs::read(dir.join("rig-again.exr")).unwrap());
     // The glTF light of write_scene (a point light of 10 cd at (0, 2, 0)) as a lights file.
     let file =
         r#"{"format": "relume-lights", "version": 1, "lights": [{"type": "point", "position": [0, 2, 0], "intensity": [10, 10, 10]}]}"#;
