@@ -206,6 +206,21 @@ mod tests {
     }
 
     #[test]
+    fn files_are_relative_to_the_sweep_file() {
+        let dir = std::env::temp_dir().join(format!("relume-sweep-files-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text =
+            "name = 'x'\n[[scenes]]\npath = 'm/a.gltf'\nenvironment = 'e.exr'\nlights = 'l/rig.json'\n[[methods]]\nmethod = 'direct'";
+        std::fs::write(dir.join("sweep.toml"), text).unwrap();
+        let sweep = Sweep::read(&dir.join("sweep.toml")).unwrap();
+        let scene = &sweep.scenes[0];
+        assert_eq!(
+            (&scene.path, scene.environment.as_ref(), scene.lights.as_ref()),
+            (&dir.join("m/a.gltf"), Some(&dir.join("e.exr")), Some(&dir.join("l/rig.json")))
+        );
+    }
+
+    #[test]
     fn bad_sweeps_are_refused_by_key() {
         let dir = std::env::temp_dir().join(format!("relume-sweep-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
