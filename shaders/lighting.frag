@@ -29,6 +29,7 @@ struct Material {
     vec4 base_color;
     vec4 emission;
     vec4 texture;            // base-colour texture: width, height, array layer (-1: none)
+    vec4 phong;              // glossy lobe: rho_s rgb, exponent e (rho_s 0: Lambertian)
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer Lights { Light lights[]; };
@@ -63,6 +64,16 @@ vec3 atlas_sample(sampler2DArray image, vec2 uv) {
     return sample_bilinear(image, layer, size.xy, vec2(uv.x - page, uv.y), WRAP_CLAMP).rgb;
 }
 
+// The glossy lobe of f, the normalised modified Phong lobe the path tracer also evaluates
+// (bake/src/bsdf.rs): rho_s (e + 2) / 2 pi max(0, wi . reflect(wo))^e.
+vec3 phong_lobe(vec4 phong, vec3 n, vec3 to_camera, vec3 to_light) {
+    if (phong.rgb == vec3(0.0)) return vec3(0.0);
+    float c = max(dot(to_light, reflect(-to_camera, n)), 0.0);
+    // pow(0, 0) is undefined in GLSL; the lobe of exponent 0 is the constant (e + 2) / 2 pi.
+    float lobe = phong.w == 0.0 ? 1.0 : pow(c, phong.w);
+    return phong.rgb * ((phong.w + 2.0) / (2.0 * PI) * lobe);
+}
+
 vec3 irradiance_term() {
     if (IRRADIANCE_TERM == TERM_TEXEL) return atlas_sample(irradiance_texels, uv1);
     if (IRRADIANCE_TERM == TERM_VERTEX) return vertex_term;
@@ -93,7 +104,7 @@ void main() {
         if (cos_theta <= 0.0) continue;
         float v = visibility(lights[i], world_position, frame.shadows, frame.min_variance,
                              frame.bleeding_reduction);
-        result += albedo / PI * irradiance * cos_theta * v;
+        result += (albedo / PI + phong_lobe(m.phong, n, to_camera, to_light)) * irradiance * cos_theta * v;
         direct += irradiance * cos_theta * v;
     }
     if (frame.ambient_beta != vec4(0.0)) {

@@ -146,6 +146,10 @@ pub fn scene_checksum(scene: &Scene) -> String {
     for material in &scene.materials {
         hash.floats(material.base_color.as_ref().iter().chain(material.emission.as_ref()));
         hash.write(&material.base_color_texture.map_or(u64::MAX, |t| t as u64).to_le_bytes());
+        // Only when present, so that every Lambertian scene keeps its checksum.
+        if let Some(phong) = &material.phong {
+            hash.floats(phong.specular.as_ref().iter().chain([&phong.exponent]));
+        }
     }
     for texture in &scene.textures {
         [texture.width, texture.height].iter().for_each(|v| hash.write(&v.to_le_bytes()));

@@ -24,6 +24,8 @@ pub mod light_path_maps;
 pub mod obscurance;
 
 #[cfg(feature = "baking")]
+mod bsdf;
+#[cfg(feature = "baking")]
 pub mod bvh;
 #[cfg(feature = "baking")]
 pub mod cpca;

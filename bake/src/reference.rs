@@ -34,15 +34,15 @@
 //! depend on the settings and the seed only, never on the thread count or on how samples were
 //! split into passes.
 
+use crate::bsdf::Bsdf;
 use crate::bvh::{Hit, SceneBvh};
 use crate::environment::{face_point, face_rectangle_solid_angle, luminance};
 use crate::image::Image;
-use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
+use crate::sampling::{uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
 use crate::work::{progress_bar, with_threads, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use std::f32::consts::PI;
 use std::time::Instant;
 
 /// The first path vertex (0 = where the camera ray lands) whose continuation Russian roulette
@@ -52,6 +52,9 @@ const ROULETTE_FROM_VERTEX: u32 = 3;
 /// far above the two per vertex that emitter choice and Russian roulette take, so scenes
 /// without an environment draw exactly the numbers they drew before it existed.
 const ENVIRONMENT_DIMENSIONS: u32 = 1 << 30;
+/// First sampler dimension of the glossy lobe's choice (one per bounce; only a material with a
+/// lobe reads it).
+const LOBE_DIMENSIONS: u32 = 1 << 29;
 /// The largest number of samples per pixel one pass over the image takes: small enough that
 /// a time limit is not overshot by much and the progress bar moves.
 const MAX_PASS_SAMPLES: u32 = 16;
@@ -215,7 +218,7 @@ pub fn radiance_by_bounce(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSet
 /// for lights in front of the surface and not blocked. Shadow rays start
 /// [`SceneBvh::epsilon`] off the point along `normal`. Emissive triangles are not included.
 pub fn direct_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal: Vec3) -> Vec3 {
-    scene.lights.iter().filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true)).sum()
+    scene.lights.iter().filter_map(|light| punctual_irradiance(bvh, light, point, normal, normal, true)).map(|(e, _)| e).sum()
 }
 
 /// Irradiance from the scene's environment at `point` on a surface with unit `normal`, with
@@ -246,10 +249,11 @@ pub fn environment_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal
     Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32)
 }
 
-/// Irradiance on the shading normal `ns` from one punctual light, or None when the light is
-/// behind the surface (either normal), outside its cone or range, or blocked.
+/// Irradiance on the shading normal `ns` from one punctual light and the direction to it, or
+/// None when the light is behind the surface (either normal), outside its cone or range, or
+/// blocked.
 #[inline]
-fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<Vec3> {
+fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<(Vec3, Vec3)> {
     let incident = light.incident(point);
     if incident.irradiance.max_element() <= 0.0 {
         return None;
@@ -265,7 +269,7 @@ fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng:
             return None;
         }
     }
-    Some(incident.irradiance * cos)
+    Some((incident.irradiance * cos, incident.to_light))
 }
 
 /// Power heuristic (beta = 2) weight of the strategy with density `a` against one with `b`.
@@ -443,41 +447,39 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let albedo = material.albedo(&scene.textures, hit.uv0);
-            if albedo.max_element() <= 0.0 {
+            let specular = material.phong.map_or(0.0, |p| p.specular.max_element());
+            if albedo.max_element() <= 0.0 && specular <= 0.0 {
                 break;
             }
-            let f = albedo * (1.0 / PI);
             // Two-sided scattering: both normals on the side the ray came from.
             let ng = if hit.geometric_normal.dot(wo) >= 0.0 { hit.geometric_normal } else { -hit.geometric_normal };
             let ns = if hit.shading_normal.dot(wo) >= 0.0 { hit.shading_normal } else { -hit.shading_normal };
             let p = hit.position;
+            let bsdf = Bsdf::new(albedo, material.phong.as_ref(), ns, wo);
 
             for light in &scene.lights {
-                if let Some(e) = punctual_irradiance(self.bvh, light, p, ns, ng, self.shadows) {
-                    sink(bounce + 1, throughput * f * e);
+                if let Some((e, wi)) = punctual_irradiance(self.bvh, light, p, ns, ng, self.shadows) {
+                    sink(bounce + 1, throughput * bsdf.eval(wi) * e);
                 }
             }
 
             let u = sampler.sobol4(1 + bounce);
             if !self.emitters.primitives.is_empty() {
                 let pick = sampler.uniform_f64(2 * bounce);
-                if let Some(l) = self.sample_emitter(&hit, p, ns, ng, pick, Vec2::new(u[2], u[3])) {
-                    sink(bounce + 1, throughput * f * l);
+                if let Some((l, wi)) = self.sample_emitter(&hit, &bsdf, p, ns, ng, pick, Vec2::new(u[2], u[3])) {
+                    sink(bounce + 1, throughput * bsdf.eval(wi) * l);
                 }
             }
 
-            if let Some(l) = self.sample_environment(sampler, bounce, p, ns, ng) {
-                sink(bounce + 1, throughput * f * l);
+            if let Some((l, wi)) = self.sample_environment(sampler, &bsdf, bounce, p, ns, ng) {
+                sink(bounce + 1, throughput * bsdf.eval(wi) * l);
             }
 
-            // Cosine-weighted continuation: f cos / pdf = albedo.
-            let (t, b) = orthonormal_basis(ns);
-            let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
-            let wi = t * local.x + b * local.y + ns * local.z;
-            if local.z <= 0.0 || ng.dot(wi) <= 0.0 {
+            // Continuation by the BSDF's sampling: f cos / pdf (the albedo for a Lambertian one).
+            let Some((wi, weight, pdf)) = bsdf.sample(Vec2::new(u[0], u[1]), || sampler.uniform(LOBE_DIMENSIONS + bounce), ng) else {
                 break;
-            }
-            throughput *= albedo;
+            };
+            throughput *= weight;
             if bounce >= ROULETTE_FROM_VERTEX {
                 let survive = throughput.max_element().min(0.95);
                 if sampler.uniform(2 * bounce + 1) >= survive {
@@ -485,7 +487,7 @@ impl<'a> Integrator<'a> {
                 }
                 throughput /= survive;
             }
-            bsdf_pdf = local.z * (1.0 / PI);
+            bsdf_pdf = pdf;
             previous = p;
             origin = self.bvh.offset_origin(p, ng, wi);
             dir = wi;
@@ -493,8 +495,9 @@ impl<'a> Integrator<'a> {
     }
 
     /// Next-event estimate from the environment at `p`, MIS-weighted against BSDF sampling:
-    /// L cos / pdf times the weight, still to be multiplied by f and the throughput.
-    fn sample_environment(&self, sampler: &PathSampler, bounce: u32, p: Vec3, ns: Vec3, ng: Vec3) -> Option<Vec3> {
+    /// L cos / pdf times the weight, still to be multiplied by f and the throughput; with its
+    /// direction.
+    fn sample_environment(&self, sampler: &PathSampler, bsdf: &Bsdf, bounce: u32, p: Vec3, ns: Vec3, ng: Vec3) -> Option<(Vec3, Vec3)> {
         let environment = self.scene.environment.as_ref()?;
         let dims = ENVIRONMENT_DIMENSIONS + 3 * bounce;
         let u = Vec2::new(sampler.uniform(dims + 1), sampler.uniform(dims + 2));
@@ -503,14 +506,15 @@ impl<'a> Integrator<'a> {
         if cos_surface <= 0.0 || ng.dot(wi) <= 0.0 || self.bvh.occluded(self.bvh.offset_origin(p, ng, wi), wi, f32::INFINITY) {
             return None;
         }
-        let weight = power_heuristic(pdf, cos_surface * (1.0 / PI));
-        Some(radiance * (cos_surface * weight / pdf))
+        let weight = power_heuristic(pdf, bsdf.pdf(wi));
+        Some((radiance * (cos_surface * weight / pdf), wi))
     }
 
     /// Next-event estimate from the emissive triangles at `p`, MIS-weighted against BSDF
     /// sampling: Le cos / pdf times the weight, still to be multiplied by f and the
-    /// throughput. None when the sample contributes nothing.
-    fn sample_emitter(&self, hit: &Hit, p: Vec3, ns: Vec3, ng: Vec3, pick: f64, u: Vec2) -> Option<Vec3> {
+    /// throughput; with its direction. None when the sample contributes nothing.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_emitter(&self, hit: &Hit, bsdf: &Bsdf, p: Vec3, ns: Vec3, ng: Vec3, pick: f64, u: Vec2) -> Option<(Vec3, Vec3)> {
         let prim = self.emitters.pick(pick);
         if prim == hit.primitive {
             return None; // A flat emitter cannot light itself.
@@ -546,7 +550,7 @@ impl<'a> Integrator<'a> {
             return None;
         }
         let material = &self.scene.materials[self.bvh.primitive_material(prim) as usize];
-        let weight = power_heuristic(light_pdf, cos_surface * (1.0 / PI));
-        Some(material.emission * (cos_surface * weight / light_pdf))
+        let weight = power_heuristic(light_pdf, bsdf.pdf(wi));
+        Some((material.emission * (cos_surface * weight / light_pdf), wi))
     }
 }

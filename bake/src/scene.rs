@@ -49,6 +49,19 @@ pub struct Material {
     pub base_color_texture: Option<usize>,
     /// Emitted radiance: emissiveFactor times KHR_materials_emissive_strength.
     pub emission: Vec3,
+    /// A glossy lobe added to the Lambertian one (`extras.relume.phong`); None: Lambertian.
+    pub phong: Option<Phong>,
+}
+
+/// The normalised modified Phong lobe (light-clouds spec C, "Reference glossy"):
+/// f = rho_d / pi + rho_s (e + 2) / (2 pi) max(0, wi . reflect(wo))^e, with rho_d the
+/// base colour and rho_d + rho_s <= 1 per channel, so no light is made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Phong {
+    /// rho_s, linear rgb.
+    pub specular: Vec3,
+    /// e, >= 0.
+    pub exponent: f32,
 }
 
 /// An sRGB-encoded image decoded to linear RGBA, row 0 at the top (v = 0), as glTF lays it out.

@@ -22,7 +22,7 @@ pub enum Facing {
 
 /// A Lambertian material with constant albedo and emitted radiance.
 pub fn material(name: &str, albedo: Vec3, emission: Vec3) -> Material {
-    Material { name: name.to_string(), base_color: albedo.extend(1.0), base_color_texture: None, emission }
+    Material { name: name.to_string(), base_color: albedo.extend(1.0), base_color_texture: None, emission, phong: None }
 }
 
 /// A scene from parts; its `source` names it as built in code.

@@ -39,6 +39,8 @@ struct GpuMaterial {
     emission: Vec4,
     /// Base-colour texture: width, height, layer of the texture array (-1: none).
     texture: Vec4,
+    /// The glossy lobe: rho_s rgb, exponent (all 0: Lambertian).
+    phong: Vec4,
 }
 
 /// One mesh's index range and material: a draw of the lighting pass.
@@ -159,6 +161,7 @@ impl GpuScene {
                     Some((layer, t)) => Vec4::new(t.width as f32, t.height as f32, layer as f32, 0.0),
                     None => Vec4::new(0.0, 0.0, -1.0, 0.0),
                 },
+                phong: m.phong.map_or(Vec4::ZERO, |p| p.specular.extend(p.exponent)),
             })
             .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;

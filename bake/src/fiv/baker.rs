@@ -192,6 +192,7 @@ fn alone(mesh: &Mesh, centre: Vec3) -> Scene {
             base_color: glam::Vec4::ZERO,
             base_color_texture: None,
             emission: Vec3::ZERO,
+            phong: None,
         }],
         textures: Vec::new(),
         lights: Vec::new(),

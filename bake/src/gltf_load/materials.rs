@@ -4,9 +4,36 @@
 use super::files::read_uri;
 use super::{default_material, quoted_name, Ctx, ErrorKind, Loader, SceneError};
 use crate::image::srgb_to_linear;
-use crate::scene::{Material, Texture};
+use crate::scene::{Material, Phong, Texture};
 use glam::{Vec3, Vec4};
 use std::borrow::Cow;
+
+/// The material's glossy lobe, `extras.relume.phong {specular, exponent}` (specular one number
+/// or rgb), refused unless rho_d + rho_s <= 1 per channel (rho_d the base colour factor: a
+/// texture, at most 1, only lowers it) and the exponent is finite and >= 0.
+fn phong(ctx: Ctx, item: &str, extras: &gltf::json::Extras, base: Vec3) -> Result<Option<Phong>, SceneError> {
+    let Some(raw) = extras else { return Ok(None) };
+    let value: serde_json::Value = serde_json::from_str(raw.get()).unwrap_or_default();
+    let block = &value["relume"]["phong"];
+    if block.is_null() {
+        return Ok(None);
+    }
+    let item = format!("{item} extras.relume.phong");
+    let fix = "give {\"specular\": rho_s (a number or [r, g, b]), \"exponent\": e >= 0} with base colour + specular <= 1";
+    let number = |v: &serde_json::Value| v.as_f64().map(|v| v as f32).filter(|v| v.is_finite());
+    let specular = match &block["specular"] {
+        serde_json::Value::Array(a) if a.len() == 3 => a.iter().map(number).collect::<Option<Vec<f32>>>().map(|v| Vec3::from_slice(&v)),
+        v => number(v).map(Vec3::splat),
+    };
+    let (Some(specular), Some(exponent)) = (specular, number(&block["exponent"])) else {
+        return Err(ctx.fail(ErrorKind::Invalid, item, "needs a finite specular and exponent", fix));
+    };
+    if specular.min_element() < 0.0 || exponent < 0.0 || (base + specular).max_element() > 1.0 {
+        let problem = format!("specular {specular} with base colour {base} and exponent {exponent} would make light or is negative");
+        return Err(ctx.fail(ErrorKind::Invalid, item, problem, fix));
+    }
+    Ok(Some(Phong { specular, exponent }))
+}
 
 impl Loader<'_> {
     pub(super) fn material_for(&mut self, primitive: &gltf::Primitive, item: &str) -> Result<usize, SceneError> {
@@ -51,8 +78,9 @@ impl Loader<'_> {
                 Some(self.texture_for(&info.texture().source(), &mat_item)?)
             }
         };
+        let phong = phong(ctx, &mat_item, gm.extras(), base_color.truncate())?;
         let name = gm.name().map(str::to_string).unwrap_or_else(|| format!("material {index}"));
-        self.scene.materials.push(Material { name, base_color, base_color_texture, emission });
+        self.scene.materials.push(Material { name, base_color, base_color_texture, emission, phong });
         let m = self.scene.materials.len() - 1;
         if let Some(slot) = self.material_map.get_mut(index) {
             *slot = Some(m);

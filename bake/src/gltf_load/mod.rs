@@ -213,7 +213,7 @@ struct Loader<'a> {
 
 /// The glTF default material: white base colour, no emission.
 fn default_material() -> Material {
-    Material { name: "default".into(), base_color: Vec4::ONE, base_color_texture: None, emission: Vec3::ZERO }
+    Material { name: "default".into(), base_color: Vec4::ONE, base_color_texture: None, emission: Vec3::ZERO, phong: None }
 }
 
 fn quoted_name(kind: &str, name: Option<&str>, index: usize) -> String {
