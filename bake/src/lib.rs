@@ -20,6 +20,7 @@ pub mod settings;
 pub mod testing;
 
 pub mod fiv;
+pub mod light_cloud;
 pub mod light_path_maps;
 pub mod obscurance;
 

@@ -253,7 +253,7 @@ pub fn environment_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal
 /// None when the light is behind the surface (either normal), outside its cone or range, or
 /// blocked.
 #[inline]
-fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<(Vec3, Vec3)> {
+pub(crate) fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<(Vec3, Vec3)> {
     let incident = light.incident(point);
     if incident.irradiance.max_element() <= 0.0 {
         return None;

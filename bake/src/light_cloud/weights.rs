@@ -1,0 +1,107 @@
+//! A user's point light as a weighted sum of cloud lights (004 §6.1): the m nearest cloud
+//! lights visible from it, weighted by Silverman's kernel (1 - d / r)^4, normalised, times the
+//! light's intensity. Several lights add their weights.
+//!
+//! r is the distance of the (m + 1)-th nearest visible cloud light (spec light-clouds.md B4):
+//! with the paper's r = d_(m) the m-th weight is always zero, and a light leaving the set
+//! would jump. With this r a light leaves the set at weight zero, so the weights are
+//! continuous as the light moves, except where visibility changes.
+
+use crate::scene::{Light, LightKind};
+use glam::Vec3;
+
+/// One cloud light's weight (per channel, candela).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CloudWeight {
+    pub light: u32,
+    pub weight: Vec3,
+}
+
+/// The most cloud lights one user light stands on.
+pub const MAX_NEAREST: usize = 16;
+
+/// Refuses what the cloud cannot stand in for: spot and directional lights (the paper's future
+/// work, §8: a cloud of isotropic points holds no direction).
+pub fn refuse_lights(lights: &[Light]) -> Result<(), String> {
+    match lights.iter().find(|l| l.kind != LightKind::Point) {
+        Some(l) => Err(format!(
+            "light \"{}\" is a {} light; light clouds stand in for point lights only (004 §8 leaves spot and directional lights to future work): give point lights (--lights FILE)",
+            l.name,
+            if l.kind == LightKind::Directional { "directional" } else { "spot" }
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Computes weights without allocating once made: its scratch is sized for the cloud.
+pub struct Weigher {
+    nearest: usize,
+    order: Vec<(f32, u32)>,
+    chosen: Vec<(f32, u32)>,
+    dense: Vec<Vec3>,
+}
+
+impl Weigher {
+    /// For a cloud of `cloud_size` lights, each user light standing on its `nearest` (m)
+    /// nearest visible ones.
+    pub fn new(cloud_size: usize, nearest: usize) -> Result<Weigher, String> {
+        if !(1..=MAX_NEAREST).contains(&nearest) {
+            return Err(format!("m = {nearest}: a light stands on 1..={MAX_NEAREST} nearest cloud lights"));
+        }
+        Ok(Weigher {
+            nearest,
+            order: Vec::with_capacity(cloud_size),
+            chosen: Vec::with_capacity(MAX_NEAREST + 1),
+            dense: vec![Vec3::ZERO; cloud_size],
+        })
+    }
+
+    /// The weights of `lights` over `cloud`, in cloud order, zero weights left out, written
+    /// to `out`; `visible(from, to)` says whether a segment is unoccluded. Returns how many
+    /// lights saw no cloud light (they add no indirect light: spec B14).
+    pub fn weigh(
+        &mut self,
+        cloud: &[Vec3],
+        lights: &[Light],
+        mut visible: impl FnMut(Vec3, Vec3) -> bool,
+        out: &mut Vec<CloudWeight>,
+    ) -> usize {
+        self.dense.iter_mut().for_each(|w| *w = Vec3::ZERO);
+        let mut unseen = 0;
+        for light in lights {
+            unseen += usize::from(!self.add(cloud, light.position, light.intensity, &mut visible));
+        }
+        out.clear();
+        out.extend(
+            self.dense.iter().enumerate().filter(|(_, w)| **w != Vec3::ZERO).map(|(j, w)| CloudWeight { light: j as u32, weight: *w }),
+        );
+        unseen
+    }
+
+    /// Adds one light's weights; false when no cloud light is visible from it.
+    fn add(&mut self, cloud: &[Vec3], position: Vec3, intensity: Vec3, visible: &mut impl FnMut(Vec3, Vec3) -> bool) -> bool {
+        self.order.clear();
+        self.order.extend(cloud.iter().enumerate().map(|(j, p)| (p.distance(position), j as u32)));
+        self.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        self.chosen.clear();
+        for &(d, j) in &self.order {
+            if self.chosen.len() > self.nearest {
+                break;
+            }
+            if visible(position, cloud[j as usize]) {
+                self.chosen.push((d, j));
+            }
+        }
+        let Some(&(r, _)) = self.chosen.last() else { return false };
+        let used = &self.chosen[..self.chosen.len().min(self.nearest)];
+        // 004 §6.1: Silverman's kernel, normalised to sum to one.
+        let kernel = |d: f32| if r > 0.0 { (1.0 - d / r).max(0.0).powi(4) } else { 1.0 };
+        let total: f32 = used.iter().map(|&(d, _)| kernel(d)).sum();
+        for &(d, j) in used {
+            // Every used light at distance r (ties): equal weights (spec B4).
+            let share = if total > 0.0 { kernel(d) / total } else { 1.0 / used.len() as f32 };
+            self.dense[j as usize] += intensity * share;
+        }
+        true
+    }
+}
