@@ -193,6 +193,13 @@ impl SceneBvh {
         !bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
     }
 
+    /// Whether nothing blocks the segment between two points in free space (no offsets: for
+    /// points off every surface, such as lights).
+    pub fn visible(&self, a: Vec3, b: Vec3) -> bool {
+        let length = a.distance(b);
+        length == 0.0 || !self.occluded(a, (b - a) / length, length)
+    }
+
     fn make_hit(&self, primitive: u32, t: f32, bary: Vec2) -> Hit {
         let p = &self.primitives[primitive as usize];
         let w = Vec3::new(1.0 - bary.x - bary.y, bary.x, bary.y);

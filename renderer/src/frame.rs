@@ -242,11 +242,13 @@ impl Renderer {
         Ok(())
     }
 
-    /// Moves the lights (same kinds and count as the scene had), without allocating. The
-    /// next frame recorded carries the new data in its command buffer, so a frame still in
-    /// flight is not disturbed.
+    /// Moves the lights (same kinds and count as the scene had), without allocating, and tells
+    /// every technique (`Technique::lights_set`). The next frame recorded carries the new data
+    /// in its command buffer, so a frame still in flight is not disturbed.
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
-        self.scene.set_lights(lights)
+        self.scene.set_lights(lights)?;
+        self.techniques.iter_mut().for_each(|t| t.lights_set(lights));
+        Ok(())
     }
 
     /// Moves mesh `mesh` (an index into the scene's meshes) by `translation` from where the

@@ -8,7 +8,7 @@ use crate::gpu_scene::GpuScene;
 use crate::vk::{Buffer, CommandRecorder, Context, Image, Tracker, VkResult};
 use crate::RenderSettings;
 use glam::Vec3;
-use relume_bake::scene::Scene;
+use relume_bake::scene::{Light, Scene};
 use std::any::Any;
 use std::sync::Arc;
 
@@ -91,6 +91,11 @@ pub trait Technique: Any + Send {
     /// `Renderer::set_mesh_translation`), for the frames recorded from now on; a technique
     /// that follows moving geometry updates its own data here, without allocating.
     fn mesh_translated(&mut self, _mesh: usize, _translation: Vec3) {}
+
+    /// The lights now stand as `lights` (see `Renderer::set_lights`; at creation, the scene's),
+    /// for the frames recorded from now on; a technique whose data follows the lights on the
+    /// CPU updates it here, without allocating.
+    fn lights_set(&mut self, _lights: &[Light]) {}
 }
 
 /// A technique's data, ready to become a technique on the device.

@@ -6,6 +6,7 @@ mod atlas;
 mod constant;
 mod direct;
 mod fiv;
+mod light_cloud;
 mod light_path_maps;
 mod obscurance;
 pub(crate) mod params;
@@ -21,8 +22,14 @@ use serde_json::{json, Value};
 use std::time::Instant;
 
 /// Every method, in the order reports list them.
-pub(crate) const METHODS: [&dyn Method; 5] =
-    [&direct::Direct, &constant::Constant, &obscurance::Obscurance, &light_path_maps::LightPathMaps, &fiv::Fiv];
+pub(crate) const METHODS: [&dyn Method; 6] = [
+    &direct::Direct,
+    &constant::Constant,
+    &obscurance::Obscurance,
+    &light_path_maps::LightPathMaps,
+    &fiv::Fiv,
+    &light_cloud::LightCloudMethod,
+];
 
 /// What `relume render` renders without a bake.
 pub(crate) const WITHOUT_BAKE: &dyn Method = &constant::Constant;
@@ -229,8 +236,8 @@ mod tests {
             let (ambient, beta) = frame_ambient(method.ambient(&room), given.0, given.1);
             let (default_ambient, _) = frame_ambient(method.ambient(&room), None, None);
             match method.name() {
-                // Models no ambient light: direct light alone, or the environment's.
-                "direct" | "fiv" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
+                // Models no ambient light: direct light alone, the environment's, or all indirect light.
+                "direct" | "fiv" | "light-cloud" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
                 "constant" | "obscurance" => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::splat(0.25))),
                 _ => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::ZERO)),
             }

@@ -28,6 +28,7 @@ pub(super) struct Builder {
     environment: Option<(String, f64)>,
     /// `extras.relume.fiv.occluders`: the nodes that occlude.
     occluders: Vec<String>,
+    light_cloud: Option<Value>,
     bin: Vec<u8>,
     buffer_views: Vec<Value>,
     accessors: Vec<Value>,
@@ -50,6 +51,7 @@ impl Builder {
             settings,
             environment: None,
             occluders: Vec::new(),
+            light_cloud: None,
             bin: Vec::new(),
             buffer_views: Vec::new(),
             accessors: Vec::new(),
@@ -167,6 +169,65 @@ impl Builder {
         self.meshes.len() - 1
     }
 
+    /// A mesh of quads, each split into an `n` x `n` grid whose vertices its cells share
+    /// (welded within the quad, split at its edges, so a crease keeps two normals), each
+    /// vertex carrying its quad's normal; each quad's front faces `outward(its centre)`.
+    /// For the per-vertex methods, which need vertices across a surface.
+    pub(super) fn grid_mesh(
+        &mut self,
+        name: &str,
+        quads: &[[DVec3; 4]],
+        n: u32,
+        outward: impl Fn(DVec3) -> DVec3,
+        material: usize,
+    ) -> usize {
+        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::<u8>::new());
+        for q in quads {
+            let centre = (q[0] + q[1] + q[2] + q[3]) / 4.0;
+            let normal = (q[2] - q[0]).cross(q[3] - q[1]).normalize();
+            let flip = normal.dot(outward(centre)) < 0.0;
+            let first = positions.len() as u32;
+            for j in 0..=n {
+                for i in 0..=n {
+                    let (s, t) = (i as f64 / n as f64, j as f64 / n as f64);
+                    let p = (q[0] * (1.0 - s) + q[1] * s) * (1.0 - t) + (q[3] * (1.0 - s) + q[2] * s) * t;
+                    positions.push(p.as_vec3().to_array());
+                    normals.push((if flip { -normal } else { normal }).as_vec3().to_array());
+                }
+            }
+            let at = |i: u32, j: u32| first + j * (n + 1) + i;
+            for j in 0..n {
+                for i in 0..n {
+                    for [a, b, c] in [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]] {
+                        let corners = if flip { [a, c, b] } else { [a, b, c] };
+                        indices.extend(corners.iter().flat_map(|v| v.to_le_bytes()));
+                    }
+                }
+            }
+        }
+        let position = self.vec3_accessor(&positions, true);
+        let normal = self.vec3_accessor(&normals, false);
+        let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
+        self.accessors
+            .push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": indices.len() / 4, "type": "SCALAR" }));
+        let index_accessor = self.accessors.len() - 1;
+        self.meshes.push(json!({
+            "name": name,
+            "primitives": [{
+                "attributes": { "NORMAL": normal, "POSITION": position },
+                "indices": index_accessor,
+                "material": material,
+                "mode": 4,
+            }],
+        }));
+        self.meshes.len() - 1
+    }
+
+    /// Declares the light cloud's grid (`extras.relume.light_cloud`): a box and its cells.
+    pub(super) fn light_cloud_grid(&mut self, min: DVec3, max: DVec3, counts: [u32; 3]) {
+        self.light_cloud = Some(json!({ "grid": { "box": [vec_json(min), vec_json(max)], "counts": counts } }));
+    }
+
     /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.
     pub(super) fn environment(&mut self, image: &str, intensity: f64) {
         self.environment = Some((image.to_string(), intensity));
@@ -187,6 +248,16 @@ impl Builder {
             node["scale"] = vec_json(scale);
         }
         self.nodes.push(node);
+    }
+
+    /// A KHR_lights_punctual point light, white, `intensity` candela.
+    pub(super) fn point_light(&mut self, name: &str, position: DVec3, intensity: f64) {
+        self.lights.push(json!({ "name": name, "type": "point", "color": [num(1.0), num(1.0), num(1.0)], "intensity": num(intensity) }));
+        self.nodes.push(json!({
+            "name": name,
+            "translation": vec_json(position),
+            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
+        }));
     }
 
     /// A KHR_lights_punctual spot light, white, `intensity` candela, cone angles in degrees;
@@ -263,7 +334,7 @@ impl Builder {
 }
 
 impl Builder {
-    /// The settings, the environment and the occluders as `extras.relume`.
+    /// The settings, the environment, the occluders and the light cloud as `extras.relume`.
     fn settings_json(&self) -> Value {
         let mut block = settings_json(&self.settings);
         if let Some((image, intensity)) = &self.environment {
@@ -271,6 +342,9 @@ impl Builder {
         }
         if !self.occluders.is_empty() {
             block["fiv"] = json!({ "occluders": self.occluders });
+        }
+        if let Some(cloud) = &self.light_cloud {
+            block["light_cloud"] = cloud.clone();
         }
         block
     }

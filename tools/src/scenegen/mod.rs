@@ -27,6 +27,9 @@
 //!   pointing at it: that paper's Fig. 9 failure case. Nearly all light reaches the room
 //!   only after a bounce off the wall, while the method's indirect term (a share beta of
 //!   each light's own unshadowed irradiance at the point) is zero outside the light's cone.
+//! - `cornell-cloud`: the `cornell` geometry with every face a welded 12 x 12 grid (4,320
+//!   triangles) and one point light, with a 6 x 6 x 6 light cloud over the room: the light
+//!   clouds paper's Cornell scene (Table 1).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -34,8 +37,9 @@
 //!
 //! Geometry is flat shaded: every triangle has its own three vertices carrying its face
 //! normal, so shading normals equal geometric normals and the path tracer and the renderer
-//! see the same surface; `fiv-garden`'s large meshes alone are smooth (shared vertices,
-//! normals computed by the loader, which both then interpolate alike). Bytes are deterministic: JSON keys are written in a fixed (sorted)
+//! see the same surface; `fiv-garden`'s large meshes are smooth (shared vertices, normals
+//! computed by the loader, which both then interpolate alike), and `cornell-cloud`'s faces are
+//! grids of shared vertices carrying the face's normal. Bytes are deterministic: JSON keys are written in a fixed (sorted)
 //! order, every JSON number is an f32 written in its shortest round-trip form, and the `.bin`
 //! holds little-endian f32 and u32 data.
 
@@ -52,11 +56,13 @@ use relume_bake::environment::lat_long_image;
 use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::outputs::Outputs;
 use relume_bake::testing::{sky, two_area_lights};
-use scenes::{classroom, cornell, cornell_wall_light, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane, occluder_stacked, table_chair};
+use scenes::{
+    classroom, cornell, cornell_cloud, cornell_wall_light, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane, occluder_stacked, table_chair,
+};
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 14] = [
+pub const SCENE_NAMES: [&str; 15] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -71,6 +77,7 @@ pub const SCENE_NAMES: [&str; 14] = [
     "fiv-crowd-30",
     "fiv-crowd-40",
     "fiv-crowd-60",
+    "cornell-cloud",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -129,6 +136,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "table-chair" => table_chair(),
         "classroom" => classroom(),
         "cornell-wall-light" => cornell_wall_light(),
+        "cornell-cloud" => cornell_cloud(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),

@@ -23,7 +23,7 @@ pub(super) fn cornell_point(x: f64, y: f64, z: f64) -> DVec3 {
 /// and leaves the ceiling to indirect light, roughly as the area light does.
 pub(super) fn cornell() -> Builder {
     let mut b = Builder::new(CORNELL_SETTINGS);
-    cornell_box(&mut b);
+    cornell_box(&mut b, None);
     // Under the centre of the published light (x 213..343, z 227..332), 1 cm below the ceiling.
     let light_position = cornell_point(278.0, 538.8, 279.5);
     b.spot_light("CeilingSpot", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 60.0, 70.0);
@@ -46,13 +46,30 @@ pub(super) fn cornell() -> Builder {
 /// and blue: views of the room need a far higher exposure than 1.
 pub(super) fn cornell_wall_light() -> Builder {
     let mut b = Builder::new(CORNELL_WALL_LIGHT_SETTINGS);
-    cornell_box(&mut b);
+    cornell_box(&mut b, None);
     let wall = CORNELL_RED_WALL.map(|v| cornell_point(v[0], v[1], v[2]));
     let centre = cornell_room_centre();
     let inward = quad_facing(wall, |c| centre - c).iter().map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize()).sum::<DVec3>().normalize();
     let aim = (wall[0] + wall[2]) * 0.5;
     let distance = 0.05;
     b.spot_light("WallSpot", aim + distance * inward, -inward, exposure_one_intensity(distance), 40.0, 50.0);
+    cornell_camera(&mut b);
+    b
+}
+
+/// 004's Cornell scene (Table 1: about 4k triangles, a 6 x 6 x 6 cloud): the Cornell box with
+/// each face a 12 x 12 grid of welded vertices (4,320 triangles), so the per-vertex transfer
+/// has vertices across every surface, lit by one point light 15 cm under the ceiling's centre
+/// (pi lux on the floor below it). The cloud's grid spans the room; its cells inside the
+/// blocks are dropped at bake time.
+pub(super) fn cornell_cloud() -> Builder {
+    let mut b = Builder::new(CORNELL_SETTINGS);
+    cornell_box(&mut b, Some(12));
+    let light_position = cornell_point(278.0, 398.8, 279.5);
+    b.point_light("CentrePoint", light_position, exposure_one_intensity(light_position.y));
+    // The room's box: x from the red wall's 556 mm to the green wall's 0, floor to ceiling,
+    // the open front to the back wall.
+    b.light_cloud_grid(cornell_point(556.0, 0.0, 559.2), cornell_point(0.0, 548.8, 0.0), [6, 6, 6]);
     cornell_camera(&mut b);
     b
 }
@@ -69,8 +86,9 @@ pub(super) fn cornell_room_centre() -> DVec3 {
 /// (<https://www.graphics.cornell.edu/online/box/data.html>): floor, ceiling, back wall,
 /// red left wall, green right wall, and the short and tall blocks (five faces each: the
 /// published data has no bottom faces, the blocks stand on the floor). Albedos are the
-/// usual linear-RGB fits to the published reflectance spectra.
-pub(super) fn cornell_box(b: &mut Builder) {
+/// usual linear-RGB fits to the published reflectance spectra. Flat-shaded quads, or with
+/// `grid` n, each face an n x n grid of welded vertices ([`Builder::grid_mesh`]).
+pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>) {
     let white = b.material("white", [0.725, 0.71, 0.68]);
     let red = b.material("red", [0.63, 0.065, 0.05]);
     let green = b.material("green", [0.14, 0.45, 0.091]);
@@ -86,8 +104,10 @@ pub(super) fn cornell_box(b: &mut Builder) {
     ];
     for (name, material, quad) in room {
         // Room surfaces face into the room.
-        let tris = quad_facing(quad.map(p), |c| room_centre - c);
-        let mesh = b.mesh(name, &tris, material);
+        let mesh = match grid {
+            None => b.mesh(name, &quad_facing(quad.map(p), |c| room_centre - c), material),
+            Some(n) => b.grid_mesh(name, &[quad.map(p)], n, |c| room_centre - c, material),
+        };
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
 
@@ -109,8 +129,10 @@ pub(super) fn cornell_box(b: &mut Builder) {
         let corners: Vec<DVec3> = faces.iter().flatten().map(|&v| p(v)).collect();
         let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
         // Block faces face away from the block.
-        let tris: Vec<[DVec3; 3]> = faces.iter().flat_map(|q| quad_facing(q.map(p), |c| c - centre)).collect();
-        let mesh = b.mesh(name, &tris, white);
+        let mesh = match grid {
+            None => b.mesh(name, &faces.iter().flat_map(|q| quad_facing(q.map(p), |c| c - centre)).collect::<Vec<_>>(), white),
+            Some(n) => b.grid_mesh(name, &faces.map(|q| q.map(p)), n, |c| c - centre, white),
+        };
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
 }
