@@ -1,15 +1,19 @@
 //! The frame loop allocates nothing: a counting allocator watches the thread that renders
 //! while frames are rendered, lights are moved, the ambient term (and the composition of the
 //! light path maps) changes, occluders move and timings are read, without obscurance, with
-//! it, with light path maps, and with FIV. (Its own test binary, so no other test shares the allocator.)
+//! it, with light path maps, with FIV, and with a light cloud (whose weights follow the lights
+//! on the CPU). (Its own test binary, so no other test shares the allocator.)
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
+use relume_bake::bvh::SceneBvh;
 use relume_bake::fiv::{self, FivBakeSettings, Grid, SumOptions};
+use relume_bake::light_cloud::{self, LightCloudBakeSettings, LightCloudSceneSettings};
 use relume_bake::scene::Scene;
 use relume_bake::testing;
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::fiv::FivData;
+use relume_renderer::techniques::light_cloud::LightCloudData;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{Headless, RenderSettings};
@@ -17,6 +21,7 @@ use relume_tests::synthetic_light_path_maps::{atlas_scene, constant_obscurance, 
 use relume_tests::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::sync::Arc;
 
 struct CountingAllocator;
 
@@ -162,4 +167,19 @@ fn frames_with_fiv_moving_occluders_and_a_deforming_receiver_allocate_nothing() 
     drop(renderer);
     assert_clean(ctx);
     assert_eq!(during, 0, "10 frames with moving occluders made {during} heap allocations");
+}
+
+#[test]
+fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
+    let scene = load_scene("cornell-cloud");
+    let bvh = SceneBvh::new(&scene);
+    let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
+    let cloud = light_cloud::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, work: WorkOptions::default() }).expect("bake");
+    let data = LightCloudData { cloud: &cloud, nearest: 8, visibility: Arc::new(move |a, b| bvh.visible(a, b)) };
+    let ctx = validated_context();
+    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
+    let during = frame_allocations(&mut renderer, &scene, false);
+    drop(renderer);
+    assert_clean(ctx);
+    assert_eq!(during, 0, "10 frames with a light cloud made {during} heap allocations");
 }

@@ -250,12 +250,16 @@ impl Builder {
         self.nodes.push(node);
     }
 
-    /// A KHR_lights_punctual point light, white, `intensity` candela.
-    pub(super) fn point_light(&mut self, name: &str, position: DVec3, intensity: f64) {
+    /// A KHR_lights_punctual point light, white, `intensity` candela. It shines every way;
+    /// its node's -Z is turned onto `sized_for`, the direction of the surface its intensity is
+    /// chosen for (which the scene tests check).
+    pub(super) fn point_light(&mut self, name: &str, position: DVec3, sized_for: DVec3, intensity: f64) {
         self.lights.push(json!({ "name": name, "type": "point", "color": [num(1.0), num(1.0), num(1.0)], "intensity": num(intensity) }));
+        let rotation = DQuat::from_rotation_arc(DVec3::NEG_Z, sized_for.normalize());
         self.nodes.push(json!({
             "name": name,
             "translation": vec_json(position),
+            "rotation": quat_json(rotation),
             "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
         }));
     }

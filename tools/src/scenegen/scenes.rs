@@ -66,7 +66,7 @@ pub(super) fn cornell_cloud() -> Builder {
     let mut b = Builder::new(CORNELL_SETTINGS);
     cornell_box(&mut b, Some(12));
     let light_position = cornell_point(278.0, 398.8, 279.5);
-    b.point_light("CentrePoint", light_position, exposure_one_intensity(light_position.y));
+    b.point_light("CentrePoint", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y));
     // The room's box: x from the red wall's 556 mm to the green wall's 0, floor to ceiling,
     // the open front to the back wall.
     b.light_cloud_grid(cornell_point(556.0, 0.0, 559.2), cornell_point(0.0, 548.8, 0.0), [6, 6, 6]);
