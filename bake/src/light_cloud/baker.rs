@@ -75,36 +75,112 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
         ));
     }
     let lights: Vec<Light> = points.iter().map(|&p| unit_light(p)).collect();
-    let vertices: Vec<(Vec3, Vec3)> =
-        scene.meshes.iter().flat_map(|m| m.positions.iter().copied().zip(m.normals.iter().copied())).collect();
+    let supports = Supports::new(scene);
+    let vertices = vertex_count(scene);
     let row = lights.len() * 3;
-    let mut sums = vec![0f64; vertex_count(scene) * row];
-    let progress = progress_bar(vertices.len() as u64 * settings.samples as u64, "light cloud", settings.work.progress);
-    let gather = Gather { scene, bvh, lights: &lights, seed: settings.work.seed };
+    let mut sums = vec![0f64; vertices * row];
+    let progress = progress_bar(vertices as u64 * settings.samples as u64, "light cloud", settings.work.progress);
+    let gather = Gather { scene, bvh, lights: &lights };
     let taken = settings.work.in_passes(settings.samples, SAMPLES_PER_PASS, |samples| {
-        sums.par_chunks_mut(row).zip(vertices.par_iter()).enumerate().for_each(|(v, (sums, &(p, n)))| {
+        sums.par_chunks_mut(row).enumerate().for_each(|(v, sums)| {
             for s in samples.clone() {
-                gather.path(v as u32, s, p, n, sums);
+                let sampler = PathSampler::new(settings.work.seed, v as u32, s);
+                if let Some((p, n)) = supports.point(v, &sampler) {
+                    gather.path(&sampler, p, n, sums);
+                }
             }
             progress.inc(samples.len() as u64);
         });
     });
     progress.finish_and_clear();
     let transfer = sums.iter().map(|s| (s / taken as f64) as f32).collect();
-    Ok(LightCloud { lights: points, vertex_count: vertices.len(), transfer, samples: taken })
+    Ok(LightCloud { lights: points, vertex_count: vertices, transfer, samples: taken })
+}
+
+/// Each vertex's support: the triangles around it, where its value is interpolated.
+///
+/// A vertex's transfer is the irradiance averaged over its support weighted by its hat
+/// function (its barycentric coordinate), not the irradiance at the vertex: that is the
+/// value whose interpolation best fits the surface (a lumped least-squares fit), and it never
+/// starts a path on an edge or corner, where rays leave along a neighbouring face's plane.
+struct Supports {
+    /// Vertex v's triangles are `triangles[starts[v]..starts[v + 1]]`, each (v, triangle).
+    starts: Vec<u32>,
+    triangles: Vec<[u32; 2]>,
+    /// Per triangle (meshes in order): its corners as vertices in the renderer's order.
+    corners: Vec<[u32; 3]>,
+    areas: Vec<f32>,
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+}
+
+/// Sampler group of the point on the support (far above the bounces' 1..=64).
+const SUPPORT_GROUP: u32 = 1 << 16;
+/// Sampler dimension of the support's triangle.
+const SUPPORT_TRIANGLE_DIMENSION: u32 = 1 << 28;
+
+impl Supports {
+    fn new(scene: &Scene) -> Supports {
+        let (mut corners, mut positions, mut normals) = (Vec::new(), Vec::new(), Vec::new());
+        for mesh in &scene.meshes {
+            let first = positions.len() as u32;
+            corners.extend(mesh.indices.chunks_exact(3).map(|t| [t[0] + first, t[1] + first, t[2] + first]));
+            positions.extend(&mesh.positions);
+            normals.extend(&mesh.normals);
+        }
+        let corner = |c: &[u32; 3], k: usize| -> Vec3 { positions[c[k] as usize] };
+        let areas = corners.iter().map(|c| 0.5 * (corner(c, 1) - corner(c, 0)).cross(corner(c, 2) - corner(c, 0)).length()).collect();
+        let mut triangles: Vec<[u32; 2]> = corners.iter().enumerate().flat_map(|(t, c)| c.map(|v| [v, t as u32])).collect();
+        triangles.sort_unstable();
+        let mut starts = vec![0u32; positions.len() + 1];
+        for [v, _] in &triangles {
+            starts[*v as usize + 1] += 1;
+        }
+        for v in 0..positions.len() {
+            starts[v + 1] += starts[v];
+        }
+        Supports { starts, triangles, corners, areas, positions, normals }
+    }
+
+    /// A point of vertex `v`'s support and its normal, drawn with density proportional to
+    /// the hat function: a triangle by area, then barycentrics from Dirichlet(2, 1, 1), the
+    /// vertex's first. None for a vertex on no triangle of non-zero area.
+    fn point(&self, v: usize, sampler: &PathSampler) -> Option<(Vec3, Vec3)> {
+        let around = &self.triangles[self.starts[v] as usize..self.starts[v + 1] as usize];
+        let total: f32 = around.iter().map(|[_, t]| self.areas[*t as usize]).sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let mut pick = sampler.uniform(SUPPORT_TRIANGLE_DIMENSION) * total;
+        let chosen = around.iter().find(|[_, t]| {
+            pick -= self.areas[*t as usize];
+            pick < 0.0
+        });
+        let [_, t] = *chosen.or(around.last())?;
+        let u = sampler.sobol4(SUPPORT_GROUP);
+        // The vertex's weight is Beta(2, 2): the median of three uniforms.
+        let own = u[0].max(u[1]).min(u[0].min(u[1]).max(u[2]));
+        let corners = self.corners[t as usize];
+        let k = corners.iter().position(|&c| c as usize == v)?;
+        let (a, b) = (corners[(k + 1) % 3] as usize, corners[(k + 2) % 3] as usize);
+        let split = (1.0 - own) * u[3];
+        let w = [own, split, 1.0 - own - split];
+        let point = self.positions[v] * w[0] + self.positions[a] * w[1] + self.positions[b] * w[2];
+        let normal = (self.normals[v] * w[0] + self.normals[a] * w[1] + self.normals[b] * w[2]).normalize_or_zero();
+        (normal != Vec3::ZERO).then_some((point, normal))
+    }
 }
 
 struct Gather<'a> {
     scene: &'a Scene,
     bvh: &'a SceneBvh,
     lights: &'a [Light],
-    seed: u64,
 }
 
 impl Gather<'_> {
-    /// Adds path `s` of vertex `v` (at `p`, normal `n`) to its row of sums, light by light.
-    fn path(&self, v: u32, s: u32, p: Vec3, n: Vec3, sums: &mut [f64]) {
-        let sampler = PathSampler::new(self.seed, v, s);
+    /// Adds the path `sampler` draws from `p` (normal `n`) to a vertex's row of sums, light by
+    /// light.
+    fn path(&self, sampler: &PathSampler, p: Vec3, n: Vec3, sums: &mut [f64]) {
         let u = sampler.sobol4(0);
         let (t, b) = orthonormal_basis(n);
         let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
