@@ -8,9 +8,10 @@
 //! about textures; per-vertex data works the same.
 //!
 //! Clustering is divisive, so the clustering for C + 1 refines the one for C and the error only
-//! falls as C grows (as it does with D). PCA works on the n_c x n_c Gram matrix of the centred
-//! points, never the P x P covariance (P ~ 50,000 texels, n_c ~ hundreds); both share their
-//! non-zero eigenvalues, and the squared residual of D basis vectors is the sum of the
+//! falls as C grows (as it does with D). PCA works on the smaller of the n_c x n_c Gram matrix
+//! of the centred points (light path maps: P ~ 50,000 texels, n_c ~ hundreds) and the P x P
+//! covariance (light clouds: P = 3 x cloud lights ~ hundreds, n_c ~ thousands of vertices);
+//! both share their non-zero eigenvalues, and the squared residual of D basis vectors is the sum of the
 //! eigenvalues beyond D, so [`error_table`] rates every (C, D) from eigenvalues alone and
 //! [`choose`] picks the cheapest within an error budget. No randomness, and parallel results
 //! are independent serial sums: the same bytes whatever the thread count.
@@ -148,8 +149,10 @@ pub struct ClusterPca {
     pub members: Vec<u32>,
     /// M^c: P values.
     pub mean: Vec<f32>,
-    /// Every eigenvalue of the centred Gram matrix (n_c of them), descending, clamped to >= 0:
-    /// the squared residual of keeping D basis vectors is the sum of those beyond D.
+    /// Every eigenvalue of the centred Gram matrix (n_c of them) or, for clusters of more
+    /// members than values per row, of the covariance (P of them: the same non-zero ones),
+    /// descending, clamped to >= 0: the squared residual of keeping D basis vectors is the sum
+    /// of those beyond D.
     pub eigenvalues: Vec<f64>,
     /// Always D unit P-vectors B^c_d by descending eigenvalue. Where the cluster's rank is below
     /// D (at most D points, or points on a flatter subspace) the rest are zero vectors, so
@@ -185,6 +188,17 @@ impl Centred {
         let (rows, n) = (self.rows(), self.values.len() / self.cols);
         let lower: Vec<Vec<f64>> = (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(rows.row(i), rows.row(j))).collect()).collect();
         DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+    }
+
+    /// C = X^T X (P x P): the covariance route, for clusters of more members than values per
+    /// row (per-vertex transfer: thousands of vertices, hundreds of values). Each entry is its
+    /// own serial dot product over the members, so the bytes do not depend on the thread count.
+    fn covariance(&self) -> DMatrix<f64> {
+        let (rows, n) = (self.rows(), self.values.len() / self.cols);
+        let columns: Vec<Vec<f32>> = (0..self.cols).map(|k| (0..n).map(|e| rows.row(e)[k]).collect()).collect();
+        let lower: Vec<Vec<f64>> =
+            (0..self.cols).into_par_iter().map(|i| (0..=i).map(|j| dot(&columns[i], &columns[j])).collect()).collect();
+        DMatrix::from_fn(self.cols, self.cols, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
     }
 
     /// X^T v normalised: an eigenvector v of G with eigenvalue lambda gives the covariance's
@@ -227,12 +241,15 @@ fn descending(eigenvalues: &DVector<f64>) -> Vec<(f64, usize)> {
 /// orthogonal projection onto the cluster's affine subspace.
 pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> ClusterPca {
     let centred = Centred::new(Rows { values: data, cols }, members);
-    let eigen = SymmetricEigen::new(centred.gram());
+    let by_covariance = cols < members.len();
+    let eigen = SymmetricEigen::new(if by_covariance { centred.covariance() } else { centred.gram() });
     let order = descending(&eigen.eigenvalues);
     let floor = RANK_TOLERANCE * order[0].0;
-    let eigenvector = |i: usize| &eigen.eigenvectors.as_slice()[i * members.len()..][..members.len()];
-    let mut basis_vectors: Vec<Vec<f32>> =
-        order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| centred.basis_vector(eigenvector(i))).collect();
+    let size = eigen.eigenvalues.len();
+    let eigenvector = |i: usize| &eigen.eigenvectors.as_slice()[i * size..][..size];
+    // The covariance's eigenvectors are the basis; the Gram matrix's map to it through X^T.
+    let vector = |i: usize| if by_covariance { unit(eigenvector(i)) } else { centred.basis_vector(eigenvector(i)) };
+    let mut basis_vectors: Vec<Vec<f32>> = order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| vector(i)).collect();
     basis_vectors.resize(basis, vec![0.0; cols]);
     let rows = centred.rows();
     let weights = (0..members.len()).into_par_iter().map(|e| basis_vectors.iter().map(|b| dot(rows.row(e), b) as f32).collect()).collect();
@@ -245,10 +262,16 @@ pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> 
     }
 }
 
+fn unit(v: &[f64]) -> Vec<f32> {
+    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    v.iter().map(|x| (x / norm) as f32).collect()
+}
+
 /// The descending eigenvalues of `cluster_pca` alone (no eigenvectors: cheaper).
 fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f64> {
-    let gram = Centred::new(Rows { values: data, cols }, members).gram();
-    descending(&gram.symmetric_eigenvalues()).iter().map(|o| o.0).collect()
+    let centred = Centred::new(Rows { values: data, cols }, members);
+    let matrix = if cols < members.len() { centred.covariance() } else { centred.gram() };
+    descending(&matrix.symmetric_eigenvalues()).iter().map(|o| o.0).collect()
 }
 
 /// Members (ascending) of each of `clusters` clusters.
@@ -277,6 +300,53 @@ pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clu
     let assignment = tree.assignment(tree.max_clusters());
     let clusters = groups(&assignment, tree.max_clusters()).iter().map(|m| cluster_pca(data, cols, m, basis)).collect();
     Ok(Cpca { assignment, clusters, basis })
+}
+
+/// Sloan et al. 2003's refinement of a fitted clustered PCA: every point moves to the cluster
+/// whose mean and basis reconstruct it best (ties to the lower cluster), then each cluster's
+/// PCA is fitted again, until no point moves or after `iterations` rounds; a cluster left empty
+/// is dropped. Each round can only lower the squared error: a point moves only to a cluster
+/// that reconstructs it better, and a cluster's new PCA fits its new members at least as well.
+/// Returns the refined fit and the rounds taken.
+pub fn refine(data: &[f32], cols: usize, fitted: Cpca, iterations: usize) -> (Cpca, usize) {
+    let rows = Rows { values: data, cols };
+    let mut cpca = fitted;
+    for round in 0..iterations {
+        let assignment: Vec<u32> = (0..cpca.assignment.len())
+            .into_par_iter()
+            .map(|e| {
+                let error = |c: &ClusterPca| projection_error(rows.row(e), c);
+                let current = cpca.assignment[e] as usize;
+                let mut best = (error(&cpca.clusters[current]), current);
+                for (c, cluster) in cpca.clusters.iter().enumerate() {
+                    let candidate = error(cluster);
+                    if candidate < best.0 || (candidate == best.0 && c < best.1) {
+                        best = (candidate, c);
+                    }
+                }
+                best.1 as u32
+            })
+            .collect();
+        if assignment == cpca.assignment {
+            return (cpca, round);
+        }
+        let groups: Vec<Vec<u32>> = groups(&assignment, cpca.clusters.len()).into_iter().filter(|m| !m.is_empty()).collect();
+        let mut renumbered = vec![0u32; assignment.len()];
+        for (c, members) in groups.iter().enumerate() {
+            members.iter().for_each(|&e| renumbered[e as usize] = c as u32);
+        }
+        let clusters = groups.iter().map(|m| cluster_pca(data, cols, m, cpca.basis)).collect();
+        cpca = Cpca { assignment: renumbered, clusters, basis: cpca.basis };
+    }
+    (cpca, iterations)
+}
+
+/// |x - M|^2 - sum_d ((x - M) . B_d)^2: the squared error of the best reconstruction of `x` by
+/// the cluster (its basis is orthonormal, or zero vectors).
+fn projection_error(x: &[f32], cluster: &ClusterPca) -> f64 {
+    let centred: Vec<f32> = x.iter().zip(&cluster.mean).map(|(a, m)| a - m).collect();
+    let whole = dot(&centred, &centred);
+    cluster.basis.iter().fold(whole, |e, b| e - dot(&centred, b).powi(2)).max(0.0)
 }
 
 impl Cpca {
@@ -516,6 +586,40 @@ mod tests {
         let (data, features) = grouped();
         let run = |threads| with_threads(Some(threads), || fit(&data, P, &features, 3, 5, 3).unwrap());
         assert_eq!(run(1), run(2));
+    }
+
+    /// The grouped points cut to their first 20 values: clusters of more members than values,
+    /// which take the covariance route.
+    fn narrow() -> (Vec<f32>, Vec<f32>) {
+        let (data, features) = grouped();
+        (data.chunks_exact(P).flat_map(|row| row[..20].to_vec()).collect(), features)
+    }
+
+    #[test]
+    fn the_covariance_route_predicts_its_fit_and_is_exact_at_full_rank() {
+        let (data, features) = narrow();
+        let table = error_table(&data, 20, &features, 3, &[1, 4], 20).unwrap();
+        for (c, d) in [(1, 0), (1, 3), (4, 2), (4, 5)] {
+            let predicted = table.iter().find(|t| (t.clusters, t.basis) == (c, d)).unwrap().relative_error;
+            let actual = fit(&data, 20, &features, 3, c, d).unwrap().relative_error(&data);
+            assert!((predicted - actual).abs() <= 1e-4 * actual, "C {c} D {d}: {predicted} vs {actual}");
+        }
+        assert!(fit(&data, 20, &features, 3, 4, 20).unwrap().relative_error(&data) < 1e-5);
+    }
+
+    /// Clustered by features that mix the four groups, refinement moves points to the clusters
+    /// that reconstruct them and the error falls round by round, never rising.
+    #[test]
+    fn refinement_never_raises_the_error() {
+        let (data, _) = grouped();
+        let misleading: Vec<f32> = (0..data.len() / P).map(|e| noise(e as u32, 99)).collect();
+        let first = fit(&data, P, &misleading, 1, 4, 2).unwrap();
+        let errors: Vec<f64> = (0..6).map(|rounds| refine(&data, P, first.clone(), rounds).0.relative_error(&data)).collect();
+        println!("relative error after 0..6 rounds: {errors:?}");
+        assert!(errors.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-9)), "{errors:?}");
+        assert!(errors[5] < 0.5 * errors[0], "{errors:?}");
+        let (settled, rounds) = refine(&data, P, first, 100);
+        assert!(rounds < 100 && refine(&data, P, settled.clone(), 100) == (settled, 0), "it settles");
     }
 
     #[test]

@@ -43,7 +43,7 @@ fn inside_a_closed_sphere_every_column_is_the_analytic_indirect_irradiance() {
     let cloud = bake(&s, grid, 64, None);
     assert_eq!(cloud.lights.len(), 8, "no grid point lies inside closed geometry");
     let expected = RHO / (RADIUS * RADIUS * (1.0 - RHO));
-    let vertices = cloud.vertex_count;
+    let vertices = cloud.vertex_count();
     for j in 0..cloud.lights.len() {
         let values: Vec<f32> = (0..vertices).map(|v| cloud.column(v, j).x).collect();
         let mean = values.iter().map(|&x| x as f64).sum::<f64>() / vertices as f64;
@@ -194,4 +194,26 @@ fn the_bake_is_the_same_at_any_thread_count() {
     let s = sphere_scene();
     let grid = CloudGrid { min: Vec3::splat(-0.5), max: Vec3::splat(0.5), counts: [3, 1, 1] };
     assert_eq!(bake(&s, grid.clone(), 9, Some(1)), bake(&s, grid, 9, Some(2)));
+}
+
+/// 004 §5: the clustered PCA's error falls as vectors are added, and a basis as long as the
+/// rows (3 x 8 values) reproduces every column; the GPU's sums-then-vertices order equals
+/// weighing the reconstructed columns.
+#[test]
+fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
+    let s = sphere_scene();
+    let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 4, None);
+    let errors: Vec<f64> =
+        [0, 1, 2, 4, 8, 24].iter().map(|&d| lc::relative_error(&cloud, &lc::compress(&cloud, 4, d).expect("compress"))).collect();
+    println!("relative error with 0, 1, 2, 4, 8, 24 vectors: {errors:?}");
+    assert!(errors.windows(2).all(|w| w[1] <= w[0] + 1e-9), "{errors:?}");
+    assert!(errors[0] > 0.01 && errors[5] < 1e-5, "{errors:?}");
+    let compressed = lc::compress(&cloud, 4, 2).unwrap();
+    let mut weigher = Weigher::new(cloud.lights.len(), 4).unwrap();
+    let weights = weigh(&mut weigher, &cloud.lights, &[point_light(Vec3::new(0.1, 0.2, -0.1), Vec3::new(1.0, 2.0, 3.0))]);
+    for (v, e) in compressed.irradiance(&weights).iter().enumerate() {
+        let direct = weights.iter().fold(Vec3::ZERO, |sum, w| sum + compressed.column(v, w.light as usize) * w.weight).max(Vec3::ZERO);
+        assert!((*e - direct).abs().max_element() < 1e-5 * direct.max_element().max(1.0), "vertex {v}: {e} against {direct}");
+    }
+    assert!(lc::compress(&compressed, 4, 2).is_err(), "a compressed cloud is refused");
 }

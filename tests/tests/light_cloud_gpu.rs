@@ -1,6 +1,7 @@
 //! The light cloud's run time (004 §6) on the GPU against its CPU twin,
-//! relume_bake::light_cloud::LightCloud::irradiance, as the lights move; its refusals; all
-//! with validation and synchronization validation on.
+//! relume_bake::light_cloud::LightCloud::{cluster_sums, irradiance}, uncompressed and
+//! clustered, as the lights move; its refusals; all with validation and synchronization
+//! validation on.
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
@@ -28,12 +29,12 @@ fn settings() -> RenderSettings {
     RenderSettings { width: 32, height: 32, ..RenderSettings::default() }
 }
 
-#[test]
-fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
-    let (scene, cloud, visibility) = baked();
+/// The cluster sums and the per-vertex irradiance the GPU wrote against the CPU's, as the
+/// light moves in four steps.
+fn gpu_equals_cpu(scene: &Scene, cloud: &LightCloud, visibility: Visibility) {
     let ctx = validated_context();
-    let data = LightCloudData { cloud: &cloud, nearest: 8, visibility };
-    let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
+    let data = LightCloudData { cloud, nearest: 8, visibility };
+    let mut renderer = new_renderer(&ctx, scene, &settings(), &[&data]);
     let mut lights = scene.lights.clone();
     let mut previous: Option<Vec<Vec3>> = None;
     for step in 0..4 {
@@ -43,11 +44,16 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
         let weights = renderer.technique_mut::<LightCloudTechnique>().unwrap().weights().to_vec();
         let sum = weights.iter().fold(Vec3::ZERO, |s, w| s + w.weight);
         assert!((sum - lights[0].intensity).abs().max_element() < 1e-4 * lights[0].intensity.max_element(), "weights sum to {sum}");
+        let (gpu_sums, cpu_sums) = (read_vec4s(&mut renderer, "light_cloud.cluster_sums").unwrap(), cloud.cluster_sums(&weights));
         let gpu = read_vec4s(&mut renderer, "light_cloud.irradiance").unwrap();
         let cpu = cloud.irradiance(&weights);
-        assert_eq!(gpu.len(), cpu.len());
-        let scale = cpu.iter().map(|e| e.max_element()).fold(0.0, f32::max);
+        assert_eq!((gpu.len(), gpu_sums.len()), (cpu.len(), cpu_sums.len()));
+        let largest = |values: &[Vec3]| values.iter().map(|e| e.abs().max_element()).fold(0.0, f32::max);
+        let (scale, sums_scale) = (largest(&cpu), largest(&cpu_sums));
         assert!(scale > 0.0, "no indirect light at all");
+        for (t, (g, c)) in gpu_sums.iter().zip(&cpu_sums).enumerate() {
+            assert!((g.truncate() - *c).abs().max_element() <= 1e-5 * sums_scale, "step {step}, term {t}: GPU {g}, CPU {c}");
+        }
         for (v, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
             assert!((g.truncate() - *c).abs().max_element() <= 1e-5 * scale, "step {step}, vertex {v}: GPU {g}, CPU {c}");
         }
@@ -56,6 +62,14 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     }
     drop(renderer);
     assert_clean(ctx);
+}
+
+#[test]
+fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
+    let (scene, cloud, visibility) = baked();
+    gpu_equals_cpu(&scene, &cloud, Arc::clone(&visibility));
+    // CPCA vertex reconstruction: 16 clusters of 4 vectors.
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, 4).unwrap(), visibility);
 }
 
 #[test]

@@ -12,6 +12,7 @@
 use super::{vertex_count, CloudGrid, LightCloud};
 use crate::bsdf::Bsdf;
 use crate::bvh::SceneBvh;
+use crate::cpca;
 use crate::reference::punctual_irradiance;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Scene};
@@ -93,8 +94,52 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
         });
     });
     progress.finish_and_clear();
-    let transfer = sums.iter().map(|s| (s / taken as f64) as f32).collect();
-    Ok(LightCloud { lights: points, vertex_count: vertices, transfer, samples: taken })
+    let rows = sums.iter().map(|s| (s / taken as f64) as f32).collect();
+    Ok(LightCloud::uncompressed(points, taken, rows))
+}
+
+/// sqrt(sum |X_v - X~_v|^2 / sum |X_v|^2) of `compressed` against the `uncompressed` cloud it
+/// was made from, over every vertex and cloud light.
+pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64 {
+    let (mut error, mut total) = (0.0f64, 0.0f64);
+    for v in 0..uncompressed.vertex_count() {
+        for j in 0..uncompressed.lights.len() {
+            let (x, y) = (uncompressed.column(v, j).as_dvec3(), compressed.column(v, j).as_dvec3());
+            error += (x - y).length_squared();
+            total += x.length_squared();
+        }
+    }
+    if total > 0.0 {
+        (error / total).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The most rounds of Sloan's refinement (004 §5: "20-30 iterations or until no vertex moves").
+const REFINE_ROUNDS: usize = 20;
+
+/// The clustered PCA of an uncompressed cloud (004 §5, after Sloan et al. 2003): `clusters`
+/// clusters of vertices by the divisive 2-means of their rows, `basis` vectors each, then
+/// refined: vertices move to the cluster that reconstructs them best until none moves (at most
+/// 20 rounds). Clusters left empty are dropped.
+pub fn compress(cloud: &LightCloud, clusters: usize, basis: usize) -> Result<LightCloud, String> {
+    if cloud.basis != 0 || cloud.cluster_count() != cloud.vertex_count() {
+        return Err("only an uncompressed cloud can be compressed".into());
+    }
+    let cols = 3 * cloud.lights.len();
+    let first = cpca::fit(&cloud.terms, cols, &cloud.terms, cols, clusters, basis)?;
+    let (fitted, _) = cpca::refine(&cloud.terms, cols, first, REFINE_ROUNDS);
+    let mut coords = vec![0.0; cloud.vertex_count() * basis];
+    let mut terms = Vec::with_capacity(fitted.clusters.len() * (1 + basis) * cols);
+    for cluster in &fitted.clusters {
+        terms.extend(&cluster.mean);
+        cluster.basis.iter().for_each(|b| terms.extend(b));
+        for (&v, z) in cluster.members.iter().zip(&cluster.weights) {
+            coords[v as usize * basis..][..basis].copy_from_slice(z);
+        }
+    }
+    Ok(LightCloud { lights: cloud.lights.clone(), samples: cloud.samples, assignment: fitted.assignment, basis, terms, coords })
 }
 
 /// Each vertex's support: the triangles around it, where its value is interpolated.

@@ -123,52 +123,109 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
 
 /// The baked transfer: the cloud's lights and, per vertex of the scene (meshes in order, each
 /// mesh's vertices in order: the renderer's vertex buffer) and per cloud light, the indirect
-/// irradiance a 1 cd isotropic light there gives the vertex (lux), rgb.
+/// irradiance a 1 cd isotropic light there gives the vertex (lux, rgb), as a clustered PCA
+/// (004 §5, eq. 11): vertex v of cluster c stores X_v ~ X^c + sum_d z_vd B^c_d, each term a
+/// row of 3 x lights values (rgb per light, spec light-clouds.md B8). Uncompressed, every
+/// vertex is its own cluster and D = 0: the terms are the rows as gathered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloud {
     pub lights: Vec<Vec3>,
-    pub vertex_count: usize,
-    /// `[vertex][light][rgb]`: row v holds 3 x lights values (004 eq. 10's rows).
-    pub transfer: Vec<f32>,
     /// Gather paths per vertex.
     pub samples: u32,
+    /// Per vertex, its cluster.
+    pub assignment: Vec<u32>,
+    /// D, the basis vectors of every cluster.
+    pub basis: usize,
+    /// `[cluster][term][light][rgb]`: term 0 the cluster's mean X^c, term d its B^c_d.
+    pub terms: Vec<f32>,
+    /// `[vertex][d]`: z_vd, d from 1 (D per vertex).
+    pub coords: Vec<f32>,
 }
 
 impl LightCloud {
-    /// The transfer from cloud light `light` to vertex `vertex`.
-    pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
-        let i = (vertex * self.lights.len() + light) * 3;
-        Vec3::from_slice(&self.transfer[i..i + 3])
+    /// Rows as gathered, `[vertex][light][rgb]`: one cluster per vertex, no basis.
+    pub fn uncompressed(lights: Vec<Vec3>, samples: u32, rows: Vec<f32>) -> LightCloud {
+        let vertices = rows.len() / (3 * lights.len()).max(1);
+        LightCloud { lights, samples, assignment: (0..vertices as u32).collect(), basis: 0, terms: rows, coords: Vec::new() }
     }
 
-    /// The shapes agree and every value is finite and not negative.
+    pub fn vertex_count(&self) -> usize {
+        self.assignment.len()
+    }
+
+    /// Values in one term: rgb per light.
+    fn row_len(&self) -> usize {
+        3 * self.lights.len()
+    }
+
+    pub fn cluster_count(&self) -> usize {
+        self.terms.len() / ((1 + self.basis) * self.row_len()).max(1)
+    }
+
+    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed.
+    pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
+        let terms = self.cluster_terms_of(self.assignment[vertex] as usize);
+        let value = |t: usize| Vec3::from_slice(&terms[t * self.row_len() + 3 * light..][..3]);
+        (1..=self.basis).fold(value(0), |sum, d| sum + value(d) * self.coords[vertex * self.basis + d - 1])
+    }
+
+    fn cluster_terms_of(&self, cluster: usize) -> &[f32] {
+        let len = (1 + self.basis) * self.row_len();
+        &self.terms[cluster * len..][..len]
+    }
+
+    /// The shapes agree, every value is finite, every vertex's cluster exists, and an
+    /// uncompressed transfer is not negative.
     pub fn validate(&self) -> Result<(), String> {
         if self.lights.is_empty() || self.lights.len() > MAX_CLOUD_LIGHTS as usize || self.lights.iter().any(|p| !p.is_finite()) {
             return Err(format!("{} cloud lights: must be 1..={MAX_CLOUD_LIGHTS} finite points", self.lights.len()));
         }
-        if self.transfer.len() != self.vertex_count * self.lights.len() * 3 {
+        let clusters = self.cluster_count();
+        if self.terms.len() != clusters * (1 + self.basis) * self.row_len() || clusters == 0 {
             return Err(format!(
-                "{} transfer values for {} vertices and {} lights",
-                self.transfer.len(),
-                self.vertex_count,
+                "{} term values are not whole clusters of {} terms of {} lights",
+                self.terms.len(),
+                1 + self.basis,
                 self.lights.len()
             ));
         }
-        if let Some(i) = self.transfer.iter().position(|t| !(t.is_finite() && *t >= 0.0)) {
-            let (vertex, light) = (i / 3 / self.lights.len(), i / 3 % self.lights.len());
+        if self.coords.len() != self.vertex_count() * self.basis {
+            return Err(format!("{} coordinates for {} vertices of D = {}", self.coords.len(), self.vertex_count(), self.basis));
+        }
+        if let Some(v) = self.assignment.iter().position(|&c| c as usize >= clusters) {
+            return Err(format!("vertex {v} is in cluster {}, of {clusters}", self.assignment[v]));
+        }
+        let negative_allowed = self.basis > 0;
+        if let Some(i) = self.terms.iter().chain(&self.coords).position(|t| !(t.is_finite() && (negative_allowed || *t >= 0.0))) {
             return Err(format!(
-                "the transfer from cloud light {light} to vertex {vertex} is {} (must be finite and >= 0)",
-                self.transfer[i]
+                "transfer value {i} is {} (must be finite, and >= 0 uncompressed)",
+                self.terms.iter().chain(&self.coords).nth(i).unwrap()
             ));
         }
         Ok(())
     }
 
-    /// Indirect irradiance per vertex for cloud-light weights (per channel, candela), summed
-    /// over `weights` in their order: the CPU oracle of the renderer's reconstruction.
+    /// Each cluster's terms weighed by cloud-light weights (per channel, candela), summed over
+    /// `weights` in their order: x^m and b_d of 004 eq. (12), term after term.
+    pub fn cluster_sums(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
+        let row = self.row_len();
+        self.terms
+            .chunks_exact(row)
+            .map(|term| weights.iter().fold(Vec3::ZERO, |sum, w| sum + Vec3::from_slice(&term[3 * w.light as usize..][..3]) * w.weight))
+            .collect()
+    }
+
+    /// Indirect irradiance per vertex for cloud-light weights: x^m + sum_d z_d b_d (004 eq.
+    /// 12-13), clamped at zero: the CPU oracle of the renderer's two passes.
     pub fn irradiance(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
-        (0..self.vertex_count)
-            .map(|v| weights.iter().fold(Vec3::ZERO, |sum, w| sum + self.column(v, w.light as usize) * w.weight))
+        let sums = self.cluster_sums(weights);
+        let terms = 1 + self.basis;
+        (0..self.vertex_count())
+            .map(|v| {
+                let first = self.assignment[v] as usize * terms;
+                let e = (1..terms).fold(sums[first], |e, d| e + sums[first + d] * self.coords[v * self.basis + d - 1]);
+                e.max(Vec3::ZERO)
+            })
             .collect()
     }
 }
@@ -179,16 +236,19 @@ pub fn vertex_count(scene: &Scene) -> usize {
 }
 
 pub const SECTION: &str = "light-cloud";
-pub const SECTION_VERSION: u32 = 1;
+/// Version 2: the clustered transfer (version 1 held rows only).
+pub const SECTION_VERSION: u32 = 2;
 const BIN: &str = "light-cloud.bin";
 const MAGIC: &[u8; 8] = b"RLCLOUD\0";
 
-/// The section: `light-cloud.bin` (counts, the lights, the transfer).
+/// The section: `light-cloud.bin` (counts, the lights, the clustered transfer).
 pub fn section(cloud: &LightCloud, summary: Value) -> Section {
     let mut w = Writer::new(MAGIC);
-    w.u32s(&[cloud.lights.len() as u32, cloud.vertex_count as u32, cloud.samples]);
+    w.u32s(&[cloud.lights.len() as u32, cloud.vertex_count() as u32, cloud.samples, cloud.cluster_count() as u32, cloud.basis as u32]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
-    w.f32s(&cloud.transfer);
+    w.u32s(&cloud.assignment);
+    w.f32s(&cloud.terms);
+    w.f32s(&cloud.coords);
     Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(BIN.into(), w.bytes)] }
 }
 
@@ -197,19 +257,33 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "light cloud")?;
-    let [lights, vertices, samples] = [r.u32("the light count")?, r.u32("the vertex count")?, r.u32("the sample count")?];
-    if vertices as usize != vertex_count(scene) || lights == 0 || lights > MAX_CLOUD_LIGHTS {
-        let problem = format!("{lights} cloud lights and {vertices} vertices do not fit the scene's {} vertices", vertex_count(scene));
+    let [lights, vertices, samples, clusters, basis] =
+        [r.u32("the light count")?, r.u32("the vertex count")?, r.u32("the sample count")?, r.u32("the cluster count")?, r.u32("D")?];
+    if vertices as usize != vertex_count(scene)
+        || lights == 0
+        || lights > MAX_CLOUD_LIGHTS
+        || clusters == 0
+        || clusters > vertices
+        || basis > 1024
+    {
+        let problem = format!(
+            "{lights} cloud lights, {vertices} vertices, {clusters} clusters of D = {basis} do not fit the scene's {} vertices",
+            vertex_count(scene)
+        );
         return Err(fail(&path, problem, REBAKE));
     }
     let positions = r.f32s(lights as usize * 3, "the lights")?;
-    let transfer = r.f32s(vertices as usize * lights as usize * 3, "the transfer")?;
-    r.finish("the transfer")?;
+    let assignment = r.u32s(vertices as usize, "the clusters")?;
+    let terms = r.f32s(clusters as usize * (1 + basis as usize) * lights as usize * 3, "the terms")?;
+    let coords = r.f32s(vertices as usize * basis as usize, "the coordinates")?;
+    r.finish("the coordinates")?;
     let cloud = LightCloud {
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
-        vertex_count: vertices as usize,
-        transfer,
         samples,
+        assignment,
+        basis: basis as usize,
+        terms,
+        coords,
     };
     cloud.validate().map_err(|e| fail(&path, e, REBAKE))?;
     Ok(cloud)

@@ -34,7 +34,23 @@ const NEAREST: Param = Param::count(
 )
 .at_render();
 
-const PARAMS: [&Param; 2] = [&SAMPLES, &NEAREST];
+const CLUSTERS: Param =
+    Param::count("clusters", "clusters of vertices of the transfer's clustered PCA (004 §5)", 1, 1 << 20, Default::Value("32"));
+const VECTORS: Param = Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, 1024, Default::Value("8"));
+const UNCOMPRESSED: Param = Param::flag("uncompressed", "keep every vertex's transfer (one cluster per vertex, no basis)");
+
+const PARAMS: [&Param; 5] = [&SAMPLES, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST];
+
+/// The clusters and vectors the flags ask for; None: uncompressed.
+fn compression(values: &Values) -> Result<Option<(usize, usize)>> {
+    if values.given(&UNCOMPRESSED) {
+        if values.given(&CLUSTERS) || values.given(&VECTORS) {
+            anyhow::bail!("--uncompressed keeps every vertex's transfer: give it without --clusters or --vectors");
+        }
+        return Ok(None);
+    }
+    Ok(Some((values.count(&CLUSTERS) as usize, values.count(&VECTORS) as usize)))
+}
 
 pub(crate) struct LightCloudMethod;
 
@@ -98,28 +114,58 @@ impl Method for LightCloudMethod {
 
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
         let grid = checked(scene)?.grid;
+        let compression = compression(values)?;
         let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, work };
+        let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-        let cloud =
-            stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.display()))?;
-        let bytes = cloud.transfer.len() * 4;
-        let facts =
-            json!({ "cloud_lights": cloud.lights.len(), "grid_points": settings.grid.points().len(), "vertices": cloud.vertex_count });
+        let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
+        let raw_bytes = gathered.terms.len() * 4;
+        let (cloud, error) = match compression {
+            None => (gathered, 0.0),
+            Some((clusters, vectors)) => {
+                let cloud = stages.timed("cpca", || lc::compress(&gathered, clusters, vectors)).map_err(at)?;
+                let error = lc::relative_error(&gathered, &cloud);
+                (cloud, error)
+            }
+        };
+        let bytes = (cloud.terms.len() + cloud.coords.len() + cloud.assignment.len()) * 4;
+        let facts = json!({
+            "cloud_lights": cloud.lights.len(),
+            "grid_points": settings.grid.points().len(),
+            "vertices": cloud.vertex_count(),
+            "clusters": cloud.cluster_count(),
+            "vectors": cloud.basis,
+            "relative_error": error,
+        });
         let summary = format!(
-            "{} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex, transfer {:.2} MiB\n",
+            "{} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex; {} clusters of D = {}, relative error {error:.4}, {:.2} MiB -> {:.2} MiB\n",
             cloud.lights.len(),
             settings.grid.points().len(),
-            cloud.vertex_count,
+            cloud.vertex_count(),
             cloud.samples,
+            cloud.cluster_count(),
+            cloud.basis,
+            raw_bytes as f64 / (1 << 20) as f64,
             bytes as f64 / (1 << 20) as f64
         );
         Ok(Bake {
             sections: vec![lc::section(&cloud, facts)],
             parameters: json!({
                 "samples": settings.samples,
+                "clusters": compression.map(|c| c.0),
+                "vectors": compression.map(|c| c.1),
                 "grid": { "box": [settings.grid.min.to_array(), settings.grid.max.to_array()], "counts": settings.grid.counts },
             }),
-            stats: json!({ "cloud_lights": cloud.lights.len(), "vertices": cloud.vertex_count, "samples": cloud.samples, "transfer_bytes": bytes }),
+            stats: json!({
+                "cloud_lights": cloud.lights.len(),
+                "vertices": cloud.vertex_count(),
+                "samples": cloud.samples,
+                "clusters": cloud.cluster_count(),
+                "vectors": cloud.basis,
+                "relative_error": error,
+                "uncompressed_bytes": raw_bytes,
+                "transfer_bytes": bytes,
+            }),
             summary,
         })
     }

@@ -1,25 +1,31 @@
 //! Local radiance transfer with light clouds (Kristensen et al., 004 §6) at run time: each
 //! user point light stands on its nearest visible cloud lights (weights on the CPU, when the
-//! lights move: `Renderer::set_lights`), and one pass turns the weights into every vertex's
+//! lights move: `Renderer::set_lights`), and two passes turn the weights into every vertex's
 //! indirect irradiance, handed to the lighting pass as a vertex term (interpolated across
 //! triangles: 004 §5's blending, Gouraud-style).
 //!
-//! Uploaded at creation (device-local, never written again):
-//! - `transfer`: packed f32 rgb, `[vertex][cloud light]`, the bake's layout.
+//! Uploaded at creation (device-local, never written again), the bake's layout:
+//! - `terms`: packed f32 rgb, `[cluster][term][cloud light]` (term 0 the mean, d the basis
+//!   vector B_d);
+//! - `assignment`: one u32 cluster per vertex;
+//! - `coords`: D f32 per vertex.
 //!
 //! Written every frame:
-//! - `weights` (in the command stream, before the pass): up to one vec4 per cloud light, rgb
+//! - `weights` (in the command stream, before the passes): up to one vec4 per cloud light, rgb
 //!   the weight (candela), w the light's index as bits;
+//! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) vec4, rgb x^m then b_d;
 //! - `irradiance` by `reconstruct` (reconstruct.rs): one vec4 per vertex, rgb lux.
 //!
 //! Visibility between a user light and the cloud is asked of the caller (`Visibility`): an
 //! engine has its own ray queries, relume's tools pass the path tracer's BVH.
 
+mod cluster_sums;
 mod reconstruct;
 
 use crate::technique::{MakeTechnique, Resource, Shared, Source, Technique, Term};
 use crate::upload::upload_buffers_blocking;
 use crate::vk::{vk, Buffer, CommandRecorder, Context, Tracker, VkError, VkResult};
+use cluster_sums::ClusterSumsPass;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use reconstruct::ReconstructPass;
@@ -40,13 +46,17 @@ pub struct LightCloudData<'d> {
 }
 
 struct Buffers {
-    transfer: Buffer,
+    terms: Buffer,
+    assignment: Buffer,
+    coords: Buffer,
     weights: Buffer,
+    cluster_sums: Buffer,
     irradiance: Buffer,
 }
 
 pub struct LightCloudTechnique {
     buffers: Buffers,
+    cluster_sums: ClusterSumsPass,
     reconstruct: ReconstructPass,
     cloud: Vec<Vec3>,
     weigher: Weigher,
@@ -76,7 +86,7 @@ impl LightCloudTechnique {
     }
 }
 
-const PASSES: [&str; 1] = ["light_cloud.reconstruct"];
+const PASSES: [&str; 2] = ["light_cloud.cluster_sums", "light_cloud.reconstruct"];
 
 impl Technique for LightCloudTechnique {
     fn name(&self) -> &'static str {
@@ -87,11 +97,16 @@ impl Technique for LightCloudTechnique {
         &PASSES
     }
 
-    fn record(&self, _pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        if !self.gpu_weights.is_empty() {
-            rec.update_buffers([(self.buffers.weights.raw, bytemuck::cast_slice(&self.gpu_weights))]);
+    fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
+        match pass {
+            0 => {
+                if !self.gpu_weights.is_empty() {
+                    rec.update_buffers([(self.buffers.weights.raw, bytemuck::cast_slice(&self.gpu_weights))]);
+                }
+                self.cluster_sums.record(rec, tracker, self.gpu_weights.len() as u32);
+            }
+            _ => self.reconstruct.record(rec, tracker),
         }
-        self.reconstruct.record(rec, tracker, self.gpu_weights.len() as u32);
     }
 
     fn term(&self) -> Option<Term<'_>> {
@@ -103,9 +118,10 @@ impl Technique for LightCloudTechnique {
         self.weigh(lights);
     }
 
-    /// `irradiance` (one vec4 per vertex, rgb lux), as the last frame left it.
+    /// `cluster_sums` (C (1 + D) vec4, rgb) and `irradiance` (one vec4 per vertex, rgb lux),
+    /// as the last frame left them.
     fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
-        vec![("irradiance", Resource::Buffer(&self.buffers.irradiance))]
+        vec![("cluster_sums", Resource::Buffer(&self.buffers.cluster_sums)), ("irradiance", Resource::Buffer(&self.buffers.irradiance))]
     }
 }
 
@@ -120,10 +136,25 @@ impl MakeTechnique for LightCloudData<'_> {
         check(ctx, cloud, shared.gpu_scene.vertex_count())?;
         refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let weigher = Weigher::new(cloud.lights.len(), self.nearest).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
-        let [transfer] = upload_buffers_blocking(ctx, [("light cloud transfer", bytemuck::cast_slice(&cloud.transfer))])?;
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        // A storage buffer may not be empty: D = 0 binds one unread coordinate.
+        let coords: &[f32] = if cloud.coords.is_empty() { &[0.0] } else { &cloud.coords };
+        let [terms, assignment, coords] = upload_buffers_blocking(
+            ctx,
+            [
+                ("light cloud terms", bytemuck::cast_slice(&cloud.terms)),
+                ("light cloud assignment", bytemuck::cast_slice(&cloud.assignment)),
+                ("light cloud coordinates", bytemuck::cast_slice(coords)),
+            ],
+        )?;
+        let term_count = (cloud.cluster_count() * (1 + cloud.basis)) as u32;
+        let per_frame = |name, bytes: u64| {
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+            Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)
+        };
         let buffers = Buffers {
-            transfer,
+            terms,
+            assignment,
+            coords,
             weights: Buffer::new(
                 ctx,
                 "light cloud weights",
@@ -131,10 +162,12 @@ impl MakeTechnique for LightCloudData<'_> {
                 vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuOnly,
             )?,
-            irradiance: Buffer::new(ctx, "light cloud irradiance", cloud.vertex_count as u64 * 16, usage, MemoryLocation::GpuOnly)?,
+            cluster_sums: per_frame("light cloud cluster sums", term_count as u64 * 16)?,
+            irradiance: per_frame("light cloud irradiance", cloud.vertex_count() as u64 * 16)?,
         };
         let mut technique = LightCloudTechnique {
-            reconstruct: ReconstructPass::new(shared, &buffers, cloud.vertex_count as u32, cloud.lights.len() as u32)?,
+            cluster_sums: ClusterSumsPass::new(shared, &buffers, term_count, cloud.lights.len() as u32)?,
+            reconstruct: ReconstructPass::new(shared, &buffers, cloud.vertex_count() as u32, cloud.basis as u32)?,
             buffers,
             cloud: cloud.lights.clone(),
             weigher,
@@ -153,17 +186,17 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
     if let Err(why) = cloud.validate() {
         return refuse(why);
     }
-    if cloud.vertex_count != vertex_count {
+    if cloud.vertex_count() != vertex_count {
         return refuse(format!(
             "the cloud was baked for {} vertices; the scene has {vertex_count}: rebake it for this scene",
-            cloud.vertex_count
+            cloud.vertex_count()
         ));
     }
-    let bytes = cloud.transfer.len() as u64 * 4;
+    let bytes = cloud.terms.len().max(cloud.coords.len()) as u64 * 4;
     let limit = ctx.info.max_storage_buffer_range;
-    if bytes > limit || cloud.transfer.len() as u64 > u32::MAX as u64 {
+    if bytes > limit || cloud.terms.len() as u64 > u32::MAX as u64 {
         return refuse(format!(
-            "the transfer takes {bytes} bytes, more than the {limit} bytes one storage buffer may span on {}; use fewer cloud lights",
+            "the transfer's terms take {bytes} bytes, more than the {limit} bytes one storage buffer may span on {}; use fewer cloud lights or clusters",
             ctx.info.name
         ));
     }

@@ -1,10 +1,11 @@
-//! Per-vertex reconstruction (compute), 004 eq. (12): each vertex's indirect irradiance as
-//! this frame's cloud-light weights times its stored transfer
-//! (relume_bake::light_cloud::LightCloud::irradiance on the CPU).
+//! CPCA vertex reconstruction (compute), 004 eq. (12)-(13): each vertex's indirect irradiance
+//! as its cluster's x^m plus its coordinates times the cluster's b_d
+//! (relume_bake::light_cloud::LightCloud::irradiance on the CPU). The paper evaluates this in
+//! the vertex program; here it runs as a pass of its own so that the lighting pass, shared by
+//! every method, only reads a vertex term.
 //!
-//! Reads: the transfer, the weights (rewritten in the command stream just before). Writes: the
-//! irradiance buffer, every vertex. Cost: one invocation per vertex (workgroups of 64), each
-//! reading 12 bytes of transfer per non-zero weight (m per user light at most).
+//! Reads: the cluster sums, the assignment, the coordinates. Writes: the irradiance buffer,
+//! every vertex. Cost: one invocation per vertex (workgroups of 64), 1 + D reads of 16 bytes.
 
 use super::Buffers;
 use crate::passes::compute::{ComputePass, Slot};
@@ -16,29 +17,27 @@ use crate::vk::{Access, CommandRecorder, Tracker, VkResult};
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ReconstructPush {
     vertex_count: u32,
-    light_count: u32,
-    weight_count: u32,
+    basis: u32,
 }
 
 pub(super) struct ReconstructPass {
     pass: ComputePass,
-    vertex_count: u32,
-    light_count: u32,
+    push: ReconstructPush,
 }
 
 impl ReconstructPass {
-    pub fn new(shared: &Shared, buffers: &Buffers, vertex_count: u32, light_count: u32) -> VkResult<ReconstructPass> {
+    pub fn new(shared: &Shared, buffers: &Buffers, vertex_count: u32, basis: u32) -> VkResult<ReconstructPass> {
         let slots = [
-            Slot::Buffer(&buffers.transfer, Access::ComputeStorageRead),
-            Slot::Updated(&buffers.weights),
+            Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageRead),
+            Slot::Buffer(&buffers.assignment, Access::ComputeStorageRead),
+            Slot::Buffer(&buffers.coords, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.irradiance, Access::ComputeStorageWrite),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 12, &slots)?;
-        Ok(ReconstructPass { pass, vertex_count, light_count })
+        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 8, &slots)?;
+        Ok(ReconstructPass { pass, push: ReconstructPush { vertex_count, basis } })
     }
 
-    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, weight_count: u32) {
-        let push = ReconstructPush { vertex_count: self.vertex_count, light_count: self.light_count, weight_count };
-        self.pass.dispatch(rec, tracker, 0, &push, [self.vertex_count.div_ceil(64), 1, 1]);
+    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
+        self.pass.dispatch(rec, tracker, 0, &self.push, [self.push.vertex_count.div_ceil(64), 1, 1]);
     }
 }

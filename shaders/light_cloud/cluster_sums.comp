@@ -1,0 +1,30 @@
+#version 450
+// 004 eq. (12): per cluster c and term t (t = 0 the mean X^c, t = d the basis vector B^c_d),
+// sums[c][t] = sum_k w_k T[c][t][j_k] over this frame's non-zero cloud-light weights, in their
+// order (relume_bake::light_cloud::LightCloud::cluster_sums on the CPU). One invocation per
+// (cluster, term).
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+// T[c][t][j] at 3 * (term * light_count + j), term = c * (1 + D) + t: packed rgb.
+layout(std430, set = 0, binding = 0) readonly buffer Terms { float terms[]; };
+// rgb the weight (candela), w the cloud light's index as uint bits.
+layout(std430, set = 0, binding = 1) readonly buffer Weights { vec4 weights[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Sums { vec4 sums[]; };
+
+layout(push_constant) uniform ClusterSumsPush {
+    uint term_count;    // C * (1 + D)
+    uint light_count;
+    uint weight_count;
+} pc;
+
+void main() {
+    uint term = gl_GlobalInvocationID.x;
+    if (term >= pc.term_count) return;
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < pc.weight_count; ++k) {
+        vec4 w = weights[k];
+        uint at = 3u * (term * pc.light_count + floatBitsToUint(w.w));
+        sum += w.rgb * vec3(terms[at], terms[at + 1u], terms[at + 2u]);
+    }
+    sums[term] = vec4(sum, 0.0);
+}
