@@ -54,7 +54,7 @@ const ROULETTE_FROM_VERTEX: u32 = 3;
 const ENVIRONMENT_DIMENSIONS: u32 = 1 << 30;
 /// First sampler dimension of the glossy lobe's choice (one per bounce; only a material with a
 /// lobe reads it).
-const LOBE_DIMENSIONS: u32 = 1 << 29;
+pub(crate) const LOBE_DIMENSIONS: u32 = 1 << 29;
 /// The largest number of samples per pixel one pass over the image takes: small enough that
 /// a time limit is not overshot by much and the progress bar moves.
 const MAX_PASS_SAMPLES: u32 = 16;
@@ -272,6 +272,22 @@ pub(crate) fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns
     Some((incident.irradiance * cos, incident.to_light))
 }
 
+/// Russian roulette on the continuation from path vertex `vertex`: from the fourth on, the
+/// path survives with probability min(max throughput channel, 0.95), its throughput divided
+/// by it; `u` draws the uniform number only when the roulette is played.
+#[inline]
+pub(crate) fn survives_roulette(throughput: &mut Vec3, vertex: u32, u: impl FnOnce() -> f32) -> bool {
+    if vertex < ROULETTE_FROM_VERTEX {
+        return true;
+    }
+    let survive = throughput.max_element().min(0.95);
+    if u() >= survive {
+        return false;
+    }
+    *throughput /= survive;
+    true
+}
+
 /// Power heuristic (beta = 2) weight of the strategy with density `a` against one with `b`.
 #[inline]
 fn power_heuristic(a: f32, b: f32) -> f32 {
@@ -480,12 +496,8 @@ impl<'a> Integrator<'a> {
                 break;
             };
             throughput *= weight;
-            if bounce >= ROULETTE_FROM_VERTEX {
-                let survive = throughput.max_element().min(0.95);
-                if sampler.uniform(2 * bounce + 1) >= survive {
-                    break;
-                }
-                throughput /= survive;
+            if !survives_roulette(&mut throughput, bounce, || sampler.uniform(2 * bounce + 1)) {
+                break;
             }
             bsdf_pdf = pdf;
             previous = p;

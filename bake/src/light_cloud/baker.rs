@@ -13,7 +13,7 @@ use super::{vertex_count, CloudGrid, LightCloud};
 use crate::bsdf::Bsdf;
 use crate::bvh::SceneBvh;
 use crate::cpca;
-use crate::reference::punctual_irradiance;
+use crate::reference::{punctual_irradiance, survives_roulette, LOBE_DIMENSIONS};
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Scene};
 use crate::work::{progress_bar, WorkOptions};
@@ -30,13 +30,8 @@ pub struct LightCloudBakeSettings {
     pub work: WorkOptions,
 }
 
-/// The first path vertex (0 = the vertex being baked) whose continuation Russian roulette
-/// may cut: the reference's rule, counted from the camera's first hit.
-const ROULETTE_FROM_VERTEX: u32 = 3;
 /// The most scattering events a gather path may have (the reference's default).
 const MAX_BOUNCES: u32 = 64;
-/// First sampler dimension of the glossy lobe's choice (one per bounce).
-const LOBE_DIMENSIONS: u32 = 1 << 29;
 /// Gather paths per vertex in one pass: the time limit is checked between passes.
 const SAMPLES_PER_PASS: u32 = 8;
 
@@ -254,12 +249,8 @@ impl Gather<'_> {
                 return;
             };
             throughput *= weight;
-            if bounce >= ROULETTE_FROM_VERTEX {
-                let survive = throughput.max_element().min(0.95);
-                if sampler.uniform(2 * bounce + 1) >= survive {
-                    return;
-                }
-                throughput /= survive;
+            if !survives_roulette(&mut throughput, bounce, || sampler.uniform(2 * bounce + 1)) {
+                return;
             }
             origin = self.bvh.offset_origin(hit.position, ng, wi);
             dir = wi;

@@ -151,11 +151,17 @@ impl Builder {
                 normals.push(n.as_vec3().to_array());
             }
         }
-        let indices: Vec<u8> = (0..positions.len() as u32).flat_map(u32::to_le_bytes).collect();
-        let position = self.vec3_accessor(&positions, true);
-        let normal = self.vec3_accessor(&normals, false);
-        let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
-        self.accessors.push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": positions.len(), "type": "SCALAR" }));
+        let indices: Vec<u32> = (0..positions.len() as u32).collect();
+        self.mesh_with_normals(name, &positions, &normals, &indices, material)
+    }
+
+    /// A mesh of vertices with their normals and a triangle list of indices into them.
+    fn mesh_with_normals(&mut self, name: &str, positions: &[[f32; 3]], normals: &[[f32; 3]], indices: &[u32], material: usize) -> usize {
+        let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let position = self.vec3_accessor(positions, true);
+        let normal = self.vec3_accessor(normals, false);
+        let index_view = self.view(&bytes, ELEMENT_ARRAY_BUFFER);
+        self.accessors.push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": indices.len(), "type": "SCALAR" }));
         let index_accessor = self.accessors.len() - 1;
         self.meshes.push(json!({
             "name": name,
@@ -181,7 +187,7 @@ impl Builder {
         outward: impl Fn(DVec3) -> DVec3,
         material: usize,
     ) -> usize {
-        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::<u8>::new());
+        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
         for q in quads {
             let centre = (q[0] + q[1] + q[2] + q[3]) / 4.0;
             let normal = (q[2] - q[0]).cross(q[3] - q[1]).normalize();
@@ -199,28 +205,12 @@ impl Builder {
             for j in 0..n {
                 for i in 0..n {
                     for [a, b, c] in [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]] {
-                        let corners = if flip { [a, c, b] } else { [a, b, c] };
-                        indices.extend(corners.iter().flat_map(|v| v.to_le_bytes()));
+                        indices.extend(if flip { [a, c, b] } else { [a, b, c] });
                     }
                 }
             }
         }
-        let position = self.vec3_accessor(&positions, true);
-        let normal = self.vec3_accessor(&normals, false);
-        let index_view = self.view(&indices, ELEMENT_ARRAY_BUFFER);
-        self.accessors
-            .push(json!({ "bufferView": index_view, "componentType": UNSIGNED_INT, "count": indices.len() / 4, "type": "SCALAR" }));
-        let index_accessor = self.accessors.len() - 1;
-        self.meshes.push(json!({
-            "name": name,
-            "primitives": [{
-                "attributes": { "NORMAL": normal, "POSITION": position },
-                "indices": index_accessor,
-                "material": material,
-                "mode": 4,
-            }],
-        }));
-        self.meshes.len() - 1
+        self.mesh_with_normals(name, &positions, &normals, &indices, material)
     }
 
     /// Declares the light cloud's grid (`extras.relume.light_cloud`): a box and its cells.
