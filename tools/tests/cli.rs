@@ -408,3 +408,23 @@ fn every_value_that_cannot_be_read_exits_with_2() {
         assert!(stderr.contains(args[args.len() - 1]), "{args:?}: {stderr}");
     }
 }
+
+/// The light cloud refuses a spot-lit scene by the light's name, and bakes a flat-shaded scene
+/// lit by a point light with a warning that its vertices have nothing to interpolate.
+#[test]
+fn light_cloud_refuses_spot_lights_and_warns_on_flat_meshes() {
+    let dir = temp_dir("light-cloud");
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
+    let bake = |extra: &[&str]| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_relume"));
+        command.args(["bake", "--method", "light-cloud", "--samples", "1", "--uncompressed"]).args(extra).arg("--out").arg(dir.join("lc"));
+        command.arg(&cornell).output().unwrap()
+    };
+    assert_one_error(&bake(&[]), &["CeilingSpot", "spot light", "point lights only"]);
+    let lights = r#"{ "format": "relume-lights", "version": 1, "lights": [{ "type": "point", "position": [0, 0.4, -0.28], "intensity": [0.5, 0.5, 0.5] }] }"#;
+    std::fs::write(dir.join("point.json"), lights).unwrap();
+    let baked = bake(&["--lights", dir.join("point.json").to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&baked.stdout).to_string() + &String::from_utf8_lossy(&baked.stderr);
+    assert!(baked.status.success(), "{out}");
+    assert!(out.contains("warning: 90 of 90 vertices belong to one triangle only"), "{out}");
+}

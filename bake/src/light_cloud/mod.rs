@@ -230,6 +230,20 @@ impl LightCloud {
     }
 }
 
+/// The vertices that belong to one triangle only, and all vertices. Per-vertex transfer is
+/// interpolated across the triangles a vertex joins: where most vertices join one triangle
+/// (flat-shaded meshes, three vertices a triangle), it varies only within each triangle and
+/// the method has next to nothing to interpolate.
+pub fn lone_vertices(scene: &Scene) -> (usize, usize) {
+    let mut lone = 0;
+    for mesh in &scene.meshes {
+        let mut uses = vec![0u32; mesh.positions.len()];
+        mesh.indices.iter().for_each(|&i| uses[i as usize] += 1);
+        lone += uses.iter().filter(|&&n| n <= 1).count();
+    }
+    (lone, vertex_count(scene))
+}
+
 /// The scene's vertex count in the renderer's order.
 pub fn vertex_count(scene: &Scene) -> usize {
     scene.meshes.iter().map(|m| m.positions.len()).sum()

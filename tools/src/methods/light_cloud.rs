@@ -137,7 +137,7 @@ impl Method for LightCloudMethod {
             "vectors": cloud.basis,
             "relative_error": error,
         });
-        let summary = format!(
+        let mut summary = format!(
             "{} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex; {} clusters of D = {}, relative error {error:.4}, {:.2} MiB -> {:.2} MiB\n",
             cloud.lights.len(),
             settings.grid.points().len(),
@@ -148,6 +148,12 @@ impl Method for LightCloudMethod {
             raw_bytes as f64 / (1 << 20) as f64,
             bytes as f64 / (1 << 20) as f64
         );
+        let (lone, vertices) = lc::lone_vertices(scene);
+        if 2 * lone > vertices {
+            summary.push_str(&format!(
+                "warning: {lone} of {vertices} vertices belong to one triangle only (flat-shaded meshes): per-vertex transfer has almost nothing to interpolate; weld and tessellate the meshes (as scenes/cornell-cloud is)\n"
+            ));
+        }
         Ok(Bake {
             sections: vec![lc::section(&cloud, facts)],
             parameters: json!({
