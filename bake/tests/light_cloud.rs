@@ -217,3 +217,40 @@ fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
     }
     assert!(lc::compress(&compressed, 4, 2).is_err(), "a compressed cloud is refused");
 }
+
+/// The section reads back what was written, uncompressed and clustered, and refuses what a
+/// bake never makes: a negative uncompressed value, a non-finite term, a vertex in a cluster
+/// that does not exist; and a cloud baked for other vertices.
+#[test]
+fn the_section_round_trips_and_refuses_values_out_of_range() {
+    use relume_bake::artifact::{Artifact, BakeOutput};
+    use serde_json::json;
+    let s = sphere_scene();
+    let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.5), max: Vec3::splat(0.5), counts: [2, 1, 1] }, 1, None);
+    let dir = std::env::temp_dir().join(format!("relume-light-cloud-section-{}", std::process::id()));
+    let read = |cloud: &LightCloud, scene: &Scene| {
+        let sections = vec![lc::section(cloud, json!({}))];
+        BakeOutput { method: "light-cloud", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
+        lc::read(&Artifact::read(&dir).unwrap(), scene).map_err(|e| e.to_string())
+    };
+    let compressed = lc::compress(&cloud, 3, 2).unwrap();
+    assert_eq!(read(&cloud, &s).unwrap(), cloud);
+    assert_eq!(read(&compressed, &s).unwrap(), compressed);
+    let mut negative = cloud.clone();
+    negative.terms[7] = -0.25;
+    let error = read(&negative, &s).unwrap_err();
+    assert!(error.contains("light-cloud.bin") && error.contains("transfer value 7") && error.contains(">= 0"), "{error}");
+    let mut nan = compressed.clone();
+    nan.terms[4] = f32::NAN;
+    assert!(read(&nan, &s).unwrap_err().contains("must be finite"));
+    let mut stray = compressed.clone();
+    let clusters = stray.cluster_count();
+    stray.assignment[10] = clusters as u32;
+    let error = read(&stray, &s).unwrap_err();
+    assert!(error.contains(&format!("vertex 10 is in cluster {clusters}, of {clusters}")), "{error}");
+    let mut other = s.clone();
+    other.meshes[0].positions.push(Vec3::ZERO);
+    other.meshes[0].normals.push(Vec3::Y);
+    assert!(read(&cloud, &other).unwrap_err().contains("scene"), "another scene is refused");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
