@@ -7,8 +7,12 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
 // T[c][t][j] at 3 * (term * light_count + j), term = c * (1 + D) + t: packed rgb.
 layout(std430, set = 0, binding = 0) readonly buffer Terms { float terms[]; };
-// rgb the weight (candela), w the cloud light's index as uint bits.
-layout(std430, set = 0, binding = 1) readonly buffer Weights { vec4 weights[]; };
+// The weight (candela, rgb) and the cloud light it weighs: 16 bytes.
+struct CloudWeight {
+    vec3 weight;
+    uint light;
+};
+layout(std430, set = 0, binding = 1) readonly buffer Weights { CloudWeight weights[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Sums { vec4 sums[]; };
 
 layout(push_constant) uniform ClusterSumsPush {
@@ -22,9 +26,9 @@ void main() {
     if (term >= pc.term_count) return;
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < pc.weight_count; ++k) {
-        vec4 w = weights[k];
-        uint at = 3u * (term * pc.light_count + floatBitsToUint(w.w));
-        sum += w.rgb * vec3(terms[at], terms[at + 1u], terms[at + 2u]);
+        CloudWeight w = weights[k];
+        uint at = 3u * (term * pc.light_count + w.light);
+        sum += w.weight * vec3(terms[at], terms[at + 1u], terms[at + 2u]);
     }
     sums[term] = vec4(sum, 0.0);
 }

@@ -196,7 +196,8 @@ impl Supports {
             pick -= self.areas[*t as usize];
             pick < 0.0
         });
-        let [_, t] = *chosen.or(around.last())?;
+        // Rounding may leave `pick` above zero past the last triangle: take the last one of area.
+        let [_, t] = *chosen.or_else(|| around.iter().rfind(|[_, t]| self.areas[*t as usize] > 0.0))?;
         let u = sampler.sobol4(SUPPORT_GROUP);
         // The vertex's weight is Beta(2, 2): the median of three uniforms.
         let own = u[0].max(u[1]).min(u[0].min(u[1]).max(u[2]));

@@ -11,8 +11,8 @@
 //! - `coords`: D f32 per vertex.
 //!
 //! Written every frame:
-//! - `weights` (in the command stream, before the passes): up to one vec4 per cloud light, rgb
-//!   the weight (candela), w the light's index as bits;
+//! - `weights` (in the command stream, before the passes): up to one per cloud light, the
+//!   weight (candela, rgb f32) and the light's index (u32);
 //! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) vec4, rgb x^m then b_d;
 //! - `irradiance` by `reconstruct` (reconstruct.rs): one vec4 per vertex, rgb lux.
 //!
@@ -45,6 +45,14 @@ pub struct LightCloudData<'d> {
     pub visibility: Visibility,
 }
 
+/// A cloud light's weight as `cluster_sums.comp` reads it (std430: 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuWeight {
+    weight: [f32; 3],
+    light: u32,
+}
+
 struct Buffers {
     terms: Buffer,
     assignment: Buffer,
@@ -63,7 +71,7 @@ pub struct LightCloudTechnique {
     visibility: Visibility,
     weights: Vec<CloudWeight>,
     /// `weights` as the shader reads them (same capacity: filling it never allocates).
-    gpu_weights: Vec<[f32; 4]>,
+    gpu_weights: Vec<GpuWeight>,
     unseen: usize,
 }
 
@@ -82,7 +90,7 @@ impl LightCloudTechnique {
         let visibility = &self.visibility;
         self.unseen = self.weigher.weigh(&self.cloud, lights, |a, b| visibility(a, b), &mut self.weights);
         self.gpu_weights.clear();
-        self.gpu_weights.extend(self.weights.iter().map(|w| [w.weight.x, w.weight.y, w.weight.z, f32::from_bits(w.light)]));
+        self.gpu_weights.extend(self.weights.iter().map(|w| GpuWeight { weight: w.weight.to_array(), light: w.light }));
     }
 }
 
@@ -192,12 +200,22 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
             cloud.vertex_count()
         ));
     }
-    let bytes = cloud.terms.len().max(cloud.coords.len()) as u64 * 4;
+    // Every buffer the passes bind, in bytes, and the workgroups of each dispatch.
+    let terms = (cloud.cluster_count() * (1 + cloud.basis)) as u64;
+    let bytes = [cloud.terms.len() as u64 * 4, cloud.coords.len() as u64 * 4, cloud.vertex_count() as u64 * 16, terms * 16];
     let limit = ctx.info.max_storage_buffer_range;
-    if bytes > limit || cloud.terms.len() as u64 > u32::MAX as u64 {
+    if bytes.iter().any(|&b| b > limit) || cloud.terms.len() as u64 > u32::MAX as u64 {
         return refuse(format!(
-            "the transfer's terms take {bytes} bytes, more than the {limit} bytes one storage buffer may span on {}; use fewer cloud lights or clusters",
+            "the transfer takes up to {} bytes in one buffer, more than the {limit} bytes one storage buffer may span on {}; use fewer cloud lights, clusters or vectors",
+            bytes.iter().max().unwrap_or(&0),
             ctx.info.name
+        ));
+    }
+    // 65,535 workgroups of 64 invocations: the least maxComputeWorkGroupCount Vulkan allows.
+    if terms.max(cloud.vertex_count() as u64).div_ceil(64) > 65_535 {
+        return refuse(format!(
+            "{terms} cluster terms and {} vertices: at most 4,194,240 of each fit one dispatch; use fewer clusters or vectors, or split the scene",
+            cloud.vertex_count()
         ));
     }
     if cloud.lights.len() * 16 > 65536 {
