@@ -1,6 +1,6 @@
 //! The light cloud's run time (004 §6) on the GPU against its CPU twin,
-//! relume_bake::light_cloud::LightCloud::{cluster_sums, irradiance}, uncompressed and
-//! clustered, as the lights move; its refusals; all with validation and synchronization
+//! relume_bake::light_cloud::LightCloud::{cluster_sums, irradiance}, uncompressed, clustered
+//! and in zones, as the lights move; its refusals; all with validation and synchronization
 //! validation on.
 
 use glam::Vec3;
@@ -43,7 +43,9 @@ fn gpu_equals_cpu(scene: &Scene, cloud: &LightCloud, visibility: Visibility) {
         render(&mut renderer);
         let weights = renderer.technique_mut::<LightCloudTechnique>().unwrap().weights().to_vec();
         let sum = weights.iter().fold(Vec3::ZERO, |s, w| s + w.weight);
-        assert!((sum - lights[0].intensity).abs().max_element() < 1e-4 * lights[0].intensity.max_element(), "weights sum to {sum}");
+        // Each zone's weights sum to the light's intensity.
+        let expected = lights[0].intensity * cloud.zone_count() as f32;
+        assert!((sum - expected).abs().max_element() < 1e-4 * expected.max_element(), "weights sum to {sum}");
         let (gpu_sums, cpu_sums) = (read_vec4s(&mut renderer, "light_cloud.cluster_sums").unwrap(), cloud.cluster_sums(&weights));
         let gpu = read_vec4s(&mut renderer, "light_cloud.irradiance").unwrap();
         let cpu = cloud.irradiance(&weights);
@@ -69,7 +71,12 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     let (scene, cloud, visibility) = baked();
     gpu_equals_cpu(&scene, &cloud, Arc::clone(&visibility));
     // CPCA vertex reconstruction: 16 clusters of 4 vectors.
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, 4).unwrap(), visibility);
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, 4).unwrap(), Arc::clone(&visibility));
+    // 4 zones, each with its own clustered lights (004 §4): every cluster weighs its zone's.
+    let reduction = lc::Reduction { zones: 4, weights: Some((0.5, 20.0)) };
+    let reduced = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud;
+    assert!(reduced.lights.len() < 4 * cloud.lights.len(), "light clustering merged lights");
+    gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, 4).unwrap(), visibility);
 }
 
 #[test]

@@ -114,27 +114,43 @@ pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64
 /// The most rounds of Sloan's refinement (004 §5: "20-30 iterations or until no vertex moves").
 const REFINE_ROUNDS: usize = 20;
 
-/// The clustered PCA of an uncompressed cloud (004 §5, after Sloan et al. 2003): `clusters`
-/// clusters of vertices by the divisive 2-means of their rows, `basis` vectors each, then
-/// refined: vertices move to the cluster that reconstructs them best until none moves (at most
-/// 20 rounds). Clusters left empty are dropped.
+/// The clustered PCA of an uncompressed cloud (004 §5, after Sloan et al. 2003), zone by zone:
+/// the zone's share of `clusters` (by its vertices, at least one) by the divisive 2-means of
+/// its rows, `basis` vectors each, then refined: vertices move to the cluster that
+/// reconstructs them best until none moves (at most 20 rounds). Clusters left empty are
+/// dropped.
 pub fn compress(cloud: &LightCloud, clusters: usize, basis: usize) -> Result<LightCloud, String> {
     if cloud.basis != 0 || cloud.cluster_count() != cloud.vertex_count() {
         return Err("only an uncompressed cloud can be compressed".into());
     }
-    let cols = 3 * cloud.lights.len();
-    let first = cpca::fit(&cloud.terms, cols, &cloud.terms, cols, clusters, basis)?;
-    let (fitted, _) = cpca::refine(&cloud.terms, cols, first, REFINE_ROUNDS);
-    let mut coords = vec![0.0; cloud.vertex_count() * basis];
-    let mut terms = Vec::with_capacity(fitted.clusters.len() * (1 + basis) * cols);
-    for cluster in &fitted.clusters {
-        terms.extend(&cluster.mean);
-        cluster.basis.iter().for_each(|b| terms.extend(b));
-        for (&v, z) in cluster.members.iter().zip(&cluster.weights) {
-            coords[v as usize * basis..][..basis].copy_from_slice(z);
-        }
+    let layout = cloud.layout();
+    let mut zones = vec![Vec::new(); cloud.zone_count()];
+    for (v, &c) in cloud.assignment.iter().enumerate() {
+        zones[cloud.zone_clusters.partition_point(|&start| start <= c) - 1].push(v as u32);
     }
-    Ok(LightCloud { lights: cloud.lights.clone(), samples: cloud.samples, assignment: fitted.assignment, basis, terms, coords })
+    let mut out =
+        LightCloud { zone_clusters: vec![0], basis, terms: Vec::new(), coords: vec![0.0; cloud.vertex_count() * basis], ..cloud.clone() };
+    for (zone, members) in zones.iter().enumerate() {
+        let cols = 3 * cloud.zone_light_range(zone).len();
+        let rows: Vec<f32> =
+            members.iter().flat_map(|&v| &cloud.terms[layout[cloud.assignment[v as usize] as usize].offset..][..cols]).copied().collect();
+        let share = ((clusters * members.len()) as f64 / cloud.vertex_count() as f64).round() as usize;
+        let first = cpca::fit(&rows, cols, &rows, cols, share.clamp(1, members.len()), basis)?;
+        let (fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
+        let base = out.cluster_count() as u32;
+        for cluster in &fitted.clusters {
+            out.terms.extend(&cluster.mean);
+            cluster.basis.iter().for_each(|b| out.terms.extend(b));
+            for (&k, z) in cluster.members.iter().zip(&cluster.weights) {
+                out.coords[members[k as usize] as usize * basis..][..basis].copy_from_slice(z);
+            }
+        }
+        for (&v, &c) in members.iter().zip(&fitted.assignment) {
+            out.assignment[v as usize] = base + c;
+        }
+        out.zone_clusters.push(base + fitted.clusters.len() as u32);
+    }
+    Ok(out)
 }
 
 /// Each vertex's support: the triangles around it, where its value is interpolated.

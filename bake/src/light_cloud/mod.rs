@@ -12,9 +12,13 @@
 
 #[cfg(feature = "baking")]
 mod baker;
+#[cfg(feature = "baking")]
+mod reduce;
 mod weights;
 #[cfg(feature = "baking")]
 pub use baker::*;
+#[cfg(feature = "baking")]
+pub use reduce::*;
 pub use weights::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
@@ -121,73 +125,128 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
     Ok(LightCloudSceneSettings { grid })
 }
 
-/// The baked transfer: the cloud's lights and, per vertex of the scene (meshes in order, each
-/// mesh's vertices in order: the renderer's vertex buffer) and per cloud light, the indirect
-/// irradiance a 1 cd isotropic light there gives the vertex (lux, rgb), as a clustered PCA
-/// (004 §5, eq. 11): vertex v of cluster c stores X_v ~ X^c + sum_d z_vd B^c_d, each term a
-/// row of 3 x lights values (rgb per light, spec light-clouds.md B8). Uncompressed, every
-/// vertex is its own cluster and D = 0: the terms are the rows as gathered.
+/// The baked transfer, by zone (004 §4.2): each zone has its own cloud lights (the cloud's,
+/// or fewer after light clustering, §4.1) and its own clusters of vertices. Per vertex of the
+/// scene (meshes in order, each mesh's vertices in order: the renderer's vertex buffer) and
+/// per light of its zone, the indirect irradiance a 1 cd isotropic light there gives the
+/// vertex (lux, rgb), as a clustered PCA (004 §5, eq. 11): vertex v of cluster c stores
+/// X_v ~ X^c + sum_d z_vd B^c_d, each term a row of 3 x (the zone's lights) values (rgb per
+/// light, spec light-clouds.md B8). Uncompressed, every vertex is its own cluster and D = 0:
+/// the terms are the rows as gathered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloud {
+    /// Every zone's lights, zone after zone.
     pub lights: Vec<Vec3>,
+    /// Zone z's lights are `lights[zone_lights[z]..zone_lights[z + 1]]` (zones + 1 entries).
+    pub zone_lights: Vec<u32>,
+    /// Zone z's clusters are `zone_clusters[z]..zone_clusters[z + 1]` (zones + 1 entries).
+    pub zone_clusters: Vec<u32>,
     /// Gather paths per vertex.
     pub samples: u32,
     /// Per vertex, its cluster.
     pub assignment: Vec<u32>,
     /// D, the basis vectors of every cluster.
     pub basis: usize,
-    /// `[cluster][term][light][rgb]`: term 0 the cluster's mean X^c, term d its B^c_d.
+    /// Cluster after cluster, `[term][zone light][rgb]`: term 0 the cluster's mean X^c, term d
+    /// its B^c_d.
     pub terms: Vec<f32>,
     /// `[vertex][d]`: z_vd, d from 1 (D per vertex).
     pub coords: Vec<f32>,
 }
 
+/// Where one cluster's terms lie and which lights they weigh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClusterLayout {
+    /// The first value of its terms in `LightCloud::terms`.
+    pub offset: usize,
+    /// Its zone's first light and light count.
+    pub first_light: u32,
+    pub lights: u32,
+}
+
 impl LightCloud {
-    /// Rows as gathered, `[vertex][light][rgb]`: one cluster per vertex, no basis.
+    /// Rows as gathered, `[vertex][light][rgb]`: one zone, one cluster per vertex, no basis.
     pub fn uncompressed(lights: Vec<Vec3>, samples: u32, rows: Vec<f32>) -> LightCloud {
         let vertices = rows.len() / (3 * lights.len()).max(1);
-        LightCloud { lights, samples, assignment: (0..vertices as u32).collect(), basis: 0, terms: rows, coords: Vec::new() }
+        LightCloud {
+            zone_lights: vec![0, lights.len() as u32],
+            zone_clusters: vec![0, vertices as u32],
+            lights,
+            samples,
+            assignment: (0..vertices as u32).collect(),
+            basis: 0,
+            terms: rows,
+            coords: Vec::new(),
+        }
     }
 
     pub fn vertex_count(&self) -> usize {
         self.assignment.len()
     }
 
-    /// Values in one term: rgb per light.
-    fn row_len(&self) -> usize {
-        3 * self.lights.len()
+    pub fn zone_count(&self) -> usize {
+        self.zone_lights.len().saturating_sub(1)
     }
 
     pub fn cluster_count(&self) -> usize {
-        self.terms.len() / ((1 + self.basis) * self.row_len()).max(1)
+        self.zone_clusters.last().map_or(0, |&c| c as usize)
     }
 
-    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed.
+    /// Zone z's lights, as indices into `lights`.
+    pub fn zone_light_range(&self, zone: usize) -> std::ops::Range<usize> {
+        self.zone_lights[zone] as usize..self.zone_lights[zone + 1] as usize
+    }
+
+    /// Cluster `cluster`'s layout (clusters lie zone after zone, each zone's the same size).
+    pub fn cluster_layout(&self, cluster: usize) -> ClusterLayout {
+        let zone = self.zone_clusters.partition_point(|&start| start as usize <= cluster) - 1;
+        let size = |z: usize| (1 + self.basis) * 3 * self.zone_light_range(z).len();
+        let before: usize = (0..zone).map(|z| (self.zone_clusters[z + 1] - self.zone_clusters[z]) as usize * size(z)).sum();
+        let lights = self.zone_light_range(zone);
+        ClusterLayout {
+            offset: before + (cluster - self.zone_clusters[zone] as usize) * size(zone),
+            first_light: lights.start as u32,
+            lights: lights.len() as u32,
+        }
+    }
+
+    /// Every cluster's layout, in cluster order.
+    pub fn layout(&self) -> Vec<ClusterLayout> {
+        (0..self.cluster_count()).map(|c| self.cluster_layout(c)).collect()
+    }
+
+    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed; zero for a
+    /// light of another zone.
     pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
-        let terms = self.cluster_terms_of(self.assignment[vertex] as usize);
-        let value = |t: usize| Vec3::from_slice(&terms[t * self.row_len() + 3 * light..][..3]);
+        let at = self.cluster_layout(self.assignment[vertex] as usize);
+        let Some(j) = light.checked_sub(at.first_light as usize).filter(|&j| j < at.lights as usize) else { return Vec3::ZERO };
+        let row = 3 * at.lights as usize;
+        let value = |t: usize| Vec3::from_slice(&self.terms[at.offset + t * row + 3 * j..][..3]);
         (1..=self.basis).fold(value(0), |sum, d| sum + value(d) * self.coords[vertex * self.basis + d - 1])
     }
 
-    fn cluster_terms_of(&self, cluster: usize) -> &[f32] {
-        let len = (1 + self.basis) * self.row_len();
-        &self.terms[cluster * len..][..len]
-    }
-
-    /// The shapes agree, every value is finite, every vertex's cluster exists, and an
-    /// uncompressed transfer is not negative.
+    /// The shapes agree, every value is finite, every zone has lights and clusters, every
+    /// vertex's cluster exists, and an uncompressed transfer is not negative.
     pub fn validate(&self) -> Result<(), String> {
         if self.lights.is_empty() || self.lights.len() > MAX_CLOUD_LIGHTS as usize || self.lights.iter().any(|p| !p.is_finite()) {
             return Err(format!("{} cloud lights: must be 1..={MAX_CLOUD_LIGHTS} finite points", self.lights.len()));
         }
-        let clusters = self.cluster_count();
-        if self.terms.len() != clusters * (1 + self.basis) * self.row_len() || clusters == 0 {
+        let prefix = |starts: &[u32], end: usize| {
+            starts.len() >= 2 && starts[0] == 0 && starts.windows(2).all(|w| w[0] < w[1]) && *starts.last().unwrap() as usize == end
+        };
+        if self.zone_clusters.len() != self.zone_lights.len()
+            || !prefix(&self.zone_lights, self.lights.len())
+            || !prefix(&self.zone_clusters, self.cluster_count())
+        {
             return Err(format!(
-                "{} term values are not whole clusters of {} terms of {} lights",
-                self.terms.len(),
-                1 + self.basis,
-                self.lights.len()
+                "zones {:?} of lights and {:?} of clusters: each zone needs lights and clusters, in order",
+                self.zone_lights, self.zone_clusters
             ));
+        }
+        let clusters = self.cluster_count();
+        let expected: usize = self.layout().last().map_or(0, |l| l.offset + (1 + self.basis) * 3 * l.lights as usize);
+        if self.terms.len() != expected {
+            return Err(format!("{} term values for clusters that hold {expected}", self.terms.len()));
         }
         if self.coords.len() != self.vertex_count() * self.basis {
             return Err(format!("{} coordinates for {} vertices of D = {}", self.coords.len(), self.vertex_count(), self.basis));
@@ -206,13 +265,22 @@ impl LightCloud {
     }
 
     /// Each cluster's terms weighed by cloud-light weights (per channel, candela), summed over
-    /// `weights` in their order: x^m and b_d of 004 eq. (12), term after term.
+    /// the weights of its zone's lights in their order: x^m and b_d of 004 eq. (12), cluster
+    /// after cluster, term after term.
     pub fn cluster_sums(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
-        let row = self.row_len();
-        self.terms
-            .chunks_exact(row)
-            .map(|term| weights.iter().fold(Vec3::ZERO, |sum, w| sum + Vec3::from_slice(&term[3 * w.light as usize..][..3]) * w.weight))
-            .collect()
+        let mut sums = Vec::with_capacity(self.cluster_count() * (1 + self.basis));
+        for at in self.layout() {
+            let row = 3 * at.lights as usize;
+            for term in self.terms[at.offset..][..(1 + self.basis) * row].chunks_exact(row) {
+                let zone = weights.iter().filter(|w| (at.first_light..at.first_light + at.lights).contains(&w.light));
+                sums.push(
+                    zone.fold(Vec3::ZERO, |sum, w| {
+                        sum + Vec3::from_slice(&term[3 * (w.light - at.first_light) as usize..][..3]) * w.weight
+                    }),
+                );
+            }
+        }
+        sums
     }
 
     /// Indirect irradiance per vertex for cloud-light weights: x^m + sum_d z_d b_d (004 eq.
@@ -250,16 +318,25 @@ pub fn vertex_count(scene: &Scene) -> usize {
 }
 
 pub const SECTION: &str = "light-cloud";
-/// Version 2: the clustered transfer (version 1 held rows only).
-pub const SECTION_VERSION: u32 = 2;
+/// Version 3: zones (version 2 had one; version 1 held rows only).
+pub const SECTION_VERSION: u32 = 3;
 const BIN: &str = "light-cloud.bin";
 const MAGIC: &[u8; 8] = b"RLCLOUD\0";
 
-/// The section: `light-cloud.bin` (counts, the lights, the clustered transfer).
+/// The section: `light-cloud.bin` (counts, the lights, the zones, the clustered transfer).
 pub fn section(cloud: &LightCloud, summary: Value) -> Section {
     let mut w = Writer::new(MAGIC);
-    w.u32s(&[cloud.lights.len() as u32, cloud.vertex_count() as u32, cloud.samples, cloud.cluster_count() as u32, cloud.basis as u32]);
+    w.u32s(&[
+        cloud.lights.len() as u32,
+        cloud.vertex_count() as u32,
+        cloud.samples,
+        cloud.cluster_count() as u32,
+        cloud.basis as u32,
+        cloud.zone_count() as u32,
+    ]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
+    w.u32s(&cloud.zone_lights);
+    w.u32s(&cloud.zone_clusters);
     w.u32s(&cloud.assignment);
     w.f32s(&cloud.terms);
     w.f32s(&cloud.coords);
@@ -271,28 +348,45 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "light cloud")?;
-    let [lights, vertices, samples, clusters, basis] =
-        [r.u32("the light count")?, r.u32("the vertex count")?, r.u32("the sample count")?, r.u32("the cluster count")?, r.u32("D")?];
+    let [lights, vertices, samples, clusters, basis, zones] = [
+        r.u32("the light count")?,
+        r.u32("the vertex count")?,
+        r.u32("the sample count")?,
+        r.u32("the cluster count")?,
+        r.u32("D")?,
+        r.u32("the zone count")?,
+    ];
     if vertices as usize != vertex_count(scene)
         || lights == 0
         || lights > MAX_CLOUD_LIGHTS
         || clusters == 0
         || clusters > vertices
         || basis > 1024
+        || zones == 0
+        || zones > clusters.min(lights)
     {
         let problem = format!(
-            "{lights} cloud lights, {vertices} vertices, {clusters} clusters of D = {basis} do not fit the scene's {} vertices",
+            "{lights} cloud lights, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {} vertices",
             vertex_count(scene)
         );
         return Err(fail(&path, problem, REBAKE));
     }
     let positions = r.f32s(lights as usize * 3, "the lights")?;
+    let zone_lights = r.u32s(zones as usize + 1, "the zones' lights")?;
+    let zone_clusters = r.u32s(zones as usize + 1, "the zones' clusters")?;
     let assignment = r.u32s(vertices as usize, "the clusters")?;
-    let terms = r.f32s(clusters as usize * (1 + basis as usize) * lights as usize * 3, "the terms")?;
+    // Each cluster's terms weigh at most every light: more than that is refused unread.
+    let values: usize = zone_lights.windows(2).zip(zone_clusters.windows(2)).fold(0usize, |sum, (l, c)| {
+        let per_cluster = (1 + basis as usize) * 3 * l[1].saturating_sub(l[0]).min(lights) as usize;
+        sum.saturating_add(per_cluster.saturating_mul(c[1].saturating_sub(c[0]).min(clusters) as usize))
+    });
+    let terms = r.f32s(values, "the terms")?;
     let coords = r.f32s(vertices as usize * basis as usize, "the coordinates")?;
     r.finish("the coordinates")?;
     let cloud = LightCloud {
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
+        zone_lights,
+        zone_clusters,
         samples,
         assignment,
         basis: basis as usize,

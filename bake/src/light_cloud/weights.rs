@@ -1,6 +1,7 @@
 //! A user's point light as a weighted sum of cloud lights (004 §6.1): the m nearest cloud
 //! lights visible from it, weighted by Silverman's kernel (1 - d / r)^4, normalised, times the
-//! light's intensity. Several lights add their weights.
+//! light's intensity. Several lights add their weights. With zones (§4.2), each zone has its
+//! own cloud lights and a light stands on the nearest of each zone's.
 //!
 //! r is the distance of the (m + 1)-th nearest visible cloud light (spec light-clouds.md B4):
 //! with the paper's r = d_(m) the m-th weight is always zero, and a light leaving the set
@@ -36,20 +37,30 @@ pub fn refuse_lights(lights: &[Light]) -> Result<(), String> {
 /// Computes weights without allocating once made: its scratch is sized for the cloud.
 pub struct Weigher {
     nearest: usize,
+    /// Zone z's cloud lights are `zone_lights[z]..zone_lights[z + 1]`.
+    zone_lights: Vec<u32>,
     order: Vec<(f32, u32)>,
     chosen: Vec<(f32, u32)>,
     dense: Vec<Vec3>,
 }
 
 impl Weigher {
-    /// For a cloud of `cloud_size` lights, each user light standing on its `nearest` (m)
-    /// nearest visible ones.
+    /// For a cloud of `cloud_size` lights in one zone, each user light standing on its
+    /// `nearest` (m) nearest visible ones.
     pub fn new(cloud_size: usize, nearest: usize) -> Result<Weigher, String> {
+        Weigher::zoned(vec![0, cloud_size as u32], nearest)
+    }
+
+    /// For a cloud in zones (`LightCloud::zone_lights`), each user light standing on the
+    /// `nearest` (m) nearest visible lights of every zone.
+    pub fn zoned(zone_lights: Vec<u32>, nearest: usize) -> Result<Weigher, String> {
+        let cloud_size = zone_lights.last().map_or(0, |&n| n as usize);
         if !(1..=MAX_NEAREST).contains(&nearest) {
             return Err(format!("m = {nearest}: a light stands on 1..={MAX_NEAREST} nearest cloud lights"));
         }
         Ok(Weigher {
             nearest,
+            zone_lights,
             order: Vec::with_capacity(cloud_size),
             chosen: Vec::with_capacity(MAX_NEAREST + 1),
             dense: vec![Vec3::ZERO; cloud_size],
@@ -58,7 +69,7 @@ impl Weigher {
 
     /// The weights of `lights` over `cloud`, in cloud order, zero weights left out, written
     /// to `out`; `visible(from, to)` says whether a segment is unoccluded. Returns how many
-    /// lights saw no cloud light (they add no indirect light: spec B14).
+    /// lights saw no cloud light of some zone (they add no indirect light there: spec B14).
     pub fn weigh(
         &mut self,
         cloud: &[Vec3],
@@ -69,7 +80,13 @@ impl Weigher {
         self.dense.iter_mut().for_each(|w| *w = Vec3::ZERO);
         let mut unseen = 0;
         for light in lights {
-            unseen += usize::from(!self.add(cloud, light.position, light.intensity, &mut visible));
+            let mut seen = true;
+            for zone in 0..self.zone_lights.len() - 1 {
+                let first = self.zone_lights[zone] as usize;
+                let zone_cloud = &cloud[first..self.zone_lights[zone + 1] as usize];
+                seen &= self.add(zone_cloud, first, light.position, light.intensity, &mut visible);
+            }
+            unseen += usize::from(!seen);
         }
         out.clear();
         out.extend(
@@ -78,8 +95,9 @@ impl Weigher {
         unseen
     }
 
-    /// Adds one light's weights; false when no cloud light is visible from it.
-    fn add(&mut self, cloud: &[Vec3], position: Vec3, intensity: Vec3, visible: &mut impl FnMut(Vec3, Vec3) -> bool) -> bool {
+    /// Adds one light's weights over one zone's cloud lights (`first` the first's index); false
+    /// when none is visible from it.
+    fn add(&mut self, cloud: &[Vec3], first: usize, position: Vec3, intensity: Vec3, visible: &mut impl FnMut(Vec3, Vec3) -> bool) -> bool {
         self.order.clear();
         self.order.extend(cloud.iter().enumerate().map(|(j, p)| (p.distance(position), j as u32)));
         self.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -100,7 +118,7 @@ impl Weigher {
         for &(d, j) in used {
             // Every used light at distance r (ties): equal weights (spec B4).
             let share = if total > 0.0 { kernel(d) / total } else { 1.0 / used.len() as f32 };
-            self.dense[j as usize] += intensity * share;
+            self.dense[first + j as usize] += intensity * share;
         }
         true
     }

@@ -39,7 +39,38 @@ const CLUSTERS: Param =
 const VECTORS: Param = Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, 1024, Default::Value("8"));
 const UNCOMPRESSED: Param = Param::flag("uncompressed", "keep every vertex's transfer (one cluster per vertex, no basis)");
 
-const PARAMS: [&Param; 5] = [&SAMPLES, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST];
+const ZONES: Param = Param::count(
+    "zones",
+    "zones of vertices, each with its own reduced cloud and clusters (004 §4.2: split at the median of the longest axis)",
+    1,
+    256,
+    Default::Value("8"),
+);
+const W1: Param = Param::number(
+    "w1",
+    "light clustering's distance weight, per scene diagonal (004 eq. 9; Table 1's Cornell box: 0.5)",
+    (0.0, 1e6, false),
+    Default::Value("0.5"),
+);
+const W2: Param = Param::number(
+    "w2",
+    "light clustering's response weight, per largest transfer value (004 eq. 9; Table 1's Cornell box: 20)",
+    (0.0, 1e6, false),
+    Default::Value("20"),
+);
+const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
+
+const PARAMS: [&Param; 9] = [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST];
+
+/// The zones and light clustering the flags ask for.
+fn reduction(values: &Values) -> Result<lc::Reduction> {
+    let clustering = !values.given(&NO_LIGHT_CLUSTERING);
+    if !clustering && (values.given(&W1) || values.given(&W2)) {
+        anyhow::bail!("--w1 and --w2 weigh light clustering: give them without --no-light-clustering");
+    }
+    let weights = clustering.then(|| (values.number(&W1) as f32, values.number(&W2) as f32));
+    Ok(lc::Reduction { zones: values.count(&ZONES) as usize, weights })
+}
 
 /// The clusters and vectors the flags ask for; None: uncompressed.
 fn compression(values: &Values) -> Result<Option<(usize, usize)>> {
@@ -115,34 +146,46 @@ impl Method for LightCloudMethod {
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
         let grid = checked(scene)?.grid;
         let compression = compression(values)?;
+        let reduction = reduction(values)?;
         let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, work };
         let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
         let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
         let raw_bytes = gathered.terms.len() * 4;
+        let reduced = stages.timed("light clustering", || lc::reduce(scene, &bvh, &gathered, reduction)).map_err(at)?;
         let (cloud, error) = match compression {
-            None => (gathered, 0.0),
+            None => (reduced.cloud, 0.0),
             Some((clusters, vectors)) => {
-                let cloud = stages.timed("cpca", || lc::compress(&gathered, clusters, vectors)).map_err(at)?;
-                let error = lc::relative_error(&gathered, &cloud);
+                let cloud = stages.timed("cpca", || lc::compress(&reduced.cloud, clusters, vectors)).map_err(at)?;
+                let error = lc::relative_error(&reduced.cloud, &cloud);
                 (cloud, error)
             }
         };
+        let per_zone: Vec<usize> = (0..cloud.zone_count()).map(|z| cloud.zone_light_range(z).len()).collect();
         let bytes = (cloud.terms.len() + cloud.coords.len() + cloud.assignment.len()) * 4;
+        let cloud_lights = gathered.lights.len();
+        let mean_per_zone = per_zone.iter().sum::<usize>() as f64 / per_zone.len() as f64;
+        let (fewest, most) = (per_zone.iter().min().copied().unwrap_or(0), per_zone.iter().max().copied().unwrap_or(0));
         let facts = json!({
-            "cloud_lights": cloud.lights.len(),
+            "cloud_lights": cloud_lights,
             "grid_points": settings.grid.points().len(),
             "vertices": cloud.vertex_count(),
+            "zones": cloud.zone_count(),
+            "lights_per_zone": per_zone,
             "clusters": cloud.cluster_count(),
             "vectors": cloud.basis,
+            "light_clustering_error": reduced.relative_error,
             "relative_error": error,
         });
         let mut summary = format!(
-            "{} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex; {} clusters of D = {}, relative error {error:.4}, {:.2} MiB -> {:.2} MiB\n",
-            cloud.lights.len(),
+            "{cloud_lights} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex\n\
+             {} zones of {fewest}..{most} lights (mean {mean_per_zone:.1}) after light clustering, relative error {:.4}\n\
+             {} clusters of D = {}, relative error {error:.4}; {:.2} MiB -> {:.2} MiB\n",
             settings.grid.points().len(),
             cloud.vertex_count(),
             cloud.samples,
+            cloud.zone_count(),
+            reduced.relative_error,
             cloud.cluster_count(),
             cloud.basis,
             raw_bytes as f64 / (1 << 20) as f64,
@@ -158,12 +201,19 @@ impl Method for LightCloudMethod {
             sections: vec![lc::section(&cloud, facts)],
             parameters: json!({
                 "samples": settings.samples,
+                "zones": reduction.zones,
+                "light_clustering": reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
                 "clusters": compression.map(|c| c.0),
                 "vectors": compression.map(|c| c.1),
                 "grid": { "box": [settings.grid.min.to_array(), settings.grid.max.to_array()], "counts": settings.grid.counts },
             }),
             stats: json!({
-                "cloud_lights": cloud.lights.len(),
+                "cloud_lights": cloud_lights,
+                "zones": cloud.zone_count(),
+                "lights_per_zone_mean": mean_per_zone,
+                "lights_per_zone_min": fewest,
+                "lights_per_zone_max": most,
+                "light_clustering_error": reduced.relative_error,
                 "vertices": cloud.vertex_count(),
                 "samples": cloud.samples,
                 "clusters": cloud.cluster_count(),

@@ -2,9 +2,10 @@
 //! this frame's cloud-light weights, x^m = X^m w and b_d = B_d w
 //! (relume_bake::light_cloud::LightCloud::cluster_sums on the CPU).
 //!
-//! Reads: the terms, the weights (rewritten in the command stream just before). Writes: the
-//! cluster-sums buffer, C (1 + D) vec4. Cost: one invocation per term, each reading 12 bytes
-//! per non-zero weight (m per user light at most), in a fixed order.
+//! Reads: the terms, the cluster table, the weights (rewritten in the command stream just
+//! before). Writes: the cluster-sums buffer, C (1 + D) vec4. Cost: one invocation per term,
+//! each reading every non-zero weight (m per user light and zone at most) in a fixed order and
+//! 12 bytes of terms for each of its zone's.
 
 use super::Buffers;
 use crate::passes::compute::{ComputePass, Slot};
@@ -16,29 +17,31 @@ use crate::vk::{Access, CommandRecorder, Tracker, VkResult};
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ClusterSumsPush {
     term_count: u32,
-    light_count: u32,
+    terms: u32,
     weight_count: u32,
 }
 
 pub(super) struct ClusterSumsPass {
     pass: ComputePass,
     term_count: u32,
-    light_count: u32,
+    terms: u32,
 }
 
 impl ClusterSumsPass {
-    pub fn new(shared: &Shared, buffers: &Buffers, term_count: u32, light_count: u32) -> VkResult<ClusterSumsPass> {
+    /// `terms`: 1 + D, the terms of each cluster.
+    pub fn new(shared: &Shared, buffers: &Buffers, term_count: u32, terms: u32) -> VkResult<ClusterSumsPass> {
         let slots = [
             Slot::Buffer(&buffers.terms, Access::ComputeStorageRead),
             Slot::Updated(&buffers.weights),
             Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageWrite),
+            Slot::Buffer(&buffers.clusters, Access::ComputeStorageRead),
         ];
         let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, 12, &slots)?;
-        Ok(ClusterSumsPass { pass, term_count, light_count })
+        Ok(ClusterSumsPass { pass, term_count, terms })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, weight_count: u32) {
-        let push = ClusterSumsPush { term_count: self.term_count, light_count: self.light_count, weight_count };
+        let push = ClusterSumsPush { term_count: self.term_count, terms: self.terms, weight_count };
         self.pass.dispatch(rec, tracker, 0, &push, [self.term_count.div_ceil(64), 1, 1]);
     }
 }

@@ -5,14 +5,16 @@
 //! triangles: 004 §5's blending, Gouraud-style).
 //!
 //! Uploaded at creation (device-local, never written again), the bake's layout:
-//! - `terms`: packed f32 rgb, `[cluster][term][cloud light]` (term 0 the mean, d the basis
-//!   vector B_d);
+//! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's cloud light]` (term 0 the
+//!   mean, d the basis vector B_d);
+//! - `clusters`: per cluster 4 u32, where its terms start and its zone's first light and light
+//!   count;
 //! - `assignment`: one u32 cluster per vertex;
 //! - `coords`: D f32 per vertex.
 //!
 //! Written every frame:
-//! - `weights` (in the command stream, before the passes): up to one per cloud light, the
-//!   weight (candela, rgb f32) and the light's index (u32);
+//! - `weights` (in the command stream, before the passes): up to one per cloud light (of every
+//!   zone), the weight (candela, rgb f32) and the light's index (u32);
 //! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) vec4, rgb x^m then b_d;
 //! - `irradiance` by `reconstruct` (reconstruct.rs): one vec4 per vertex, rgb lux.
 //!
@@ -53,8 +55,19 @@ struct GpuWeight {
     light: u32,
 }
 
+/// A cluster's layout as `cluster_sums.comp` reads it (std430: 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuCluster {
+    offset: u32,
+    first_light: u32,
+    lights: u32,
+    unused: u32,
+}
+
 struct Buffers {
     terms: Buffer,
+    clusters: Buffer,
     assignment: Buffer,
     coords: Buffer,
     weights: Buffer,
@@ -143,13 +156,19 @@ impl MakeTechnique for LightCloudData<'_> {
         let cloud = self.cloud;
         check(ctx, cloud, shared.gpu_scene.vertex_count())?;
         refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
-        let weigher = Weigher::new(cloud.lights.len(), self.nearest).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
+        let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
+        let clusters: Vec<GpuCluster> = cloud
+            .layout()
+            .iter()
+            .map(|c| GpuCluster { offset: c.offset as u32, first_light: c.first_light, lights: c.lights, unused: 0 })
+            .collect();
         // A storage buffer may not be empty: D = 0 binds one unread coordinate.
         let coords: &[f32] = if cloud.coords.is_empty() { &[0.0] } else { &cloud.coords };
-        let [terms, assignment, coords] = upload_buffers_blocking(
+        let [terms, clusters, assignment, coords] = upload_buffers_blocking(
             ctx,
             [
                 ("light cloud terms", bytemuck::cast_slice(&cloud.terms)),
+                ("light cloud clusters", bytemuck::cast_slice(&clusters)),
                 ("light cloud assignment", bytemuck::cast_slice(&cloud.assignment)),
                 ("light cloud coordinates", bytemuck::cast_slice(coords)),
             ],
@@ -161,6 +180,7 @@ impl MakeTechnique for LightCloudData<'_> {
         };
         let buffers = Buffers {
             terms,
+            clusters,
             assignment,
             coords,
             weights: Buffer::new(
@@ -174,7 +194,7 @@ impl MakeTechnique for LightCloudData<'_> {
             irradiance: per_frame("light cloud irradiance", cloud.vertex_count() as u64 * 16)?,
         };
         let mut technique = LightCloudTechnique {
-            cluster_sums: ClusterSumsPass::new(shared, &buffers, term_count, cloud.lights.len() as u32)?,
+            cluster_sums: ClusterSumsPass::new(shared, &buffers, term_count, 1 + cloud.basis as u32)?,
             reconstruct: ReconstructPass::new(shared, &buffers, cloud.vertex_count() as u32, cloud.basis as u32)?,
             buffers,
             cloud: cloud.lights.clone(),
@@ -202,7 +222,13 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
     }
     // Every buffer the passes bind, in bytes, and the workgroups of each dispatch.
     let terms = (cloud.cluster_count() * (1 + cloud.basis)) as u64;
-    let bytes = [cloud.terms.len() as u64 * 4, cloud.coords.len() as u64 * 4, cloud.vertex_count() as u64 * 16, terms * 16];
+    let bytes = [
+        cloud.terms.len() as u64 * 4,
+        cloud.coords.len() as u64 * 4,
+        cloud.vertex_count() as u64 * 16,
+        terms * 16,
+        cloud.cluster_count() as u64 * 16,
+    ];
     let limit = ctx.info.max_storage_buffer_range;
     if bytes.iter().any(|&b| b > limit) || cloud.terms.len() as u64 > u32::MAX as u64 {
         return refuse(format!(

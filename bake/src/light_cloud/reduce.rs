@@ -1,0 +1,241 @@
+//! Zones and light clustering (004 §4.1-4.2): the scene's vertices split into zones, and in
+//! each zone the cloud's lights merged where the zone's vertices cannot tell them apart, so
+//! that each zone keeps fewer lights than the cloud.
+//!
+//! - Zones (spec light-clouds.md B7): the zone with the most vertices is split at the median
+//!   of its vertices along the longest axis of their box, until there are as many zones as
+//!   asked (or no zone has two vertices).
+//! - The metric (004 eq. 9): Delta_jk = w1 |p_j - p_k| / diagonal + w2 max_(v, rgb)
+//!   |X_vj - X_vk| / X_max + V_jk, the maximum over the zone's vertices, V_jk = 1 when the two
+//!   lights do not see each other. The paper only says w1 scales with 1 / (scene size) and w2
+//!   with 1 / (largest intensity): relume divides by the scene's diagonal and by the largest
+//!   transfer value of the whole cloud, so Table 1's weights (0.5 / 20 for the Cornell box)
+//!   carry over.
+//! - The merge (§4.1, spec B2): complete linkage. Two groups merge only if every pair across
+//!   them has Delta < 1; the closest such pair of groups merges first (ties to the lowest
+//!   indices), until none is left.
+//! - The merged light (spec B3): its members' mean position (the member nearest it when the
+//!   mean does not see every member), and per vertex the mean of its members' transfer.
+
+use super::LightCloud;
+use crate::bvh::SceneBvh;
+use crate::scene::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// How a gathered cloud is reduced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reduction {
+    pub zones: usize,
+    /// Light clustering's weights (004 eq. 9); None: every zone keeps every cloud light.
+    pub weights: Option<(f32, f32)>,
+}
+
+/// A reduced cloud (uncompressed, by zone) and what the reduction cost.
+pub struct Reduced {
+    pub cloud: LightCloud,
+    /// Per zone, the cloud lights each of its lights stands for (ascending, by first member).
+    pub groups: Vec<Vec<Vec<u32>>>,
+    /// sqrt(sum |X_vj - X'_v(j)|^2 / sum |X_vj|^2) over every vertex and cloud light j, X'_v(j)
+    /// the transfer of the merged light that stands for j in v's zone.
+    pub relative_error: f64,
+}
+
+/// Splits a gathered cloud (one zone, uncompressed) into zones and clusters each zone's
+/// lights.
+pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction) -> Result<Reduced, String> {
+    if gathered.basis != 0 || gathered.zone_count() != 1 || gathered.cluster_count() != gathered.vertex_count() {
+        return Err("only a gathered cloud (one zone, uncompressed) can be reduced".into());
+    }
+    if reduction.zones == 0 {
+        return Err("zones must be at least 1".into());
+    }
+    if let Some((w1, w2)) = reduction.weights {
+        if !(w1.is_finite() && w2.is_finite() && w1 >= 0.0 && w2 >= 0.0) {
+            return Err(format!("light clustering's weights w1 = {w1}, w2 = {w2} must be finite and >= 0"));
+        }
+    }
+    let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
+    let zones = split_zones(&positions, reduction.zones);
+    let n = gathered.lights.len();
+    let row = |v: u32| &gathered.terms[v as usize * 3 * n..][..3 * n];
+    let groups: Vec<Vec<Vec<u32>>> = match reduction.weights {
+        None => vec![(0..n as u32).map(|j| vec![j]).collect(); zones.len()],
+        Some((w1, w2)) => {
+            let (lo, hi) = scene.settings.bounds;
+            let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
+            let largest = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
+            let base = pair_base(bvh, &gathered.lights, w1 / diagonal);
+            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, n, w2 / largest))).collect()
+        }
+    };
+    let (mut lights, mut zone_lights, mut zone_clusters) = (Vec::new(), vec![0u32], vec![0u32]);
+    let (mut terms, mut assignment, mut cluster) = (Vec::new(), vec![0u32; gathered.vertex_count()], 0u32);
+    let (mut error, mut total) = (0f64, 0f64);
+    for (zone, groups) in zones.iter().zip(&groups) {
+        lights.extend(groups.iter().map(|g| merged_position(bvh, &gathered.lights, g)));
+        zone_lights.push(lights.len() as u32);
+        for &v in zone {
+            assignment[v as usize] = cluster;
+            cluster += 1;
+            let x = row(v);
+            for group in groups {
+                let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + Vec3::from_slice(&x[3 * j as usize..][..3])) / group.len() as f32;
+                terms.extend(mean.to_array());
+                for &j in group {
+                    let xj = Vec3::from_slice(&x[3 * j as usize..][..3]).as_dvec3();
+                    error += (xj - mean.as_dvec3()).length_squared();
+                    total += xj.length_squared();
+                }
+            }
+        }
+        zone_clusters.push(cluster);
+    }
+    let cloud =
+        LightCloud { lights, zone_lights, zone_clusters, samples: gathered.samples, assignment, basis: 0, terms, coords: Vec::new() };
+    cloud.validate()?;
+    Ok(Reduced { cloud, groups, relative_error: if total > 0.0 { (error / total).sqrt() } else { 0.0 } })
+}
+
+/// The vertices of each zone (each list ascending): the zone with the most vertices is split
+/// at its median along the longest axis of its vertices' box, ties to the lower zone and axis.
+pub fn split_zones(positions: &[Vec3], zones: usize) -> Vec<Vec<u32>> {
+    let mut out = vec![(0..positions.len() as u32).collect::<Vec<u32>>()];
+    while out.len() < zones {
+        let (largest, _) = out.iter().enumerate().fold((0, 0), |best, (z, m)| if m.len() > best.1 { (z, m.len()) } else { best });
+        if out[largest].len() < 2 {
+            break;
+        }
+        let members = &mut out[largest];
+        let (lo, hi) = members
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(positions[v as usize]), hi.max(positions[v as usize])));
+        let extent = hi - lo;
+        let axis = (0..3).fold(0, |a, k| if extent[k] > extent[a] { k } else { a });
+        members.sort_by(|&a, &b| positions[a as usize][axis].total_cmp(&positions[b as usize][axis]).then(a.cmp(&b)));
+        let mut upper = members.split_off(members.len() / 2);
+        members.sort_unstable();
+        upper.sort_unstable();
+        out.push(upper);
+    }
+    out
+}
+
+/// A symmetric n x n matrix, row-major, from its upper triangle: `pair(j, k)` for j < k.
+fn symmetric(n: usize, pair: impl Fn(usize, usize) -> f32 + Sync) -> Vec<f32> {
+    let upper: Vec<Vec<f32>> = (0..n).into_par_iter().map(|j| (j + 1..n).map(|k| pair(j, k)).collect()).collect();
+    let mut matrix = vec![0f32; n * n];
+    for (j, row) in upper.iter().enumerate() {
+        for (k, &value) in (j + 1..n).zip(row) {
+            matrix[j * n + k] = value;
+            matrix[k * n + j] = value;
+        }
+    }
+    matrix
+}
+
+/// Per pair of cloud lights, the part of eq. (9) every zone shares: `w1` times their distance,
+/// plus 1 when they do not see each other (V_jk).
+fn pair_base(bvh: &SceneBvh, lights: &[Vec3], w1: f32) -> Vec<f32> {
+    symmetric(lights.len(), |j, k| {
+        let hidden = !bvh.visible(lights[j], lights[k]);
+        w1 * lights[j].distance(lights[k]) + if hidden { 1.0 } else { 0.0 }
+    })
+}
+
+/// Eq. (9) for one zone: the shared part plus `w2` times the largest difference of the two
+/// lights' transfer over the zone's vertices and rgb.
+fn zone_metric<'a>(base: &[f32], zone: &[u32], row: &impl Fn(u32) -> &'a [f32], n: usize, w2: f32) -> Vec<f32> {
+    // Light-major copies of the zone's rows: each pair then compares two contiguous slices.
+    let mut columns = vec![0f32; n * 3 * zone.len()];
+    for (k, &v) in zone.iter().enumerate() {
+        for (j, rgb) in row(v).chunks_exact(3).enumerate() {
+            columns[(j * zone.len() + k) * 3..][..3].copy_from_slice(rgb);
+        }
+    }
+    let len = 3 * zone.len();
+    symmetric(n, |j, k| {
+        let (a, b) = (&columns[j * len..][..len], &columns[k * len..][..len]);
+        let difference = a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+        base[j * n + k] + w2 * difference
+    })
+}
+
+/// A metric value as a heap key: total order, NaN last.
+#[derive(Clone, Copy, PartialEq)]
+struct Key(f32);
+
+impl Eq for Key {}
+
+impl PartialOrd for Key {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Key {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
+/// Complete-linkage clustering of `n` items by the symmetric row-major `metric`: groups merge,
+/// closest first (ties to the lowest indices), while some pair of groups has every cross pair
+/// below 1 (004 §4.1, spec B2). The groups, each ascending, ordered by their first member.
+pub fn complete_linkage(n: usize, metric: &[f32]) -> Vec<Vec<u32>> {
+    let mut distance = metric.to_vec();
+    let mut members: Vec<Vec<u32>> = (0..n as u32).map(|j| vec![j]).collect();
+    let mut heap = BinaryHeap::new();
+    for j in 0..n {
+        for k in j + 1..n {
+            if distance[j * n + k] < 1.0 {
+                heap.push(Reverse((Key(distance[j * n + k]), j, k)));
+            }
+        }
+    }
+    while let Some(Reverse((Key(d), g, h))) = heap.pop() {
+        // Skip pairs whose group merged away or whose distance grew since.
+        if members[g].is_empty() || members[h].is_empty() || distance[g * n + h] != d {
+            continue;
+        }
+        let moved = std::mem::take(&mut members[h]);
+        members[g].extend(moved);
+        for k in (0..n).filter(|&k| k != g && !members[k].is_empty()) {
+            // The complete linkage: the merged group's distance is the farther of the two.
+            let merged = distance[g * n + k].max(distance[h * n + k]);
+            let grew = merged != distance[g * n + k];
+            distance[g * n + k] = merged;
+            distance[k * n + g] = merged;
+            if grew && merged < 1.0 {
+                heap.push(Reverse((Key(merged), g.min(k), g.max(k))));
+            }
+        }
+    }
+    let mut groups: Vec<Vec<u32>> = members.into_iter().filter(|m| !m.is_empty()).collect();
+    groups.iter_mut().for_each(|g| g.sort_unstable());
+    groups.sort_unstable_by_key(|g| g[0]);
+    groups
+}
+
+/// The merged light's position: its members' mean, or the member nearest the mean (ties to the
+/// lowest) when the mean does not see every member.
+fn merged_position(bvh: &SceneBvh, lights: &[Vec3], group: &[u32]) -> Vec3 {
+    let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + lights[j as usize]) / group.len() as f32;
+    if group.iter().all(|&j| bvh.visible(mean, lights[j as usize])) {
+        return mean;
+    }
+    let nearest =
+        group.iter().fold(
+            group[0],
+            |best, &j| {
+                if lights[j as usize].distance(mean) < lights[best as usize].distance(mean) {
+                    j
+                } else {
+                    best
+                }
+            },
+        );
+    lights[nearest as usize]
+}
