@@ -35,6 +35,41 @@ fn check_sizes(image: &Image, reference: &Image) -> Result<(), ImageError> {
     })
 }
 
+/// Side of the pixel blocks flicker averages over: popping is spatially coherent, the
+/// reference's Monte Carlo noise is not, and averaging 4 x 4 blocks cuts the noise 4 times.
+const FLICKER_BLOCK: u32 = 4;
+
+/// Popping between consecutive frames (docs/BENCH.md): the part of the method's
+/// frame-to-frame change that the reference does not have, averaged over blocks of pixels, RMS
+/// over blocks and channels, relative to the RMS of the reference's blocks. The four images
+/// are of one size (the caller's).
+pub fn flicker(before: &Image, after: &Image, reference_before: &Image, reference_after: &Image) -> f64 {
+    let change = |i: usize| (after.pixels[i] - before.pixels[i]) - (reference_after.pixels[i] - reference_before.pixels[i]);
+    let (changes, reference) =
+        (block_means(after.width, after.height, change), block_means(after.width, after.height, |i| reference_after.pixels[i]));
+    let squares = |blocks: &[Vec3]| blocks.iter().map(|b| b.length_squared() as f64).sum::<f64>();
+    let reference = squares(&reference);
+    if reference > 0.0 {
+        (squares(&changes) / reference).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The mean of `value(pixel index)` over each FLICKER_BLOCK square (partial at the edges).
+fn block_means(width: u32, height: u32, value: impl Fn(usize) -> Vec3) -> Vec<Vec3> {
+    let mut blocks = Vec::new();
+    for by in (0..height).step_by(FLICKER_BLOCK as usize) {
+        for bx in (0..width).step_by(FLICKER_BLOCK as usize) {
+            let pixels: Vec<usize> = (by..(by + FLICKER_BLOCK).min(height))
+                .flat_map(|y| (bx..(bx + FLICKER_BLOCK).min(width)).map(move |x| (y * width + x) as usize))
+                .collect();
+            blocks.push(pixels.iter().map(|&i| value(i)).sum::<Vec3>() / pixels.len() as f32);
+        }
+    }
+    blocks
+}
+
 /// RMSE and NRMSE of `image` against `reference`; non-finite pixels are counted, not summed.
 pub fn compare(image: &Image, reference: &Image) -> Result<ErrorStats, ImageError> {
     check_sizes(image, reference)?;
@@ -147,6 +182,14 @@ mod tests {
 
     fn flat(value: Vec3) -> Image {
         Image { width: 2, height: 2, pixels: vec![value; 4] }
+    }
+
+    #[test]
+    fn flicker_counts_only_change_the_reference_lacks() {
+        let image = |v: f32| Image { width: 2, height: 1, pixels: vec![Vec3::splat(v); 2] };
+        assert_eq!(flicker(&image(1.0), &image(2.0), &image(1.0), &image(2.0)), 0.0);
+        let popped = flicker(&image(1.0), &image(3.0), &image(1.0), &image(2.0));
+        assert!((popped - 0.5).abs() < 1e-9, "{popped}");
     }
 
     #[test]

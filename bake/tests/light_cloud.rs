@@ -254,3 +254,56 @@ fn the_section_round_trips_and_refuses_values_out_of_range() {
     assert!(read(&cloud, &other).unwrap_err().contains("scene"), "another scene is refused");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Spec light-clouds.md B5: a door closes between a moving light and half the cloud (cloud
+/// lights at x < 2 drop out of sight once the light passes y = 2). Cut after cut, their weights
+/// vanish in one step; moving continuously at 60 frames a second with a 0.25 s fade, no
+/// frame's change is more than a fraction of that, the weights still sum to the intensity, and
+/// once the light stands still for the fade they equal the settled weights.
+#[test]
+fn a_fade_spreads_a_visibility_change_over_its_duration() {
+    let cloud = grid_cloud();
+    let visible = |a: Vec3, b: Vec3| !(b.x < 2.0 && a.y > 2.0);
+    let intensity = Vec3::new(1.0, 2.0, 0.5);
+    let path: Vec<Vec3> = (0..=60).map(|k| Vec3::new(2.1, 1.7 + 0.01 * k as f32, 1.9)).collect();
+    let dense = |weights: &[CloudWeight]| {
+        let mut d = vec![0f32; cloud.len()];
+        weights.iter().for_each(|w| d[w.light as usize] = w.weight.y);
+        d
+    };
+    let largest_step = |fade: f32, continuous: bool| {
+        let mut weigher = Weigher::new(cloud.len(), 8).unwrap().with_fade(fade).unwrap();
+        let (mut out, mut previous, mut worst) = (Vec::new(), None::<Vec<f32>>, 0f32);
+        for (k, &p) in path.iter().enumerate() {
+            let elapsed = (continuous && k > 0).then_some(1.0 / 60.0);
+            weigher.weigh_after(&cloud, &[point_light(p, intensity)], visible, elapsed, &mut out);
+            let sum = out.iter().fold(Vec3::ZERO, |s, w| s + w.weight);
+            assert!((sum - intensity).abs().max_element() < 1e-5, "fade {fade}, step {k}: sum {sum}");
+            let now = dense(&out);
+            if let Some(before) = &previous {
+                worst = worst.max(now.iter().zip(before).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max));
+            }
+            previous = Some(now);
+        }
+        worst
+    };
+    let (cut, faded) = (largest_step(0.25, false), largest_step(0.25, true));
+    println!("largest weight change a frame: {cut:.4} by cuts, {faded:.4} fading over 0.25 s");
+    assert!(faded < 0.25 * cut, "fading: {faded} against {cut}");
+    assert_eq!(largest_step(0.0, true), cut, "no fade: continuous moves are cuts");
+    // Standing still past the fade: the settled weights.
+    let end = point_light(*path.last().unwrap(), intensity);
+    let mut weigher = Weigher::new(cloud.len(), 8).unwrap().with_fade(0.25).unwrap();
+    let mut out = Vec::new();
+    weigher.weigh_after(&cloud, &[point_light(path[0], intensity)], visible, None, &mut out);
+    weigher.weigh_after(&cloud, std::slice::from_ref(&end), visible, Some(1.0 / 60.0), &mut out);
+    let mut settled = Vec::new();
+    Weigher::new(cloud.len(), 8).unwrap().weigh(&cloud, std::slice::from_ref(&end), visible, &mut settled);
+    assert_ne!(dense(&out), dense(&settled), "one frame after the door closed, the hidden lights still fade");
+    for _ in 0..15 {
+        weigher.weigh_after(&cloud, std::slice::from_ref(&end), visible, Some(1.0 / 60.0), &mut out);
+    }
+    let (now, settled) = (dense(&out), dense(&settled));
+    assert!(now.iter().zip(&settled).all(|(a, b)| (a - b).abs() < 1e-6), "after the fade: {now:?} against {settled:?}");
+    assert!(Weigher::new(4, 2).unwrap().with_fade(f32::NAN).is_err() && Weigher::new(4, 2).unwrap().with_fade(-1.0).is_err());
+}

@@ -185,5 +185,12 @@ fn a_zoned_transfer_round_trips_and_is_the_same_at_any_thread_count() {
     let sections = vec![lc::section(&zoned, json!({}))];
     BakeOutput { method: "light-cloud", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
     assert_eq!(lc::read(&Artifact::read(&dir).unwrap(), &s).unwrap(), zoned);
+    // Zone starts out of order are refused, naming the file and the zones.
+    let mut disordered = zoned.clone();
+    disordered.zone_lights.swap(1, 2);
+    let sections = vec![lc::section(&disordered, json!({}))];
+    BakeOutput { method: "light-cloud", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
+    let error = lc::read(&Artifact::read(&dir).unwrap(), &s).unwrap_err().to_string();
+    assert!(error.contains("light-cloud.bin") && error.contains("each zone needs lights and clusters"), "{error}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

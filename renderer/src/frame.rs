@@ -246,8 +246,19 @@ impl Renderer {
     /// every technique (`Technique::lights_set`). The next frame recorded carries the new data
     /// in its command buffer, so a frame still in flight is not disturbed.
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
+        self.place_lights(lights, None)
+    }
+
+    /// As [`Renderer::set_lights`] for lights that moved continuously over `seconds` (a frame's
+    /// time): techniques that ease changes over time (a fade as visibility changes) advance by
+    /// it instead of settling at once.
+    pub fn move_lights(&mut self, lights: &[Light], seconds: f32) -> VkResult<()> {
+        self.place_lights(lights, Some(seconds))
+    }
+
+    fn place_lights(&mut self, lights: &[Light], elapsed: Option<f32>) -> VkResult<()> {
         self.scene.set_lights(lights)?;
-        self.techniques.iter_mut().for_each(|t| t.lights_set(lights));
+        self.techniques.iter_mut().for_each(|t| t.lights_set(lights, elapsed));
         Ok(())
     }
 

@@ -94,8 +94,10 @@ pub trait Technique: Any + Send {
 
     /// The lights now stand as `lights` (see `Renderer::set_lights`; at creation, the scene's),
     /// for the frames recorded from now on; a technique whose data follows the lights on the
-    /// CPU updates it here, without allocating.
-    fn lights_set(&mut self, _lights: &[Light]) {}
+    /// CPU updates it here, without allocating. `elapsed`: the seconds since they last stood
+    /// somewhere when they moved continuously (`Renderer::move_lights`), None for a cut: a
+    /// technique that eases changes over time settles at once.
+    fn lights_set(&mut self, _lights: &[Light], _elapsed: Option<f32>) {}
 }
 
 /// A technique's data, ready to become a technique on the device.

@@ -9,7 +9,7 @@ use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::fiv::{self, FivBakeSettings, Grid, SumOptions};
 use relume_bake::light_cloud::{self, LightCloudBakeSettings, LightCloudSceneSettings};
-use relume_bake::scene::Scene;
+use relume_bake::scene::{Light, Scene};
 use relume_bake::testing;
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::fiv::FivData;
@@ -178,10 +178,21 @@ fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
     // In zones of clustered lights, as the method's defaults bake it.
     let reduction = light_cloud::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
     let cloud = light_cloud::compress(&light_cloud::reduce(&scene, &bvh, &cloud, reduction).unwrap().cloud, 32, 8).unwrap();
-    let data = LightCloudData { cloud: &cloud, nearest: 8, visibility: Arc::new(move |a, b| bvh.visible(a, b)) };
+    let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.25, visibility: Arc::new(move |a, b| bvh.visible(a, b)) };
     let ctx = validated_context();
     let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
-    let during = frame_allocations(&mut renderer, &scene, false);
+    // Each frame also moves the light continuously (the fade advancing), from lists made
+    // before the frames.
+    let moved: Vec<Vec<Light>> = (0..10)
+        .map(|k| {
+            let mut lights = scene.lights.clone();
+            lights[0].position += Vec3::new(0.0, -0.01 * k as f32, 0.02 * k as f32);
+            lights
+        })
+        .collect();
+    let during = frame_allocations_with(&mut renderer, &scene, |renderer, frame| {
+        renderer.move_lights(&moved[frame], 1.0 / 60.0).expect("same kinds");
+    });
     drop(renderer);
     assert_clean(ctx);
     assert_eq!(during, 0, "10 frames with a light cloud made {during} heap allocations");

@@ -71,9 +71,9 @@ fn nrmse_along_a_path(ctx: &Arc<Context>, effort: Effort) -> Measured {
     // vectors.
     let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
     let reduced = lc::compress(&lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud, 32, 8).unwrap();
-    let interpolated = LightCloudData { cloud: &cloud, nearest: 8, visibility: Arc::clone(&visibility) };
-    let by_default = LightCloudData { cloud: &reduced, nearest: 8, visibility: Arc::clone(&visibility) };
-    let nearest_one = LightCloudData { cloud: &cloud, nearest: 1, visibility };
+    let interpolated = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
+    let by_default = LightCloudData { cloud: &reduced, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
+    let nearest_one = LightCloudData { cloud: &cloud, nearest: 1, fade_seconds: 0.0, visibility };
     let mut with_cloud = new_renderer(ctx, &scene, &settings(), &[&interpolated]);
     let mut with_reduced = new_renderer(ctx, &scene, &settings(), &[&by_default]);
     let mut only_column = new_renderer(ctx, &scene, &settings(), &[&nearest_one]);

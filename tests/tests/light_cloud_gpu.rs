@@ -33,7 +33,7 @@ fn settings() -> RenderSettings {
 /// light moves in four steps.
 fn gpu_equals_cpu(scene: &Scene, cloud: &LightCloud, visibility: Visibility) {
     let ctx = validated_context();
-    let data = LightCloudData { cloud, nearest: 8, visibility };
+    let data = LightCloudData { cloud, nearest: 8, fade_seconds: 0.0, visibility };
     let mut renderer = new_renderer(&ctx, scene, &settings(), &[&data]);
     let mut lights = scene.lights.clone();
     let mut previous: Option<Vec<Vec3>> = None;
@@ -83,7 +83,7 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
 fn spot_lights_another_scenes_cloud_and_a_bad_m_are_refused_by_name() {
     let (scene, cloud, visibility) = baked();
     let ctx = validated_context();
-    let data = |nearest| LightCloudData { cloud: &cloud, nearest, visibility: Arc::clone(&visibility) };
+    let data = |nearest| LightCloudData { cloud: &cloud, nearest, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
     let mut spot = scene.clone();
     spot.lights = vec![spot_light(Vec3::new(0.0, 0.5, -0.3), Vec3::NEG_Y, Vec3::ONE, 0.3, 0.5)];
     says(&refusal(try_new_renderer(&ctx, &spot, &settings(), &[&data(8)])), &["light cloud", "spot light", "point lights only"]);

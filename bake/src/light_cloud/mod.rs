@@ -231,18 +231,7 @@ impl LightCloud {
         if self.lights.is_empty() || self.lights.len() > MAX_CLOUD_LIGHTS as usize || self.lights.iter().any(|p| !p.is_finite()) {
             return Err(format!("{} cloud lights: must be 1..={MAX_CLOUD_LIGHTS} finite points", self.lights.len()));
         }
-        let prefix = |starts: &[u32], end: usize| {
-            starts.len() >= 2 && starts[0] == 0 && starts.windows(2).all(|w| w[0] < w[1]) && *starts.last().unwrap() as usize == end
-        };
-        if self.zone_clusters.len() != self.zone_lights.len()
-            || !prefix(&self.zone_lights, self.lights.len())
-            || !prefix(&self.zone_clusters, self.cluster_count())
-        {
-            return Err(format!(
-                "zones {:?} of lights and {:?} of clusters: each zone needs lights and clusters, in order",
-                self.zone_lights, self.zone_clusters
-            ));
-        }
+        check_zones(&self.zone_lights, &self.zone_clusters, self.lights.len(), self.cluster_count())?;
         let clusters = self.cluster_count();
         let expected: usize = self.layout().last().map_or(0, |l| l.offset + (1 + self.basis) * 3 * l.lights as usize);
         if self.terms.len() != expected {
@@ -296,6 +285,19 @@ impl LightCloud {
             })
             .collect()
     }
+}
+
+/// Zone starts: as many of lights as of clusters, each from 0, increasing (every zone has
+/// lights and clusters), to `lights` and `clusters`.
+fn check_zones(zone_lights: &[u32], zone_clusters: &[u32], lights: usize, clusters: usize) -> Result<(), String> {
+    let starts =
+        |s: &[u32], end: usize| s.len() >= 2 && s[0] == 0 && s.windows(2).all(|w| w[0] < w[1]) && *s.last().unwrap() as usize == end;
+    if zone_clusters.len() != zone_lights.len() || !starts(zone_lights, lights) || !starts(zone_clusters, clusters) {
+        return Err(format!(
+            "zones {zone_lights:?} of lights and {zone_clusters:?} of clusters: each zone needs lights and clusters, in order"
+        ));
+    }
+    Ok(())
 }
 
 /// The vertices that belong to one triangle only, and all vertices. Per-vertex transfer is
@@ -374,12 +376,13 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let positions = r.f32s(lights as usize * 3, "the lights")?;
     let zone_lights = r.u32s(zones as usize + 1, "the zones' lights")?;
     let zone_clusters = r.u32s(zones as usize + 1, "the zones' clusters")?;
+    check_zones(&zone_lights, &zone_clusters, lights as usize, clusters as usize).map_err(|e| fail(&path, e, REBAKE))?;
     let assignment = r.u32s(vertices as usize, "the clusters")?;
-    // Each cluster's terms weigh at most every light: more than that is refused unread.
-    let values: usize = zone_lights.windows(2).zip(zone_clusters.windows(2)).fold(0usize, |sum, (l, c)| {
-        let per_cluster = (1 + basis as usize) * 3 * l[1].saturating_sub(l[0]).min(lights) as usize;
-        sum.saturating_add(per_cluster.saturating_mul(c[1].saturating_sub(c[0]).min(clusters) as usize))
-    });
+    let values: usize = zone_lights
+        .windows(2)
+        .zip(zone_clusters.windows(2))
+        .map(|(l, c)| (1 + basis as usize) * 3 * (l[1] - l[0]) as usize * (c[1] - c[0]) as usize)
+        .sum();
     let terms = r.f32s(values, "the terms")?;
     let coords = r.f32s(vertices as usize * basis as usize, "the coordinates")?;
     r.finish("the coordinates")?;

@@ -10,7 +10,8 @@
 //!   lights do not see each other. The paper only says w1 scales with 1 / (scene size) and w2
 //!   with 1 / (largest intensity): relume divides by the scene's diagonal and by the largest
 //!   transfer value of the whole cloud, so Table 1's weights (0.5 / 20 for the Cornell box)
-//!   carry over.
+//!   carry over. That value is a maximum: one cloud light a few centimetres from a wall raises
+//!   it and makes every other light's responses look alike (tune w2 per scene, as Table 1 does).
 //! - The merge (§4.1, spec B2): complete linkage. Two groups merge only if every pair across
 //!   them has Delta < 1; the closest such pair of groups merges first (ties to the lowest
 //!   indices), until none is left.
@@ -66,9 +67,9 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
         Some((w1, w2)) => {
             let (lo, hi) = scene.settings.bounds;
             let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
-            let largest = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
+            let scale = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
             let base = pair_base(bvh, &gathered.lights, w1 / diagonal);
-            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, n, w2 / largest))).collect()
+            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, n, w2 / scale))).collect()
         }
     };
     let (mut lights, mut zone_lights, mut zone_clusters) = (Vec::new(), vec![0u32], vec![0u32]);

@@ -34,11 +34,17 @@ pub fn refuse_lights(lights: &[Light]) -> Result<(), String> {
     }
 }
 
-/// Computes weights without allocating once made: its scratch is sized for the cloud.
+/// Computes weights without allocating once made: its scratch is sized for the cloud (and,
+/// at the first weighing, for the number of user lights).
 pub struct Weigher {
     nearest: usize,
     /// Zone z's cloud lights are `zone_lights[z]..zone_lights[z + 1]`.
     zone_lights: Vec<u32>,
+    /// Seconds a cloud light takes to fade in or out as visibility changes; 0 (the default):
+    /// at once.
+    fade_seconds: f32,
+    /// `[user light][cloud light]`: how far each cloud light is faded in for each user light.
+    faded: Vec<f32>,
     order: Vec<(f32, u32)>,
     chosen: Vec<(f32, u32)>,
     dense: Vec<Vec3>,
@@ -61,30 +67,62 @@ impl Weigher {
         Ok(Weigher {
             nearest,
             zone_lights,
+            fade_seconds: 0.0,
+            faded: Vec::new(),
             order: Vec::with_capacity(cloud_size),
             chosen: Vec::with_capacity(MAX_NEAREST + 1),
             dense: vec![Vec3::ZERO; cloud_size],
         })
     }
 
-    /// The weights of `lights` over `cloud`, in cloud order, zero weights left out, written
-    /// to `out`; `visible(from, to)` says whether a segment is unoccluded. Returns how many
-    /// lights saw no cloud light of some zone (they add no indirect light there: spec B14).
+    /// The same, with cloud lights fading in and out over `seconds` as visibility changes
+    /// (0: at once).
+    pub fn with_fade(self, seconds: f32) -> Result<Weigher, String> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(format!("a fade of {seconds} s: must be a finite number of seconds >= 0"));
+        }
+        Ok(Weigher { fade_seconds: seconds, ..self })
+    }
+
+    /// The weights of `lights` over `cloud`, settled (a cut: every fade done), in cloud order,
+    /// zero weights left out, written to `out`; `visible(from, to)` says whether a segment is
+    /// unoccluded. Returns how many lights saw no cloud light of some zone (they add no
+    /// indirect light there: spec B14).
     pub fn weigh(
         &mut self,
         cloud: &[Vec3],
         lights: &[Light],
-        mut visible: impl FnMut(Vec3, Vec3) -> bool,
+        visible: impl FnMut(Vec3, Vec3) -> bool,
         out: &mut Vec<CloudWeight>,
     ) -> usize {
+        self.weigh_after(cloud, lights, visible, None, out)
+    }
+
+    /// As [`Weigher::weigh`], `elapsed` seconds after the last weighing (None: a cut): cloud
+    /// lights that came into or went out of sight fade in or out over the weigher's fade
+    /// (spec light-clouds.md B5: w_j = f_j (1 - d_j / r)^4 before normalising, f_j stepping
+    /// by elapsed / fade towards 1 while j is among the nearest visible, towards 0 after).
+    pub fn weigh_after(
+        &mut self,
+        cloud: &[Vec3],
+        lights: &[Light],
+        mut visible: impl FnMut(Vec3, Vec3) -> bool,
+        elapsed: Option<f32>,
+        out: &mut Vec<CloudWeight>,
+    ) -> usize {
+        // A new number of lights starts settled.
+        let step = match elapsed {
+            Some(dt) if self.fade_seconds > 0.0 && self.faded.len() == lights.len() * cloud.len() => dt.max(0.0) / self.fade_seconds,
+            _ => f32::INFINITY,
+        };
+        self.faded.resize(lights.len() * cloud.len(), 0.0);
         self.dense.iter_mut().for_each(|w| *w = Vec3::ZERO);
         let mut unseen = 0;
-        for light in lights {
+        for (k, light) in lights.iter().enumerate() {
             let mut seen = true;
             for zone in 0..self.zone_lights.len() - 1 {
-                let first = self.zone_lights[zone] as usize;
-                let zone_cloud = &cloud[first..self.zone_lights[zone + 1] as usize];
-                seen &= self.add(zone_cloud, first, light.position, light.intensity, &mut visible);
+                let zone = self.zone_lights[zone] as usize..self.zone_lights[zone + 1] as usize;
+                seen &= self.add(cloud, zone, k * cloud.len(), light, step, &mut visible);
             }
             unseen += usize::from(!seen);
         }
@@ -95,11 +133,20 @@ impl Weigher {
         unseen
     }
 
-    /// Adds one light's weights over one zone's cloud lights (`first` the first's index); false
-    /// when none is visible from it.
-    fn add(&mut self, cloud: &[Vec3], first: usize, position: Vec3, intensity: Vec3, visible: &mut impl FnMut(Vec3, Vec3) -> bool) -> bool {
+    /// Adds one light's weights over one zone's cloud lights (`faded_at`: where the light's
+    /// fade factors start); false when none is visible from it.
+    fn add(
+        &mut self,
+        cloud: &[Vec3],
+        zone: std::ops::Range<usize>,
+        faded_at: usize,
+        light: &Light,
+        step: f32,
+        visible: &mut impl FnMut(Vec3, Vec3) -> bool,
+    ) -> bool {
+        let position = light.position;
         self.order.clear();
-        self.order.extend(cloud.iter().enumerate().map(|(j, p)| (p.distance(position), j as u32)));
+        self.order.extend(zone.clone().map(|j| (cloud[j].distance(position), j as u32)));
         self.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         self.chosen.clear();
         for &(d, j) in &self.order {
@@ -112,13 +159,24 @@ impl Weigher {
         }
         let Some(&(r, _)) = self.chosen.last() else { return false };
         let used = &self.chosen[..self.chosen.len().min(self.nearest)];
+        let faded = &mut self.faded[faded_at + zone.start..faded_at + zone.end];
+        for (f, j) in faded.iter_mut().zip(zone.clone()) {
+            let wanted = used.iter().any(|&(_, u)| u as usize == j);
+            *f = if wanted { (*f + step).min(1.0) } else { (*f - step).max(0.0) };
+        }
         // 004 §6.1: Silverman's kernel, normalised to sum to one.
         let kernel = |d: f32| if r > 0.0 { (1.0 - d / r).max(0.0).powi(4) } else { 1.0 };
-        let total: f32 = used.iter().map(|&(d, _)| kernel(d)).sum();
-        for &(d, j) in used {
+        let weight = |j: usize| faded[j - zone.start] * kernel(cloud[j].distance(position));
+        let total: f32 = zone.clone().map(weight).sum();
+        if total > 0.0 {
+            for j in zone.clone() {
+                self.dense[j] += light.intensity * (weight(j) / total);
+            }
+        } else {
             // Every used light at distance r (ties): equal weights (spec B4).
-            let share = if total > 0.0 { kernel(d) / total } else { 1.0 / used.len() as f32 };
-            self.dense[first + j as usize] += intensity * share;
+            for &(_, j) in used {
+                self.dense[j as usize] += light.intensity / used.len() as f32;
+            }
         }
         true
     }

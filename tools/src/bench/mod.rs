@@ -201,6 +201,8 @@ struct SceneBench<'s> {
     name: String,
     scene: Scene,
     configurations: Vec<Configuration>,
+    /// Seconds between consecutive configurations when the light moves continuously.
+    continuous: Option<f32>,
     references: Vec<Reference>,
     /// Bakes made so far, by method and flags: configurations that differ only at run time
     /// (composition, shadow maps) share one.
@@ -242,7 +244,19 @@ impl<'s> SceneBench<'s> {
             outputs.commit()?;
             references.push(reference);
         }
-        Ok(SceneBench { sweep, ctx, out: &args.out, threads: args.threads, name, scene, configurations, references, bakes: Vec::new() })
+        let continuous = entry.light_path.as_ref().and_then(|p| p.seconds);
+        Ok(SceneBench {
+            sweep,
+            ctx,
+            out: &args.out,
+            threads: args.threads,
+            name,
+            scene,
+            configurations,
+            continuous,
+            references,
+            bakes: Vec::new(),
+        })
     }
 
     /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
@@ -268,7 +282,10 @@ impl<'s> SceneBench<'s> {
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
-            configuration.apply(&mut renderer)?;
+            match (self.continuous, k.checked_sub(1)) {
+                (Some(seconds), Some(before)) => self.configurations[before].move_to(configuration, seconds, &mut renderer)?,
+                _ => configuration.apply(&mut renderer)?,
+            }
             let frames = time_frames(&mut renderer, self.sweep.frames, self.sweep.warmup_seconds)?;
             let image = frame_image(&mut renderer)?;
             configuration.apply(&mut direct_renderer)?;
@@ -276,7 +293,9 @@ impl<'s> SceneBench<'s> {
             let scored = self.score(k, &image, &direct, &self.point_id(config, k))?;
             let accuracy = scored.as_ref().ok().copied();
             let flicker = match (&previous, &accuracy) {
-                (Some(before), Some(_)) => Some(flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined)),
+                (Some(before), Some(_)) => {
+                    Some(metrics::flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined))
+                }
                 _ => None,
             };
             rows.push(Row {
@@ -447,6 +466,21 @@ impl Configuration {
         renderer.set_lights(&self.lights)?;
         Ok(())
     }
+
+    /// The lights moved from this configuration to `next` over `seconds`, in steps of 1/60 s
+    /// along the straight line between (light paths only).
+    fn move_to(&self, next: &Configuration, seconds: f32, renderer: &mut Renderer) -> Result<()> {
+        let steps = (seconds * 60.0).round().max(1.0) as usize;
+        let mut lights = self.lights.clone();
+        for step in 1..=steps {
+            let t = step as f32 / steps as f32;
+            for ((light, from), to) in lights.iter_mut().zip(&self.lights).zip(&next.lights) {
+                light.position = from.position.lerp(to.position, t);
+            }
+            renderer.move_lights(&lights, seconds / steps as f32)?;
+        }
+        Ok(())
+    }
 }
 
 /// The scene as it is, or one light or one mesh moved along the sweep's path.
@@ -510,40 +544,6 @@ fn count_non_finite(image: &Image) -> usize {
     image.pixels.iter().filter(|p| !p.is_finite()).count()
 }
 
-/// Side of the pixel blocks flicker averages over: popping is spatially coherent, the
-/// reference's Monte Carlo noise is not, and averaging 4 x 4 blocks cuts the noise 4 times.
-const FLICKER_BLOCK: u32 = 4;
-
-/// Popping (docs/BENCH.md): the part of the method's frame-to-frame change that the
-/// reference does not have, averaged over blocks of pixels, RMS over blocks and channels,
-/// relative to the RMS of the reference's blocks.
-fn flicker(before: &Image, after: &Image, reference_before: &Image, reference_after: &Image) -> f64 {
-    let change = |i: usize| (after.pixels[i] - before.pixels[i]) - (reference_after.pixels[i] - reference_before.pixels[i]);
-    let (changes, reference) =
-        (block_means(after.width, after.height, change), block_means(after.width, after.height, |i| reference_after.pixels[i]));
-    let squares = |blocks: &[Vec3]| blocks.iter().map(|b| b.length_squared() as f64).sum::<f64>();
-    let reference = squares(&reference);
-    if reference > 0.0 {
-        (squares(&changes) / reference).sqrt()
-    } else {
-        0.0
-    }
-}
-
-/// The mean of `value(pixel index)` over each FLICKER_BLOCK square (partial at the edges).
-fn block_means(width: u32, height: u32, value: impl Fn(usize) -> Vec3) -> Vec<Vec3> {
-    let mut blocks = Vec::new();
-    for by in (0..height).step_by(FLICKER_BLOCK as usize) {
-        for bx in (0..width).step_by(FLICKER_BLOCK as usize) {
-            let pixels: Vec<usize> = (by..(by + FLICKER_BLOCK).min(height))
-                .flat_map(|y| (bx..(bx + FLICKER_BLOCK).min(width)).map(move |x| (y * width + x) as usize))
-                .collect();
-            blocks.push(pixels.iter().map(|&i| value(i)).sum::<Vec3>() / pixels.len() as f32);
-        }
-    }
-    blocks
-}
-
 /// A label as part of a file name: letters, digits, '-', '.', the rest '_'.
 fn sanitize(label: &str) -> String {
     label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
@@ -552,14 +552,6 @@ fn sanitize(label: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn flicker_counts_only_change_the_reference_lacks() {
-        let image = |v: f32| Image { width: 2, height: 1, pixels: vec![Vec3::splat(v); 2] };
-        assert_eq!(flicker(&image(1.0), &image(2.0), &image(1.0), &image(2.0)), 0.0);
-        let popped = flicker(&image(1.0), &image(3.0), &image(1.0), &image(2.0));
-        assert!((popped - 0.5).abs() < 1e-9, "{popped}");
-    }
 
     #[test]
     fn a_nan_pixel_fails_the_point_and_is_counted() {

@@ -75,6 +75,11 @@ pub(crate) struct LightPath {
     /// length along it, both ends included.
     pub points: Vec<[f32; 3]>,
     pub frames: u32,
+    /// Seconds the light takes from one position to the next, moved in steps of 1/60 s
+    /// (`Renderer::move_lights`: what eases over time, a fade, sees the motion); without, each
+    /// position is a cut.
+    #[serde(default)]
+    pub seconds: Option<f32>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -146,6 +151,9 @@ impl Sweep {
             }
             if let Some(j) = self.scenes[..i].iter().position(|other| other.name() == name) {
                 bail!("scenes[{j}] and scenes[{i}] are both named \"{name}\": give each its own `name`");
+            }
+            if scene.light_path.as_ref().and_then(|p| p.seconds).is_some_and(|s| !(s > 0.0 && s <= 60.0)) {
+                bail!("scenes[{i}].light_path.seconds must be a number of seconds in (0, 60]");
             }
             if scene.occluder_path.as_ref().is_some_and(|p| !p.turn_degrees.is_finite()) {
                 bail!("scenes[{i}].occluder_path.turn_degrees must be a finite number of degrees");
@@ -234,6 +242,7 @@ mod tests {
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 2, turn_degrees = nan }\n[[methods]]\nmethod = 'direct'", "turn_degrees must be a finite"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 2, seconds = 0 }\n[[methods]]\nmethod = 'direct'", "light_path.seconds must be"),
         ] {
             let path = dir.join("sweep.toml");
             std::fs::write(&path, text).unwrap();

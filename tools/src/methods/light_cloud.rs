@@ -34,6 +34,14 @@ const NEAREST: Param = Param::count(
 )
 .at_render();
 
+const FADE: Param = Param::number(
+    "fade",
+    "seconds a cloud light takes to fade in or out as it comes into or leaves a moving light's sight (spec B5's 0.25 measured no better: docs/BENCHMARKS.md)",
+    (0.0, 60.0, false),
+    Default::Value("0"),
+)
+.at_render();
+
 const CLUSTERS: Param =
     Param::count("clusters", "clusters of vertices of the transfer's clustered PCA (004 §5)", 1, 1 << 20, Default::Value("32"));
 const VECTORS: Param = Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, 1024, Default::Value("8"));
@@ -60,7 +68,7 @@ const W2: Param = Param::number(
 );
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 9] = [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST];
+const PARAMS: [&Param; 10] = [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST, &FADE];
 
 /// The zones and light clustering the flags ask for.
 fn reduction(values: &Values) -> Result<lc::Reduction> {
@@ -92,11 +100,12 @@ fn checked(scene: &Scene) -> Result<LightCloudSceneSettings> {
     LightCloudSceneSettings::of(scene).map_err(at)
 }
 
-/// A bake read for a scene, with the run-time m and the scene's visibility.
+/// A bake read for a scene, with the run-time m and fade and the scene's visibility.
 struct Baked {
     scene: Scene,
     cloud: LightCloud,
     nearest: usize,
+    fade_seconds: f32,
     visibility: Visibility,
 }
 
@@ -106,7 +115,12 @@ impl Loaded for Baked {
     }
 
     fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
-        vec![Box::new(LightCloudData { cloud: &self.cloud, nearest: self.nearest, visibility: Arc::clone(&self.visibility) })]
+        vec![Box::new(LightCloudData {
+            cloud: &self.cloud,
+            nearest: self.nearest,
+            fade_seconds: self.fade_seconds,
+            visibility: Arc::clone(&self.visibility),
+        })]
     }
 }
 
@@ -230,6 +244,12 @@ impl Method for LightCloudMethod {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-cloud renders from a bake: give --bake"))?;
         checked(scene)?;
         let cloud = lc::read(artifact, scene)?;
-        Ok(Box::new(Baked { visibility: visibility(scene), scene: scene.clone(), cloud, nearest: values.count(&NEAREST) as usize }))
+        Ok(Box::new(Baked {
+            visibility: visibility(scene),
+            scene: scene.clone(),
+            cloud,
+            nearest: values.count(&NEAREST) as usize,
+            fade_seconds: values.number(&FADE) as f32,
+        }))
     }
 }

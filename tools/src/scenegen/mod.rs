@@ -30,6 +30,9 @@
 //! - `cornell-cloud`: the `cornell` geometry with every face a welded 12 x 12 grid (4,320
 //!   triangles) and one point light, with a 6 x 6 x 6 light cloud over the room: the light
 //!   clouds paper's Cornell scene (Table 1).
+//! - `cornell-window`: `cornell-cloud` with a window in a 2 cm back wall and a closed yard
+//!   behind it, the cloud (5 x 5 x 10) over room and yard: that paper's Window scene, where a
+//!   light carried in through the window pops (its Fig. 7).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -57,12 +60,13 @@ use relume_bake::image::{write_exr_layers, Image};
 use relume_bake::outputs::Outputs;
 use relume_bake::testing::{sky, two_area_lights};
 use scenes::{
-    classroom, cornell, cornell_cloud, cornell_wall_light, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane, occluder_stacked, table_chair,
+    classroom, cornell, cornell_cloud, cornell_wall_light, cornell_window, fiv_blobs, fiv_crowd, fiv_garden, occluder_plane,
+    occluder_stacked, table_chair,
 };
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 15] = [
+pub const SCENE_NAMES: [&str; 16] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -78,6 +82,7 @@ pub const SCENE_NAMES: [&str; 15] = [
     "fiv-crowd-40",
     "fiv-crowd-60",
     "cornell-cloud",
+    "cornell-window",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -137,6 +142,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "classroom" => classroom(),
         "cornell-wall-light" => cornell_wall_light(),
         "cornell-cloud" => cornell_cloud(),
+        "cornell-window" => cornell_window(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),

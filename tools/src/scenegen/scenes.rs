@@ -23,7 +23,7 @@ pub(super) fn cornell_point(x: f64, y: f64, z: f64) -> DVec3 {
 /// and leaves the ceiling to indirect light, roughly as the area light does.
 pub(super) fn cornell() -> Builder {
     let mut b = Builder::new(CORNELL_SETTINGS);
-    cornell_box(&mut b, None);
+    cornell_box(&mut b, None, None);
     // Under the centre of the published light (x 213..343, z 227..332), 1 cm below the ceiling.
     let light_position = cornell_point(278.0, 538.8, 279.5);
     b.spot_light("CeilingSpot", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y), 60.0, 70.0);
@@ -46,7 +46,7 @@ pub(super) fn cornell() -> Builder {
 /// and blue: views of the room need a far higher exposure than 1.
 pub(super) fn cornell_wall_light() -> Builder {
     let mut b = Builder::new(CORNELL_WALL_LIGHT_SETTINGS);
-    cornell_box(&mut b, None);
+    cornell_box(&mut b, None, None);
     let wall = CORNELL_RED_WALL.map(|v| cornell_point(v[0], v[1], v[2]));
     let centre = cornell_room_centre();
     let inward = quad_facing(wall, |c| centre - c).iter().map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize()).sum::<DVec3>().normalize();
@@ -64,7 +64,7 @@ pub(super) fn cornell_wall_light() -> Builder {
 /// blocks are dropped at bake time.
 pub(super) fn cornell_cloud() -> Builder {
     let mut b = Builder::new(CORNELL_SETTINGS);
-    cornell_box(&mut b, Some(12));
+    cornell_box(&mut b, Some(12), None);
     let light_position = cornell_point(278.0, 398.8, 279.5);
     b.point_light("CentrePoint", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y));
     // The room's box: x from the red wall's 556 mm to the green wall's 0, floor to ceiling,
@@ -73,6 +73,78 @@ pub(super) fn cornell_cloud() -> Builder {
     cornell_camera(&mut b);
     b
 }
+
+/// 004's Window scene (Table 1: about 5k triangles, 250 lights inside and out): `cornell-cloud`
+/// with a window about 15 cm square in the back wall, high enough for a light to pass over the
+/// tall block, the wall 2 cm thick, and behind it a closed yard 40 cm deep. One point light in
+/// the room in front of the window; the cloud's 5 x 5 x 10 grid spans room and yard, so a
+/// light carried in through the window crosses from cloud lights the room's vertices see only
+/// through the window to those inside: the paper's Fig. 7 popping case.
+pub(super) fn cornell_window() -> Builder {
+    let mut b = Builder::new(CORNELL_SETTINGS);
+    let window = Hole { s: [0.365, 0.635], t: [0.63, 0.9] };
+    let white = cornell_box(&mut b, Some(12), Some(&window));
+    let p = |v: [f64; 3]| cornell_point(v[0], v[1], v[2]);
+    let back_wall = CORNELL_BACK_WALL.map(p);
+    let thickness = cornell_point(0.0, 0.0, 20.0) - cornell_point(0.0, 0.0, 0.0);
+    let outer = back_wall.map(|c| c + thickness);
+    let mesh = b.grid_mesh("BackWallOutside", &window.around(outer), 4, |_| thickness, white);
+    b.mesh_node("BackWallOutside", mesh, DVec3::ZERO, DVec3::ONE);
+    let [a, c, d, e] = window.corners(back_wall);
+    let axis = (a + d) * 0.5;
+    let jambs = [[a, c], [c, d], [d, e], [e, a]].map(|[from, to]| [from, to, to + thickness, from + thickness]);
+    let mesh =
+        b.grid_mesh("WindowJambs", &jambs, 1, |x| axis + thickness * ((x - axis).dot(thickness) / thickness.length_squared()) - x, white);
+    b.mesh_node("WindowJambs", mesh, DVec3::ZERO, DVec3::ONE);
+    // The yard: x and y as the room's box, from the wall's outside 40 cm back.
+    let (x, y, z) = ([556.0, 0.0], [0.0, 548.8], [579.2, 979.2]);
+    let yard = [
+        [[x[0], y[0], z[0]], [x[1], y[0], z[0]], [x[1], y[0], z[1]], [x[0], y[0], z[1]]],
+        [[x[0], y[1], z[0]], [x[0], y[1], z[1]], [x[1], y[1], z[1]], [x[1], y[1], z[0]]],
+        [[x[0], y[0], z[1]], [x[1], y[0], z[1]], [x[1], y[1], z[1]], [x[0], y[1], z[1]]],
+        [[x[0], y[0], z[0]], [x[0], y[0], z[1]], [x[0], y[1], z[1]], [x[0], y[1], z[0]]],
+        [[x[1], y[0], z[0]], [x[1], y[1], z[0]], [x[1], y[1], z[1]], [x[1], y[0], z[1]]],
+    ];
+    let yard_centre = p([278.0, 274.4, 779.2]);
+    let mesh = b.grid_mesh("Yard", &yard.map(|q| q.map(p)), 6, |c| yard_centre - c, white);
+    b.mesh_node("Yard", mesh, DVec3::ZERO, DVec3::ONE);
+    let light_position = p([278.0, 450.0, 300.0]);
+    b.point_light("RoomPoint", light_position, DVec3::NEG_Y, exposure_one_intensity(light_position.y));
+    // Cells 98 mm deep with a border in the wall's middle: the nearest cloud lights stand 39 mm
+    // either side of it (a light centimetres from a wall would outshine the rest: reduce.rs).
+    b.light_cloud_grid(p([556.0, 0.0, 961.2]), p([0.0, 548.8, -18.8]), [5, 5, 10]);
+    cornell_camera(&mut b);
+    b
+}
+
+/// A hole in a quad, in the quad's parameters: s from its first corner to its second, t from
+/// its first to its fourth.
+pub(super) struct Hole {
+    s: [f64; 2],
+    t: [f64; 2],
+}
+
+impl Hole {
+    fn at(q: &[DVec3; 4], s: f64, t: f64) -> DVec3 {
+        (q[0] * (1.0 - s) + q[1] * s) * (1.0 - t) + (q[3] * (1.0 - s) + q[2] * s) * t
+    }
+
+    /// The hole's corners in `q`, in the quad's own order.
+    fn corners(&self, q: [DVec3; 4]) -> [DVec3; 4] {
+        let ([s0, s1], [t0, t1]) = (self.s, self.t);
+        [Hole::at(&q, s0, t0), Hole::at(&q, s1, t0), Hole::at(&q, s1, t1), Hole::at(&q, s0, t1)]
+    }
+
+    /// `q` less the hole: four quads (below, above, and either side of it).
+    fn around(&self, q: [DVec3; 4]) -> [[DVec3; 4]; 4] {
+        let ([s0, s1], [t0, t1]) = (self.s, self.t);
+        [[0.0, 1.0, 0.0, t0], [0.0, 1.0, t1, 1.0], [0.0, s0, t0, t1], [s1, 1.0, t0, t1]]
+            .map(|[sa, sb, ta, tb]| [Hole::at(&q, sa, ta), Hole::at(&q, sb, ta), Hole::at(&q, sb, tb), Hole::at(&q, sa, tb)])
+    }
+}
+
+/// The back wall's corners (Cornell millimetres).
+const CORNELL_BACK_WALL: [[f64; 3]; 4] = [[549.6, 0.0, 559.2], [0.0, 0.0, 559.2], [0.0, 548.8, 559.2], [556.0, 548.8, 559.2]];
 
 /// The red wall's corners (Cornell millimetres), named because `cornell-wall-light` aims at it.
 pub(super) const CORNELL_RED_WALL: [[f64; 3]; 4] = [[552.8, 0.0, 0.0], [549.6, 0.0, 559.2], [556.0, 548.8, 559.2], [556.0, 548.8, 0.0]];
@@ -87,8 +159,9 @@ pub(super) fn cornell_room_centre() -> DVec3 {
 /// red left wall, green right wall, and the short and tall blocks (five faces each: the
 /// published data has no bottom faces, the blocks stand on the floor). Albedos are the
 /// usual linear-RGB fits to the published reflectance spectra. Flat-shaded quads, or with
-/// `grid` n, each face an n x n grid of welded vertices ([`Builder::grid_mesh`]).
-pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>) {
+/// `grid` n, each face an n x n grid of welded vertices ([`Builder::grid_mesh`]); with `window`
+/// (grids only), the back wall has that hole. Returns the white material.
+pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>, window: Option<&Hole>) -> usize {
     let white = b.material("white", [0.725, 0.71, 0.68]);
     let red = b.material("red", [0.63, 0.065, 0.05]);
     let green = b.material("green", [0.14, 0.45, 0.091]);
@@ -98,7 +171,7 @@ pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>) {
     let room: [(&str, usize, [[f64; 3]; 4]); 5] = [
         ("Floor", white, [[552.8, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 559.2], [549.6, 0.0, 559.2]]),
         ("Ceiling", white, [[556.0, 548.8, 0.0], [556.0, 548.8, 559.2], [0.0, 548.8, 559.2], [0.0, 548.8, 0.0]]),
-        ("BackWall", white, [[549.6, 0.0, 559.2], [0.0, 0.0, 559.2], [0.0, 548.8, 559.2], [556.0, 548.8, 559.2]]),
+        ("BackWall", white, CORNELL_BACK_WALL),
         ("RightWall", green, [[0.0, 0.0, 559.2], [0.0, 0.0, 0.0], [0.0, 548.8, 0.0], [0.0, 548.8, 559.2]]),
         ("LeftWall", red, CORNELL_RED_WALL),
     ];
@@ -106,7 +179,10 @@ pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>) {
         // Room surfaces face into the room.
         let mesh = match grid {
             None => b.mesh(name, &quad_facing(quad.map(p), |c| room_centre - c), material),
-            Some(n) => b.grid_mesh(name, &[quad.map(p)], n, |c| room_centre - c, material),
+            Some(n) => match window.filter(|_| name == "BackWall") {
+                Some(hole) => b.grid_mesh(name, &hole.around(quad.map(p)), n, |c| room_centre - c, material),
+                None => b.grid_mesh(name, &[quad.map(p)], n, |c| room_centre - c, material),
+            },
         };
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
@@ -135,6 +211,7 @@ pub(super) fn cornell_box(b: &mut Builder, grid: Option<u32>) {
         };
         b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
     }
+    white
 }
 
 /// The published camera: (278, 273, -800) looking along +z with a 35 mm lens on a

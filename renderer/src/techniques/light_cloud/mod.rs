@@ -40,10 +40,12 @@ use std::sync::Arc;
 pub type Visibility = Arc<dyn Fn(Vec3, Vec3) -> bool + Send + Sync>;
 
 /// What the technique is made from: a bake's cloud, m (each light's nearest visible cloud
-/// lights) and the caller's visibility query.
+/// lights), the seconds a cloud light takes to fade in or out as it comes into or goes out of
+/// a light's sight (`Renderer::move_lights`; 0: at once) and the caller's visibility query.
 pub struct LightCloudData<'d> {
     pub cloud: &'d LightCloud,
     pub nearest: usize,
+    pub fade_seconds: f32,
     pub visibility: Visibility,
 }
 
@@ -99,9 +101,9 @@ impl LightCloudTechnique {
         self.unseen
     }
 
-    fn weigh(&mut self, lights: &[Light]) {
+    fn weigh(&mut self, lights: &[Light], elapsed: Option<f32>) {
         let visibility = &self.visibility;
-        self.unseen = self.weigher.weigh(&self.cloud, lights, |a, b| visibility(a, b), &mut self.weights);
+        self.unseen = self.weigher.weigh_after(&self.cloud, lights, |a, b| visibility(a, b), elapsed, &mut self.weights);
         self.gpu_weights.clear();
         self.gpu_weights.extend(self.weights.iter().map(|w| GpuWeight { weight: w.weight.to_array(), light: w.light }));
     }
@@ -134,9 +136,10 @@ impl Technique for LightCloudTechnique {
         Some(Term::Irradiance { source: Source::Vertex(&self.buffers.irradiance), times_occlusion: false, occluded_direct: false })
     }
 
-    /// The lights moved: their weights now, for the frames recorded from now on (004 §6.1).
-    fn lights_set(&mut self, lights: &[Light]) {
-        self.weigh(lights);
+    /// The lights moved: their weights now, for the frames recorded from now on (004 §6.1),
+    /// fading as visibility changes when they moved continuously.
+    fn lights_set(&mut self, lights: &[Light], elapsed: Option<f32>) {
+        self.weigh(lights, elapsed);
     }
 
     /// `cluster_sums` (C (1 + D) vec4, rgb) and `irradiance` (one vec4 per vertex, rgb lux),
@@ -156,7 +159,9 @@ impl MakeTechnique for LightCloudData<'_> {
         let cloud = self.cloud;
         check(ctx, cloud, shared.gpu_scene.vertex_count())?;
         refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
-        let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
+        let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest)
+            .and_then(|w| w.with_fade(self.fade_seconds))
+            .map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let clusters: Vec<GpuCluster> = cloud
             .layout()
             .iter()
@@ -204,7 +209,7 @@ impl MakeTechnique for LightCloudData<'_> {
             gpu_weights: Vec::with_capacity(cloud.lights.len()),
             unseen: 0,
         };
-        technique.weigh(&shared.scene.lights);
+        technique.weigh(&shared.scene.lights, None);
         Ok(Box::new(technique))
     }
 }
