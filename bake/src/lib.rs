@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod outputs;
 pub mod scene;
 pub mod settings;
+pub mod sh;
 pub mod testing;
 
 pub mod fiv;

@@ -49,6 +49,11 @@ pub enum Term<'t> {
         /// again (000 §3.4's literal reading).
         occluded_direct: bool,
     },
+    /// Indirect exitant radiance per vertex of the scene's vertex buffer as 16 real spherical
+    /// harmonics (bands l <= 3, world space, `relume_bake::sh`): 16 vec4 (rgb) per vertex, read
+    /// in the vertex stage, interpolated, evaluated towards the camera and added as is (glossy
+    /// surfaces). It takes the irradiance term's place: a frame has one or the other.
+    Radiance(&'t Buffer),
 }
 
 /// A technique's image or buffer, named for read-back (tests and tools).

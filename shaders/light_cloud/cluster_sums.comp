@@ -1,12 +1,13 @@
 #version 450
-// 004 eq. (12): per cluster c and term t (t = 0 the mean X^c, t = d the basis vector B^c_d),
-// sums[c][t] = sum_k w_k T[c][t][j_k] over this frame's non-zero weights of c's zone's cloud
-// lights, in their order (relume_bake::light_cloud::LightCloud::cluster_sums on the CPU). One
-// invocation per (cluster, term).
+// 004 eq. (12): per cluster c, term t (t = 0 the mean X^c, t = d the basis vector B^c_d) and
+// coefficient i (n_b of them), sums[c][t][i] = sum_k w_k T[c][t][j_k][i] over this frame's
+// non-zero weights of c's zone's cloud lights, in their order
+// (relume_bake::light_cloud::LightCloud::cluster_sums on the CPU). One invocation per
+// (cluster, term, coefficient).
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Cluster c's term t at clusters[c].offset + 3 * (t * clusters[c].lights + j) for the zone's
-// light j (packed rgb).
+// Cluster c's term t, coefficient i at clusters[c].offset + 3 * ((t * clusters[c].lights + j) *
+// n_b + i) for the zone's light j (packed rgb).
 layout(std430, set = 0, binding = 0) readonly buffer Terms { float terms[]; };
 // The weight (candela, rgb) and the cloud light it weighs: 16 bytes.
 struct CloudWeight {
@@ -25,25 +26,27 @@ struct Cluster {
 layout(std430, set = 0, binding = 3) readonly buffer Clusters { Cluster clusters[]; };
 
 layout(push_constant) uniform ClusterSumsPush {
-    uint term_count;    // C * (1 + D)
+    uint term_count;    // C * (1 + D) * n_b
     uint terms;         // 1 + D
     uint weight_count;
+    uint coefficients;  // n_b
 } pc;
 
 void main() {
-    uint term = gl_GlobalInvocationID.x;
-    if (term >= pc.term_count) return;
+    uint index = gl_GlobalInvocationID.x;
+    if (index >= pc.term_count) return;
+    uint term = index / pc.coefficients, i = index % pc.coefficients;
     Cluster c = clusters[term / pc.terms];
-    uint first = c.offset + 3u * (term % pc.terms) * c.lights;
+    uint first = c.offset + 3u * ((term % pc.terms) * c.lights * pc.coefficients + i);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < pc.weight_count; ++k) {
         CloudWeight w = weights[k];
         uint j = w.light - c.first_light;
         // Unsigned: a light before the zone wraps past its count too.
         if (j < c.lights) {
-            uint at = first + 3u * j;
+            uint at = first + 3u * j * pc.coefficients;
             sum += w.weight * vec3(terms[at], terms[at + 1u], terms[at + 2u]);
         }
     }
-    sums[term] = vec4(sum, 0.0);
+    sums[index] = vec4(sum, 0.0);
 }

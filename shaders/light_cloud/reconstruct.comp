@@ -1,28 +1,32 @@
 #version 450
-// 004 eq. (12)-(13): per vertex of cluster c, the indirect irradiance
-// E = x^m + sum_d z_d b_d with x^m = sums[c][0] and b_d = sums[c][d] from cluster_sums.comp,
-// clamped at zero (relume_bake::light_cloud::LightCloud::irradiance on the CPU). One invocation
-// per vertex.
+// 004 eq. (12)-(13): per vertex of cluster c and coefficient i, x^m + sum_d z_d b_d with
+// x^m = sums[c][0][i] and b_d = sums[c][d][i] from cluster_sums.comp: the indirect irradiance
+// (n_b = 1, clamped at zero) or the exitant radiance's spherical-harmonic coefficients
+// (relume_bake::light_cloud::LightCloud::reconstruct on the CPU). One invocation per vertex.
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
 layout(std430, set = 0, binding = 0) readonly buffer Sums { vec4 sums[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Assignment { uint assignment[]; };
 // z[v][d - 1] at v * D + d - 1.
 layout(std430, set = 0, binding = 2) readonly buffer Coords { float coords[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer Irradiance { vec4 irradiance[]; };
+// n_b values per vertex.
+layout(std430, set = 0, binding = 3) writeonly buffer VertexValues { vec4 values[]; };
 
 layout(push_constant) uniform ReconstructPush {
     uint vertex_count;
     uint basis;         // D
+    uint coefficients;  // n_b
 } pc;
 
 void main() {
     uint v = gl_GlobalInvocationID.x;
     if (v >= pc.vertex_count) return;
-    uint first = assignment[v] * (1u + pc.basis);
-    vec3 e = sums[first].rgb;
-    for (uint d = 1u; d <= pc.basis; ++d) {
-        e += sums[first + d].rgb * coords[v * pc.basis + d - 1u];
+    uint first = assignment[v] * (1u + pc.basis) * pc.coefficients;
+    for (uint i = 0u; i < pc.coefficients; ++i) {
+        vec3 a = sums[first + i].rgb;
+        for (uint d = 1u; d <= pc.basis; ++d) {
+            a += sums[first + d * pc.coefficients + i].rgb * coords[v * pc.basis + d - 1u];
+        }
+        values[v * pc.coefficients + i] = vec4(pc.coefficients == 1u ? max(a, vec3(0.0)) : a, 1.0);
     }
-    irradiance[v] = vec4(max(e, vec3(0.0)), 1.0);
 }

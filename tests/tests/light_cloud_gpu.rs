@@ -47,8 +47,8 @@ fn gpu_equals_cpu(scene: &Scene, cloud: &LightCloud, visibility: Visibility) {
         let expected = lights[0].intensity * cloud.zone_count() as f32;
         assert!((sum - expected).abs().max_element() < 1e-4 * expected.max_element(), "weights sum to {sum}");
         let (gpu_sums, cpu_sums) = (read_vec4s(&mut renderer, "light_cloud.cluster_sums").unwrap(), cloud.cluster_sums(&weights));
-        let gpu = read_vec4s(&mut renderer, "light_cloud.irradiance").unwrap();
-        let cpu = cloud.irradiance(&weights);
+        let gpu = read_vec4s(&mut renderer, "light_cloud.vertex_values").unwrap();
+        let cpu = cloud.reconstruct(&weights);
         assert_eq!((gpu.len(), gpu_sums.len()), (cpu.len(), cpu_sums.len()));
         let largest = |values: &[Vec3]| values.iter().map(|e| e.abs().max_element()).fold(0.0, f32::max);
         let (scale, sums_scale) = (largest(&cpu), largest(&cpu_sums));
@@ -93,4 +93,60 @@ fn spot_lights_another_scenes_cloud_and_a_bad_m_are_refused_by_name() {
     point_lit.lights = scene.lights.clone();
     says(&refusal(try_new_renderer(&ctx, &point_lit, &settings(), &[&data(8)])), &["baked for 2535 vertices", "rebake"]);
     assert_clean(ctx);
+}
+
+/// The lighting pass's spherical harmonics (shaders/sh.glsl) against the CPU's
+/// (relume_bake::sh): a black plane filling the view carries one set of 16 coefficients at
+/// every vertex, from one cloud light under the scene's light, so each pixel is
+/// max(0, y(towards the camera) . a), a direction per pixel: 4,096 directions within 1e-5 of
+/// the largest value.
+#[test]
+fn the_shaders_spherical_harmonics_equal_the_cpus() {
+    use relume_bake::sh;
+    use relume_bake::testing::{look_at, material, point_light, scene, square};
+    let plane = square(Vec3::ZERO, Vec3::X * 4.0, Vec3::Y * 4.0, 2, 0);
+    let camera = look_at(Vec3::new(0.4, -0.3, 1.5), Vec3::new(0.1, 0.1, 0.0), Vec3::Y, 1.4);
+    let light = Vec3::new(0.0, 0.0, 0.5);
+    let s = scene("sh plane", vec![plane], vec![material("black", Vec3::ZERO, Vec3::ZERO)], vec![point_light(light, Vec3::ONE)], camera);
+    let mut state = 99u64;
+    let mut next = || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    let a: Vec<Vec3> =
+        (0..sh::COEFFICIENTS).map(|k| Vec3::new(next(), next(), next()) + Vec3::splat(if k == 0 { 2.0 } else { 0.0 })).collect();
+    let row: Vec<f32> = a.iter().flat_map(|c| c.to_array()).collect();
+    let vertices = s.meshes[0].positions.len();
+    let cloud = LightCloud::uncompressed(vec![light], sh::COEFFICIENTS, 1, row.repeat(vertices));
+    let ctx = validated_context();
+    let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility: Arc::new(|_, _| true) };
+    let (width, height) = (64, 64);
+    let mut renderer = new_renderer(&ctx, &s, &RenderSettings { width, height, ..RenderSettings::default() }, &[&data]);
+    let image = render(&mut renderer);
+    drop(renderer);
+    assert_clean(ctx);
+    let expected: Vec<Vec3> = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let y_k = sh::eval(-s.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height));
+            a.iter().zip(y_k).fold(Vec3::ZERO, |sum, (a, y)| sum + *a * y).max(Vec3::ZERO)
+        })
+        .collect();
+    let scale = expected.iter().map(|e| e.max_element()).fold(0.0, f32::max);
+    let worst = image.pixels.iter().zip(&expected).map(|(g, c)| (*g - *c).abs().max_element()).fold(0.0, f32::max);
+    println!("largest difference {worst:.2e} of the largest value {scale:.3}");
+    assert!(worst <= 1e-5 * scale, "GPU against CPU spherical harmonics: {worst} (largest value {scale})");
+}
+
+/// A glossy scene's transfer (16 spherical harmonics a light) through the same two passes:
+/// cluster sums and every vertex's coefficients equal the CPU's as the light moves.
+#[test]
+fn spherical_harmonic_transfer_equals_the_cpus_as_the_light_moves() {
+    let scene = load_scene("glossy-enclosure");
+    let bvh = SceneBvh::new(&scene);
+    // 2 x 2 x 2 cloud lights over the room: 384 values a vertex keep the test short.
+    let grid = lc::CloudGrid { counts: [2; 3], ..LightCloudSceneSettings::of(&scene).unwrap().grid };
+    let cloud = lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, work: WorkOptions::default() }).expect("bake");
+    assert_eq!(cloud.coefficients, relume_bake::sh::COEFFICIENTS);
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, 4).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
 }

@@ -5,10 +5,12 @@
 //! lights (`weights.rs`, §6.1) and, behind the `baking` feature, the baker (`baker.rs`: the
 //! cloud, the per-vertex gather with random numbers shared by every cloud light).
 //!
-//! Every surface here is diffuse, so a vertex's transfer is one coefficient per cloud light
+//! Where every surface is diffuse, a vertex's transfer is one coefficient per cloud light
 //! (004 eq. 7 with n_b = 1). relume stores it as the indirect irradiance (lux per candela)
 //! rather than the exitant radiance: the lighting pass multiplies by albedo / pi per pixel,
-//! so a textured albedo stays sharp between vertices.
+//! so a textured albedo stays sharp between vertices. A scene with a glossy material stores
+//! every vertex's exitant radiance as 16 spherical-harmonic coefficients ("third order",
+//! n_b = 16, `crate::sh`), fitted over the vertex's hemisphere (spec light-clouds.md B10).
 
 #[cfg(feature = "baking")]
 mod baker;
@@ -26,6 +28,7 @@ use crate::binary::{Reader, Writer};
 use crate::scene::Scene;
 use crate::settings::SceneBlock;
 use crate::settings::{as_object, known_keys, vec3};
+use crate::sh;
 use glam::Vec3;
 use serde_json::Value;
 
@@ -137,6 +140,9 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
 pub struct LightCloud {
     /// Every zone's lights, zone after zone.
     pub lights: Vec<Vec3>,
+    /// n_b: 1 (indirect irradiance, lux) or `sh::COEFFICIENTS` (exitant radiance in spherical
+    /// harmonics).
+    pub coefficients: usize,
     /// Zone z's lights are `lights[zone_lights[z]..zone_lights[z + 1]]` (zones + 1 entries).
     pub zone_lights: Vec<u32>,
     /// Zone z's clusters are `zone_clusters[z]..zone_clusters[z + 1]` (zones + 1 entries).
@@ -147,8 +153,8 @@ pub struct LightCloud {
     pub assignment: Vec<u32>,
     /// D, the basis vectors of every cluster.
     pub basis: usize,
-    /// Cluster after cluster, `[term][zone light][rgb]`: term 0 the cluster's mean X^c, term d
-    /// its B^c_d.
+    /// Cluster after cluster, `[term][zone light][coefficient][rgb]`: term 0 the cluster's mean
+    /// X^c, term d its B^c_d.
     pub terms: Vec<f32>,
     /// `[vertex][d]`: z_vd, d from 1 (D per vertex).
     pub coords: Vec<f32>,
@@ -165,10 +171,12 @@ pub struct ClusterLayout {
 }
 
 impl LightCloud {
-    /// Rows as gathered, `[vertex][light][rgb]`: one zone, one cluster per vertex, no basis.
-    pub fn uncompressed(lights: Vec<Vec3>, samples: u32, rows: Vec<f32>) -> LightCloud {
-        let vertices = rows.len() / (3 * lights.len()).max(1);
+    /// Rows as gathered, `[vertex][light][coefficient][rgb]`: one zone, one cluster per vertex,
+    /// no basis.
+    pub fn uncompressed(lights: Vec<Vec3>, coefficients: usize, samples: u32, rows: Vec<f32>) -> LightCloud {
+        let vertices = rows.len() / (3 * coefficients * lights.len()).max(1);
         LightCloud {
+            coefficients,
             zone_lights: vec![0, lights.len() as u32],
             zone_clusters: vec![0, vertices as u32],
             lights,
@@ -188,6 +196,11 @@ impl LightCloud {
         self.zone_lights.len().saturating_sub(1)
     }
 
+    /// Values a light has in one term: rgb per coefficient.
+    pub fn per_light(&self) -> usize {
+        3 * self.coefficients
+    }
+
     pub fn cluster_count(&self) -> usize {
         self.zone_clusters.last().map_or(0, |&c| c as usize)
     }
@@ -200,7 +213,7 @@ impl LightCloud {
     /// Cluster `cluster`'s layout (clusters lie zone after zone, each zone's the same size).
     pub fn cluster_layout(&self, cluster: usize) -> ClusterLayout {
         let zone = self.zone_clusters.partition_point(|&start| start as usize <= cluster) - 1;
-        let size = |z: usize| (1 + self.basis) * 3 * self.zone_light_range(z).len();
+        let size = |z: usize| (1 + self.basis) * self.per_light() * self.zone_light_range(z).len();
         let before: usize = (0..zone).map(|z| (self.zone_clusters[z + 1] - self.zone_clusters[z]) as usize * size(z)).sum();
         let lights = self.zone_light_range(zone);
         ClusterLayout {
@@ -215,25 +228,41 @@ impl LightCloud {
         (0..self.cluster_count()).map(|c| self.cluster_layout(c)).collect()
     }
 
-    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed; zero for a
-    /// light of another zone.
+    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed: the
+    /// irradiance, or the radiance's first coefficient; zero for a light of another zone.
     pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
+        self.coefficient(vertex, light, 0)
+    }
+
+    /// Coefficient `k` of the transfer from cloud light `light` to vertex `vertex`,
+    /// reconstructed; zero for a light of another zone.
+    pub fn coefficient(&self, vertex: usize, light: usize, k: usize) -> Vec3 {
         let at = self.cluster_layout(self.assignment[vertex] as usize);
         let Some(j) = light.checked_sub(at.first_light as usize).filter(|&j| j < at.lights as usize) else { return Vec3::ZERO };
-        let row = 3 * at.lights as usize;
-        let value = |t: usize| Vec3::from_slice(&self.terms[at.offset + t * row + 3 * j..][..3]);
+        let row = self.per_light() * at.lights as usize;
+        let value = |t: usize| Vec3::from_slice(&self.terms[at.offset + t * row + self.per_light() * j + 3 * k..][..3]);
         (1..=self.basis).fold(value(0), |sum, d| sum + value(d) * self.coords[vertex * self.basis + d - 1])
     }
 
     /// The shapes agree, every value is finite, every zone has lights and clusters, every
     /// vertex's cluster exists, and an uncompressed transfer is not negative.
     pub fn validate(&self) -> Result<(), String> {
-        if self.lights.is_empty() || self.lights.len() > MAX_CLOUD_LIGHTS as usize || self.lights.iter().any(|p| !p.is_finite()) {
-            return Err(format!("{} cloud lights: must be 1..={MAX_CLOUD_LIGHTS} finite points", self.lights.len()));
+        if self.coefficients != 1 && self.coefficients != sh::COEFFICIENTS {
+            return Err(format!(
+                "{} coefficients a light: 1 (irradiance) or {} (spherical harmonics)",
+                self.coefficients,
+                sh::COEFFICIENTS
+            ));
+        }
+        if self.lights.is_empty() || self.lights.iter().any(|p| !p.is_finite()) {
+            return Err(format!("{} cloud lights: must be at least one, each a finite point", self.lights.len()));
         }
         check_zones(&self.zone_lights, &self.zone_clusters, self.lights.len(), self.cluster_count())?;
+        if let Some(z) = (0..self.zone_count()).find(|&z| self.zone_light_range(z).len() > MAX_CLOUD_LIGHTS as usize) {
+            return Err(format!("zone {z} has {} lights: at most {MAX_CLOUD_LIGHTS}", self.zone_light_range(z).len()));
+        }
         let clusters = self.cluster_count();
-        let expected: usize = self.layout().last().map_or(0, |l| l.offset + (1 + self.basis) * 3 * l.lights as usize);
+        let expected: usize = self.layout().last().map_or(0, |l| l.offset + (1 + self.basis) * self.per_light() * l.lights as usize);
         if self.terms.len() != expected {
             return Err(format!("{} term values for clusters that hold {expected}", self.terms.len()));
         }
@@ -243,7 +272,8 @@ impl LightCloud {
         if let Some(v) = self.assignment.iter().position(|&c| c as usize >= clusters) {
             return Err(format!("vertex {v} is in cluster {}, of {clusters}", self.assignment[v]));
         }
-        let negative_allowed = self.basis > 0;
+        // Basis vectors and spherical harmonics take both signs; irradiance does not.
+        let negative_allowed = self.basis > 0 || self.coefficients > 1;
         if let Some(i) = self.terms.iter().chain(&self.coords).position(|t| !(t.is_finite() && (negative_allowed || *t >= 0.0))) {
             return Err(format!(
                 "transfer value {i} is {} (must be finite, and >= 0 uncompressed)",
@@ -255,35 +285,39 @@ impl LightCloud {
 
     /// Each cluster's terms weighed by cloud-light weights (per channel, candela), summed over
     /// the weights of its zone's lights in their order: x^m and b_d of 004 eq. (12), cluster
-    /// after cluster, term after term.
+    /// after cluster, term after term, coefficient after coefficient.
     pub fn cluster_sums(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
-        let mut sums = Vec::with_capacity(self.cluster_count() * (1 + self.basis));
+        let n = self.per_light();
+        let mut sums = Vec::with_capacity(self.cluster_count() * (1 + self.basis) * self.coefficients);
         for at in self.layout() {
-            let row = 3 * at.lights as usize;
+            let row = n * at.lights as usize;
             for term in self.terms[at.offset..][..(1 + self.basis) * row].chunks_exact(row) {
-                let zone = weights.iter().filter(|w| (at.first_light..at.first_light + at.lights).contains(&w.light));
-                sums.push(
-                    zone.fold(Vec3::ZERO, |sum, w| {
-                        sum + Vec3::from_slice(&term[3 * (w.light - at.first_light) as usize..][..3]) * w.weight
-                    }),
-                );
+                for k in 0..self.coefficients {
+                    let zone = weights.iter().filter(|w| (at.first_light..at.first_light + at.lights).contains(&w.light));
+                    sums.push(zone.fold(Vec3::ZERO, |sum, w| {
+                        sum + Vec3::from_slice(&term[n * (w.light - at.first_light) as usize + 3 * k..][..3]) * w.weight
+                    }));
+                }
             }
         }
         sums
     }
 
-    /// Indirect irradiance per vertex for cloud-light weights: x^m + sum_d z_d b_d (004 eq.
-    /// 12-13), clamped at zero: the CPU oracle of the renderer's two passes.
-    pub fn irradiance(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
+    /// Per vertex and coefficient, the transfer for cloud-light weights: x^m + sum_d z_d b_d
+    /// (004 eq. 12-13), irradiance clamped at zero (spherical harmonics are clamped where they
+    /// are evaluated): the CPU oracle of the renderer's two passes.
+    pub fn reconstruct(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
         let sums = self.cluster_sums(weights);
-        let terms = 1 + self.basis;
-        (0..self.vertex_count())
-            .map(|v| {
-                let first = self.assignment[v] as usize * terms;
-                let e = (1..terms).fold(sums[first], |e, d| e + sums[first + d] * self.coords[v * self.basis + d - 1]);
-                e.max(Vec3::ZERO)
-            })
-            .collect()
+        let (terms, n) = (1 + self.basis, self.coefficients);
+        let mut out = Vec::with_capacity(self.vertex_count() * n);
+        for v in 0..self.vertex_count() {
+            let first = self.assignment[v] as usize * terms * n;
+            for k in 0..n {
+                let a = (1..terms).fold(sums[first + k], |a, d| a + sums[first + d * n + k] * self.coords[v * self.basis + d - 1]);
+                out.push(if n == 1 { a.max(Vec3::ZERO) } else { a });
+            }
+        }
+        out
     }
 }
 
@@ -320,8 +354,9 @@ pub fn vertex_count(scene: &Scene) -> usize {
 }
 
 pub const SECTION: &str = "light-cloud";
-/// Version 3: zones (version 2 had one; version 1 held rows only).
-pub const SECTION_VERSION: u32 = 3;
+/// Version 4: spherical harmonics (version 3 had irradiance only, version 2 one zone, version 1
+/// rows only).
+pub const SECTION_VERSION: u32 = 4;
 const BIN: &str = "light-cloud.bin";
 const MAGIC: &[u8; 8] = b"RLCLOUD\0";
 
@@ -335,6 +370,7 @@ pub fn section(cloud: &LightCloud, summary: Value) -> Section {
         cloud.cluster_count() as u32,
         cloud.basis as u32,
         cloud.zone_count() as u32,
+        cloud.coefficients as u32,
     ]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
     w.u32s(&cloud.zone_lights);
@@ -350,25 +386,27 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "light cloud")?;
-    let [lights, vertices, samples, clusters, basis, zones] = [
+    let [lights, vertices, samples, clusters, basis, zones, coefficients] = [
         r.u32("the light count")?,
         r.u32("the vertex count")?,
         r.u32("the sample count")?,
         r.u32("the cluster count")?,
         r.u32("D")?,
         r.u32("the zone count")?,
+        r.u32("the coefficient count")?,
     ];
     if vertices as usize != vertex_count(scene)
         || lights == 0
-        || lights > MAX_CLOUD_LIGHTS
+        || lights as u64 > MAX_CLOUD_LIGHTS as u64 * zones as u64
         || clusters == 0
         || clusters > vertices
         || basis > 1024
         || zones == 0
         || zones > clusters.min(lights)
+        || (coefficients != 1 && coefficients as usize != sh::COEFFICIENTS)
     {
         let problem = format!(
-            "{lights} cloud lights, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {} vertices",
+            "{lights} cloud lights of {coefficients} coefficients, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {} vertices",
             vertex_count(scene)
         );
         return Err(fail(&path, problem, REBAKE));
@@ -381,13 +419,14 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let values: usize = zone_lights
         .windows(2)
         .zip(zone_clusters.windows(2))
-        .map(|(l, c)| (1 + basis as usize) * 3 * (l[1] - l[0]) as usize * (c[1] - c[0]) as usize)
+        .map(|(l, c)| (1 + basis as usize) * 3 * coefficients as usize * (l[1] - l[0]) as usize * (c[1] - c[0]) as usize)
         .sum();
     let terms = r.f32s(values, "the terms")?;
     let coords = r.f32s(vertices as usize * basis as usize, "the coordinates")?;
     r.finish("the coordinates")?;
     let cloud = LightCloud {
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
+        coefficients: coefficients as usize,
         zone_lights,
         zone_clusters,
         samples,

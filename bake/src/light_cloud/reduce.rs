@@ -60,8 +60,8 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
     }
     let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
     let zones = split_zones(&positions, reduction.zones);
-    let n = gathered.lights.len();
-    let row = |v: u32| &gathered.terms[v as usize * 3 * n..][..3 * n];
+    let (n, per_light) = (gathered.lights.len(), gathered.per_light());
+    let row = |v: u32| &gathered.terms[v as usize * per_light * n..][..per_light * n];
     let groups: Vec<Vec<Vec<u32>>> = match reduction.weights {
         None => vec![(0..n as u32).map(|j| vec![j]).collect(); zones.len()],
         Some((w1, w2)) => {
@@ -69,7 +69,7 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
             let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
             let scale = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
             let base = pair_base(bvh, &gathered.lights, w1 / diagonal);
-            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, n, w2 / scale))).collect()
+            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, (n, per_light), w2 / scale))).collect()
         }
     };
     let (mut lights, mut zone_lights, mut zone_clusters) = (Vec::new(), vec![0u32], vec![0u32]);
@@ -83,19 +83,30 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
             cluster += 1;
             let x = row(v);
             for group in groups {
-                let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + Vec3::from_slice(&x[3 * j as usize..][..3])) / group.len() as f32;
-                terms.extend(mean.to_array());
-                for &j in group {
-                    let xj = Vec3::from_slice(&x[3 * j as usize..][..3]).as_dvec3();
-                    error += (xj - mean.as_dvec3()).length_squared();
-                    total += xj.length_squared();
+                for k in (0..per_light).step_by(3) {
+                    let value = |j: u32| Vec3::from_slice(&x[per_light * j as usize + k..][..3]);
+                    let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + value(j)) / group.len() as f32;
+                    terms.extend(mean.to_array());
+                    for &j in group {
+                        error += (value(j).as_dvec3() - mean.as_dvec3()).length_squared();
+                        total += value(j).as_dvec3().length_squared();
+                    }
                 }
             }
         }
         zone_clusters.push(cluster);
     }
-    let cloud =
-        LightCloud { lights, zone_lights, zone_clusters, samples: gathered.samples, assignment, basis: 0, terms, coords: Vec::new() };
+    let cloud = LightCloud {
+        lights,
+        coefficients: gathered.coefficients,
+        zone_lights,
+        zone_clusters,
+        samples: gathered.samples,
+        assignment,
+        basis: 0,
+        terms,
+        coords: Vec::new(),
+    };
     cloud.validate()?;
     Ok(Reduced { cloud, groups, relative_error: if total > 0.0 { (error / total).sqrt() } else { 0.0 } })
 }
@@ -147,16 +158,17 @@ fn pair_base(bvh: &SceneBvh, lights: &[Vec3], w1: f32) -> Vec<f32> {
 }
 
 /// Eq. (9) for one zone: the shared part plus `w2` times the largest difference of the two
-/// lights' transfer over the zone's vertices and rgb.
-fn zone_metric<'a>(base: &[f32], zone: &[u32], row: &impl Fn(u32) -> &'a [f32], n: usize, w2: f32) -> Vec<f32> {
+/// lights' transfer over the zone's vertices, coefficients and rgb (spec B1); `n` lights of
+/// `per_light` values.
+fn zone_metric<'a>(base: &[f32], zone: &[u32], row: &impl Fn(u32) -> &'a [f32], (n, per_light): (usize, usize), w2: f32) -> Vec<f32> {
     // Light-major copies of the zone's rows: each pair then compares two contiguous slices.
-    let mut columns = vec![0f32; n * 3 * zone.len()];
+    let mut columns = vec![0f32; n * per_light * zone.len()];
     for (k, &v) in zone.iter().enumerate() {
-        for (j, rgb) in row(v).chunks_exact(3).enumerate() {
-            columns[(j * zone.len() + k) * 3..][..3].copy_from_slice(rgb);
+        for (j, values) in row(v).chunks_exact(per_light).enumerate() {
+            columns[(j * zone.len() + k) * per_light..][..per_light].copy_from_slice(values);
         }
     }
-    let len = 3 * zone.len();
+    let len = per_light * zone.len();
     symmetric(n, |j, k| {
         let (a, b) = (&columns[j * len..][..len], &columns[k * len..][..len]);
         let difference = a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));

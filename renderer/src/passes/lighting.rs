@@ -2,9 +2,11 @@
 //! variance shadow maps (000 §3.4), emission, the ambient light of 001 eq. (5)-(7), and the
 //! terms the frame's techniques hand over, for Lambertian surfaces (shaders/lighting.frag
 //! states the formula). It knows terms by kind, never by technique: at most one occlusion
-//! term (an atlas image scaling the ambient light) and one irradiance term, read through uv1
-//! (texel), per vertex (vertex) or per pixel (pixel). Which terms are there picks the
-//! shader's variant (specialization constants); what may change per frame (ambient, beta,
+//! term (an atlas image scaling the ambient light) and one indirect term: irradiance, read
+//! through uv1 (texel), per vertex (vertex) or per pixel (pixel), or exitant radiance in
+//! spherical harmonics per vertex. Which terms are there picks the shader's variant
+//! (specialization constants; the radiance term its own shaders, lighting_sh.vert and .frag,
+//! whose vertex outputs differ); what may change per frame (ambient, beta,
 //! the irradiance term's flags, camera, shadow settings) is in the frame's uniform buffer.
 //! Absent terms are bound to stand-ins the variant never reads.
 //!
@@ -36,6 +38,8 @@ const TERM_PIXEL: u32 = 3;
 pub struct Terms<'t> {
     pub occlusion: Option<&'t Image>,
     pub irradiance: Option<Source<'t>>,
+    /// Exitant radiance in spherical harmonics per vertex: in place of `irradiance`.
+    pub radiance: Option<&'t Buffer>,
 }
 
 impl<'t> Terms<'t> {
@@ -54,9 +58,13 @@ impl<'t> Terms<'t> {
                     gathered.irradiance = Some(source);
                     1
                 }
+                Some(Term::Radiance(buffer)) => {
+                    gathered.radiance = Some(buffer);
+                    1
+                }
             };
             if let Some(first) = givers[role].replace(name) {
-                let what = ["an occlusion", "an irradiance"][role];
+                let what = ["an occlusion", "an irradiance or radiance"][role];
                 return Err(VkError::Invalid(format!(
                     "techniques {first} and {name} both hand the lighting pass {what} term; a frame takes one of each"
                 )));
@@ -125,9 +133,14 @@ impl LightingPass {
             Some(Source::Pixel(image)) => Some(image),
             _ => None,
         };
-        let vertices = match terms.irradiance {
-            Some(Source::Vertex(buffer)) => buffer,
+        let vertices = match (&terms.irradiance, terms.radiance) {
+            (Some(Source::Vertex(buffer)), _) => *buffer,
+            (_, Some(buffer)) => buffer,
             _ => &stand_in_buffer,
+        };
+        let (vertex, fragment) = match terms.radiance {
+            Some(_) => (shaders::LIGHTING_SH_VERT, shaders::LIGHTING_SH_FRAG),
+            None => (shaders::LIGHTING_VERT, shaders::LIGHTING_FRAG),
         };
         let descriptors = DescriptorSet::new(
             ctx,
@@ -152,8 +165,8 @@ impl LightingPass {
         let pipeline = Pipeline::graphics(
             ctx,
             &GraphicsPipelineDesc {
-                vertex: shaders::LIGHTING_VERT,
-                fragment: shaders::LIGHTING_FRAG,
+                vertex,
+                fragment,
                 specialization: &[terms.occlusion.is_some() as u32, terms.irradiance_kind()],
                 vertex_stride: VERTEX_STRIDE,
                 attributes: &vertex_attributes(),

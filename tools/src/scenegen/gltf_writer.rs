@@ -77,6 +77,14 @@ impl Builder {
         self.materials.len() - 1
     }
 
+    /// A diffuse material with relume's glossy lobe (`extras.relume.phong`: the normalised
+    /// modified Phong lobe of rho_s `specular` and exponent e the path tracer opts into).
+    pub(super) fn phong_material(&mut self, name: &str, rgb: [f64; 3], specular: f64, exponent: f64) -> usize {
+        let m = self.material(name, rgb);
+        self.materials[m]["extras"] = json!({ "relume": { "phong": { "specular": num(specular), "exponent": num(exponent) } } });
+        m
+    }
+
     /// Appends bytes as a bufferView (4-byte aligned, as every accessor here needs).
     pub(super) fn view(&mut self, bytes: &[u8], target: u32) -> usize {
         while !self.bin.len().is_multiple_of(4) {

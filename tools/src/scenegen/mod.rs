@@ -33,6 +33,10 @@
 //! - `cornell-window`: `cornell-cloud` with a window in a 2 cm back wall and a closed yard
 //!   behind it, the cloud (5 x 5 x 10) over room and yard: that paper's Window scene, where a
 //!   light carried in through the window pops (its Fig. 7).
+//! - `maze`: that paper's Maze scene (Table 1: about 43k triangles, 1,024 cloud lights, half
+//!   above the maze): 8 x 8 corridors, walls open to the sky, welded grids.
+//! - `glossy-enclosure`: that paper's glossy scene (its Bunny): a lumpy blob with a Phong lobe
+//!   of exponent 12 in a closed room between a red and a blue wall, 64 cloud lights.
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -47,7 +51,9 @@
 //! holds little-endian f32 and u32 data.
 
 mod geometry;
+mod glossy;
 mod gltf_writer;
+mod maze;
 mod scenes;
 mod settings;
 #[cfg(test)]
@@ -66,7 +72,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 16] = [
+pub const SCENE_NAMES: [&str; 18] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -83,6 +89,8 @@ pub const SCENE_NAMES: [&str; 16] = [
     "fiv-crowd-60",
     "cornell-cloud",
     "cornell-window",
+    "maze",
+    "glossy-enclosure",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -143,6 +151,8 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "cornell-wall-light" => cornell_wall_light(),
         "cornell-cloud" => cornell_cloud(),
         "cornell-window" => cornell_window(),
+        "maze" => maze::maze(),
+        "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),

@@ -63,3 +63,19 @@ pub(super) const CLASSROOM_SETTINGS: Settings = Settings {
     light_region: Some(([-1.5, 2.5, -3.0], [1.5, 2.95, 3.0], 64)),
     light_area: 0.0,
 };
+
+/// The maze: no ambient light (light clouds model it all), the obscurance's range a corridor's
+/// width, texels 6 cm; light path maps' region over the corridors at the point light's height.
+pub(super) const MAZE_SETTINGS: Settings = Settings {
+    ambient: [0.0; 3],
+    beta: 0.3,
+    texel_density: 16.0,
+    tau: 0.1,
+    l_max: 0.5,
+    light_region: Some(([-2.0, 0.3, -2.0], [2.0, 0.45, 2.0], 64)),
+    light_area: 0.0,
+};
+
+/// The glossy enclosure: as the maze, texels 4 cm.
+pub(super) const GLOSSY_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 24.0, tau: 0.1, l_max: 0.4, light_region: None, light_area: 0.0 };

@@ -1,12 +1,13 @@
 //! Local radiance transfer with light clouds (Kristensen et al., 004 §6) at run time: each
 //! user point light stands on its nearest visible cloud lights (weights on the CPU, when the
 //! lights move: `Renderer::set_lights`), and two passes turn the weights into every vertex's
-//! indirect irradiance, handed to the lighting pass as a vertex term (interpolated across
-//! triangles: 004 §5's blending, Gouraud-style).
+//! indirect irradiance (diffuse scenes) or exitant radiance in spherical harmonics (glossy
+//! ones), handed to the lighting pass as a vertex term (interpolated across triangles: 004
+//! §5's blending, Gouraud-style).
 //!
 //! Uploaded at creation (device-local, never written again), the bake's layout:
-//! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's cloud light]` (term 0 the
-//!   mean, d the basis vector B_d);
+//! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's cloud light][coefficient]`
+//!   (term 0 the mean, d the basis vector B_d; n_b coefficients);
 //! - `clusters`: per cluster 4 u32, where its terms start and its zone's first light and light
 //!   count;
 //! - `assignment`: one u32 cluster per vertex;
@@ -15,8 +16,9 @@
 //! Written every frame:
 //! - `weights` (in the command stream, before the passes): up to one per cloud light (of every
 //!   zone), the weight (candela, rgb f32) and the light's index (u32);
-//! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) vec4, rgb x^m then b_d;
-//! - `irradiance` by `reconstruct` (reconstruct.rs): one vec4 per vertex, rgb lux.
+//! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) n_b vec4, rgb x^m then b_d;
+//! - `vertex_values` by `reconstruct` (reconstruct.rs): n_b vec4 per vertex, rgb lux (n_b = 1)
+//!   or the exitant radiance's coefficients (n_b = 16).
 //!
 //! Visibility between a user light and the cloud is asked of the caller (`Visibility`): an
 //! engine has its own ray queries, relume's tools pass the path tracer's BVH.
@@ -74,7 +76,7 @@ struct Buffers {
     coords: Buffer,
     weights: Buffer,
     cluster_sums: Buffer,
-    irradiance: Buffer,
+    vertex_values: Buffer,
 }
 
 pub struct LightCloudTechnique {
@@ -84,6 +86,8 @@ pub struct LightCloudTechnique {
     cloud: Vec<Vec3>,
     weigher: Weigher,
     visibility: Visibility,
+    /// n_b: 1 (irradiance) or 16 (spherical harmonics).
+    coefficients: usize,
     weights: Vec<CloudWeight>,
     /// `weights` as the shader reads them (same capacity: filling it never allocates).
     gpu_weights: Vec<GpuWeight>,
@@ -133,7 +137,11 @@ impl Technique for LightCloudTechnique {
     }
 
     fn term(&self) -> Option<Term<'_>> {
-        Some(Term::Irradiance { source: Source::Vertex(&self.buffers.irradiance), times_occlusion: false, occluded_direct: false })
+        let values = &self.buffers.vertex_values;
+        Some(match self.coefficients {
+            1 => Term::Irradiance { source: Source::Vertex(values), times_occlusion: false, occluded_direct: false },
+            _ => Term::Radiance(values),
+        })
     }
 
     /// The lights moved: their weights now, for the frames recorded from now on (004 §6.1),
@@ -142,10 +150,13 @@ impl Technique for LightCloudTechnique {
         self.weigh(lights, elapsed);
     }
 
-    /// `cluster_sums` (C (1 + D) vec4, rgb) and `irradiance` (one vec4 per vertex, rgb lux),
+    /// `cluster_sums` (C (1 + D) n_b vec4, rgb) and `vertex_values` (n_b vec4 per vertex, rgb),
     /// as the last frame left them.
     fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
-        vec![("cluster_sums", Resource::Buffer(&self.buffers.cluster_sums)), ("irradiance", Resource::Buffer(&self.buffers.irradiance))]
+        vec![
+            ("cluster_sums", Resource::Buffer(&self.buffers.cluster_sums)),
+            ("vertex_values", Resource::Buffer(&self.buffers.vertex_values)),
+        ]
     }
 }
 
@@ -153,11 +164,11 @@ impl MakeTechnique for LightCloudData<'_> {
     /// Uploads the transfer in one submission that is waited for and weighs the scene's
     /// lights. Refused, by name: a cloud that fails `validate` or is for another vertex count,
     /// spot or directional lights, an m out of range, a transfer larger than one storage
-    /// buffer, and a cloud too large for one in-stream weight update (64 KiB).
+    /// buffer, and more weights than one in-stream update holds (64 KiB, 4,096 weights).
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
         let ctx = shared.ctx;
         let cloud = self.cloud;
-        check(ctx, cloud, shared.gpu_scene.vertex_count())?;
+        check(ctx, cloud, shared.gpu_scene.vertex_count(), (self.nearest, shared.scene.lights.len()))?;
         refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest)
             .and_then(|w| w.with_fade(self.fade_seconds))
@@ -178,7 +189,7 @@ impl MakeTechnique for LightCloudData<'_> {
                 ("light cloud coordinates", bytemuck::cast_slice(coords)),
             ],
         )?;
-        let term_count = (cloud.cluster_count() * (1 + cloud.basis)) as u32;
+        let term_count = (cloud.cluster_count() * (1 + cloud.basis) * cloud.coefficients) as u32;
         let per_frame = |name, bytes: u64| {
             let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
             Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)
@@ -191,22 +202,28 @@ impl MakeTechnique for LightCloudData<'_> {
             weights: Buffer::new(
                 ctx,
                 "light cloud weights",
-                cloud.lights.len() as u64 * 16,
+                weight_capacity(cloud) as u64 * 16,
                 vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuOnly,
             )?,
             cluster_sums: per_frame("light cloud cluster sums", term_count as u64 * 16)?,
-            irradiance: per_frame("light cloud irradiance", cloud.vertex_count() as u64 * 16)?,
+            vertex_values: per_frame("light cloud vertex values", (cloud.vertex_count() * cloud.coefficients) as u64 * 16)?,
         };
         let mut technique = LightCloudTechnique {
-            cluster_sums: ClusterSumsPass::new(shared, &buffers, term_count, 1 + cloud.basis as u32)?,
-            reconstruct: ReconstructPass::new(shared, &buffers, cloud.vertex_count() as u32, cloud.basis as u32)?,
+            cluster_sums: ClusterSumsPass::new(shared, &buffers, (term_count, 1 + cloud.basis as u32, cloud.coefficients as u32))?,
+            reconstruct: ReconstructPass::new(
+                shared,
+                &buffers,
+                cloud.vertex_count() as u32,
+                (cloud.basis as u32, cloud.coefficients as u32),
+            )?,
+            coefficients: cloud.coefficients,
             buffers,
             cloud: cloud.lights.clone(),
             weigher,
             visibility: Arc::clone(&self.visibility),
             weights: Vec::with_capacity(cloud.lights.len()),
-            gpu_weights: Vec::with_capacity(cloud.lights.len()),
+            gpu_weights: Vec::with_capacity(weight_capacity(cloud)),
             unseen: 0,
         };
         technique.weigh(&shared.scene.lights, None);
@@ -214,7 +231,8 @@ impl MakeTechnique for LightCloudData<'_> {
     }
 }
 
-fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()> {
+/// `nearest`: m; `scene_lights`: the user lights (their count never changes).
+fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene_lights): (usize, usize)) -> VkResult<()> {
     let refuse = |why: String| Err(VkError::Invalid(format!("light cloud: {why}")));
     if let Err(why) = cloud.validate() {
         return refuse(why);
@@ -226,11 +244,11 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
         ));
     }
     // Every buffer the passes bind, in bytes, and the workgroups of each dispatch.
-    let terms = (cloud.cluster_count() * (1 + cloud.basis)) as u64;
+    let terms = (cloud.cluster_count() * (1 + cloud.basis) * cloud.coefficients) as u64;
     let bytes = [
         cloud.terms.len() as u64 * 4,
         cloud.coords.len() as u64 * 4,
-        cloud.vertex_count() as u64 * 16,
+        (cloud.vertex_count() * cloud.coefficients) as u64 * 16,
         terms * 16,
         cloud.cluster_count() as u64 * 16,
     ];
@@ -249,8 +267,21 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
             cloud.vertex_count()
         ));
     }
-    if cloud.lights.len() * 16 > 65536 {
-        return refuse(format!("{} cloud lights: at most 4096 weights fit one in-stream update", cloud.lights.len()));
+    let most = cloud.zone_count() * nearest * scene_lights;
+    if cloud.lights.len().min(most) > MAX_WEIGHTS {
+        return refuse(format!(
+            "{scene_lights} lights standing on up to {nearest} cloud lights in each of {} zones make up to {most} weights; at most {MAX_WEIGHTS} fit one in-stream update: use fewer lights, zones or --nearest",
+            cloud.zone_count()
+        ));
     }
     Ok(())
+}
+
+/// The most non-zero weights a frame uploads: 64 KiB, one in-stream update.
+const MAX_WEIGHTS: usize = 4096;
+
+/// Room for every weight a frame can have: one per cloud light, at most MAX_WEIGHTS (`check`
+/// refused more).
+fn weight_capacity(cloud: &LightCloud) -> usize {
+    cloud.lights.len().min(MAX_WEIGHTS)
 }

@@ -1,11 +1,12 @@
-//! CPCA vertex reconstruction (compute), 004 eq. (12)-(13): each vertex's indirect irradiance
-//! as its cluster's x^m plus its coordinates times the cluster's b_d
-//! (relume_bake::light_cloud::LightCloud::irradiance on the CPU). The paper evaluates this in
-//! the vertex program; here it runs as a pass of its own so that the lighting pass, shared by
-//! every method, only reads a vertex term.
+//! CPCA vertex reconstruction (compute), 004 eq. (12)-(13): each vertex's indirect irradiance,
+//! or its exitant radiance's n_b spherical-harmonic coefficients, as its cluster's x^m plus its
+//! coordinates times the cluster's b_d (relume_bake::light_cloud::LightCloud::reconstruct on the
+//! CPU). The paper evaluates this in the vertex program; here it runs as a pass of its own so
+//! that the lighting pass, shared by every method, only reads a vertex term.
 //!
-//! Reads: the cluster sums, the assignment, the coordinates. Writes: the irradiance buffer,
-//! every vertex. Cost: one invocation per vertex (workgroups of 64), 1 + D reads of 16 bytes.
+//! Reads: the cluster sums, the assignment, the coordinates. Writes: the per-vertex values,
+//! every vertex. Cost: one invocation per vertex (workgroups of 64), (1 + D) n_b reads of 16
+//! bytes.
 
 use super::Buffers;
 use crate::passes::compute::{ComputePass, Slot};
@@ -18,6 +19,7 @@ use crate::vk::{Access, CommandRecorder, Tracker, VkResult};
 struct ReconstructPush {
     vertex_count: u32,
     basis: u32,
+    coefficients: u32,
 }
 
 pub(super) struct ReconstructPass {
@@ -26,15 +28,15 @@ pub(super) struct ReconstructPass {
 }
 
 impl ReconstructPass {
-    pub fn new(shared: &Shared, buffers: &Buffers, vertex_count: u32, basis: u32) -> VkResult<ReconstructPass> {
+    pub fn new(shared: &Shared, buffers: &Buffers, vertex_count: u32, (basis, coefficients): (u32, u32)) -> VkResult<ReconstructPass> {
         let slots = [
             Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.assignment, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.coords, Access::ComputeStorageRead),
-            Slot::Buffer(&buffers.irradiance, Access::ComputeStorageWrite),
+            Slot::Buffer(&buffers.vertex_values, Access::ComputeStorageWrite),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 8, &slots)?;
-        Ok(ReconstructPass { pass, push: ReconstructPush { vertex_count, basis } })
+        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 12, &slots)?;
+        Ok(ReconstructPass { pass, push: ReconstructPush { vertex_count, basis, coefficients } })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {

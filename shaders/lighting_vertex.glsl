@@ -1,0 +1,42 @@
+// The lighting pass's vertex stage (lighting.vert, and lighting_sh.vert with SH_RADIANCE):
+// scene geometry in world space, as the CPU scene holds it, and a vertex term for the fragment
+// stage to interpolate: irradiance, or with SH_RADIANCE 16 spherical-harmonic coefficients of
+// exitant radiance (48 floats in 12 vec4: with the four other outputs, the 64 components every
+// Vulkan device takes).
+#include "lighting_interface.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv0;
+layout(location = 3) in vec2 in_uv1;
+
+layout(location = 0) out vec3 world_position;
+layout(location = 1) out vec3 world_normal;
+layout(location = 2) out vec2 uv0;
+layout(location = 3) out vec2 uv1;
+#ifdef SH_RADIANCE
+layout(location = 4) out vec4 radiance_sh[12];
+#else
+layout(location = 4) out vec3 vertex_term;
+#endif
+
+void main() {
+    world_position = in_position;
+    world_normal = in_normal;
+    uv0 = in_uv0;
+    uv1 = in_uv1;
+#ifdef SH_RADIANCE
+    // Coefficient k's rgb at floats 3k..3k+2 of the 48.
+    for (int i = 0; i < 12; ++i) {
+        vec4 packed;
+        for (int c = 0; c < 4; ++c) {
+            int f = 4 * i + c;
+            packed[c] = vertex_irradiance[16 * gl_VertexIndex + f / 3][f % 3];
+        }
+        radiance_sh[i] = packed;
+    }
+#else
+    vertex_term = IRRADIANCE_TERM == TERM_VERTEX ? vertex_irradiance[gl_VertexIndex].rgb : vec3(0.0);
+#endif
+    gl_Position = frame.clip_from_world * vec4(in_position, 1.0);
+}
