@@ -42,7 +42,7 @@ pub struct RenderSettings {
     pub exposure: f32,
     /// I_A of 001 eq. (5): the ambient irradiance (lux, rgb, each at least 0) an unoccluded
     /// surface receives; scaled by the frame's occlusion term where a technique hands one
-    /// over (shaders/lighting.frag). Default 0.
+    /// over (shaders/lighting_fragment.glsl). Default 0.
     pub ambient: Vec3,
     /// beta of 001 eq. (7), in [0, 1): I'_S = beta * the sum over all lights of each light's
     /// unshadowed irradiance on a surface facing it (range window and spot cone included, no

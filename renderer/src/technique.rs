@@ -35,7 +35,7 @@ pub enum Source<'t> {
     Pixel(&'t Image),
 }
 
-/// What a technique hands the lighting pass (lighting.frag states the formula).
+/// What a technique hands the lighting pass (lighting_fragment.glsl states the formula).
 pub enum Term<'t> {
     /// An atlas image whose rgb scales the ambient light (I_A + beta * every light's
     /// unshadowed irradiance): W of 001 eq. (5).

@@ -1,6 +1,6 @@
 //! The lighting pass (graphics): direct light of every punctual light with visibility from the
 //! variance shadow maps (000 §3.4), emission, the ambient light of 001 eq. (5)-(7), and the
-//! terms the frame's techniques hand over, for Lambertian surfaces (shaders/lighting.frag
+//! terms the frame's techniques hand over, for Lambertian surfaces (shaders/lighting_fragment.glsl
 //! states the formula). It knows terms by kind, never by technique: at most one occlusion
 //! term (an atlas image scaling the ambient light) and one indirect term: irradiance, read
 //! through uv1 (texel), per vertex (vertex) or per pixel (pixel), or exitant radiance in
