@@ -168,6 +168,9 @@ fn two_irradiance_terms_in_one_frame_are_refused() {
     let ctx = validated_context();
     let settings = RenderSettings { width: 16, height: 16, ..RenderSettings::default() };
     let (vertices, pixels) = (TermData { per_pixel: false }, TermData { per_pixel: true });
-    says(&refusal(try_new_renderer(&ctx, &dark_scene(), &settings, &[&vertices, &pixels])), &["term_test", "an irradiance or radiance term"]);
+    says(
+        &refusal(try_new_renderer(&ctx, &dark_scene(), &settings, &[&vertices, &pixels])),
+        &["term_test", "an irradiance or radiance term"],
+    );
     assert_clean(ctx);
 }
