@@ -4,24 +4,34 @@
 //! a little-endian u32 length, then the first file, then the second.
 //! 0: manifest.json; 1: atlas.bin; 2: obscurance.exr after a u16 width and height of the atlas;
 //! 3: light-path-maps.bin after a u16 width and height; 4: fiv_environment.bin;
-//! 5: fiv_environment.bin and fiv_occluder_0.bin.
+//! 5: fiv_environment.bin and fiv_occluder_0.bin; 6: light-cloud.bin (for cornell-cloud).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use relume_bake::artifact::{Artifact, BakeOutput, Key, PageLayout, Section};
 use relume_bake::scene::Scene;
-use relume_bake::{atlas, fiv, light_path_maps, obscurance};
+use relume_bake::{atlas, fiv, light_cloud, light_path_maps, obscurance};
 use serde_json::json;
 use std::sync::OnceLock;
 
+/// The committed scenes the sections are read for, each loaded once.
+const SCENES: [&str; 3] = ["cornell", "fiv-blobs", "cornell-cloud"];
+
+fn loaded(which: usize) -> &'static Scene {
+    static LOADED: [OnceLock<Scene>; SCENES.len()] = [const { OnceLock::new() }; SCENES.len()];
+    LOADED[which].get_or_init(|| relume_fuzz::scene(SCENES[which]))
+}
+
 fn cornell() -> &'static Scene {
-    static SCENE: OnceLock<Scene> = OnceLock::new();
-    SCENE.get_or_init(|| relume_fuzz::scene("cornell"))
+    loaded(0)
 }
 
 fn fiv_blobs() -> &'static Scene {
-    static SCENE: OnceLock<Scene> = OnceLock::new();
-    SCENE.get_or_init(|| relume_fuzz::scene("fiv-blobs"))
+    loaded(1)
+}
+
+fn cornell_cloud() -> &'static Scene {
+    loaded(2)
 }
 
 /// An artifact of `files` (one section each: name, key, file name, bytes) for `scene`, read.
@@ -55,7 +65,7 @@ fn scene_section(name: &str, file: &str, bytes: &[u8]) -> (String, Key, String, 
 }
 
 fn read(which: u8, data: &[u8]) -> Option<()> {
-    match which % 6 {
+    match which % 7 {
         0 => {
             let dir = relume_fuzz::scratch().join("manifest");
             std::fs::create_dir_all(&dir).ok()?;
@@ -80,6 +90,10 @@ fn read(which: u8, data: &[u8]) -> Option<()> {
         4 => {
             let environment = (fiv::ENVIRONMENT_SECTION.into(), Key::Environment, "fiv_environment.bin".into(), data.to_vec());
             let _ = fiv::read(&artifact(fiv_blobs(), vec![environment], fiv::SECTION_VERSION)?, fiv_blobs(), &[]);
+        }
+        6 => {
+            let sections = vec![scene_section(light_cloud::SECTION, "light-cloud.bin", data)];
+            let _ = light_cloud::read(&artifact(cornell_cloud(), sections, light_cloud::SECTION_VERSION)?, cornell_cloud());
         }
         _ => {
             let (environment, table) = two_files(data)?;
