@@ -189,3 +189,15 @@ pub fn interior_pixels(hits: &[Option<Hit>], width: u32, height: u32) -> Vec<boo
     }
     keep
 }
+
+/// A gathered light cloud reduced and compressed as the `light-cloud` method's defaults do: 8
+/// zones, light clustering at Table 1's 0.5 / 20, 32 clusters of 8 vectors.
+pub fn light_cloud_by_defaults(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    gathered: &relume_bake::light_cloud::LightCloud,
+) -> relume_bake::light_cloud::LightCloud {
+    use relume_bake::light_cloud as lc;
+    let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
+    lc::compress(&lc::reduce(scene, bvh, gathered, reduction).expect("reduce").cloud, 32, 8).expect("compress")
+}

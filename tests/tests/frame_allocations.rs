@@ -176,8 +176,7 @@ fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
     let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
     let cloud = light_cloud::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, work: WorkOptions::default() }).expect("bake");
     // In zones of clustered lights, as the method's defaults bake it.
-    let reduction = light_cloud::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
-    let cloud = light_cloud::compress(&light_cloud::reduce(&scene, &bvh, &cloud, reduction).unwrap().cloud, 32, 8).unwrap();
+    let cloud = light_cloud_by_defaults(&scene, &bvh, &cloud);
     let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.25, visibility: Arc::new(move |a, b| bvh.visible(a, b)) };
     let ctx = validated_context();
     let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);

@@ -67,10 +67,7 @@ struct Measured {
 fn nrmse_along_a_path(ctx: &Arc<Context>, effort: Effort) -> Measured {
     let scene = load_scene("cornell-cloud");
     let (cloud, visibility) = bake(&scene, effort);
-    // The method's defaults: 8 zones, light clustering at Table 1's 0.5 / 20, 32 clusters of 8
-    // vectors.
-    let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
-    let reduced = lc::compress(&lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud, 32, 8).unwrap();
+    let reduced = light_cloud_by_defaults(&scene, &SceneBvh::new(&scene), &cloud);
     let interpolated = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
     let by_default = LightCloudData { cloud: &reduced, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
     let nearest_one = LightCloudData { cloud: &cloud, nearest: 1, fade_seconds: 0.0, visibility };

@@ -73,8 +73,7 @@ fn a_light_through_and_past_the_window_pops_no_more_than_first_measured() {
     let bvh = SceneBvh::new(&scene);
     let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
     let gathered = lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 16, work: WorkOptions::default() }).expect("bake");
-    let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
-    let cloud = lc::compress(&lc::reduce(&scene, &bvh, &gathered, reduction).unwrap().cloud, 32, 8).unwrap();
+    let cloud = light_cloud_by_defaults(&scene, &bvh, &gathered);
     let bvh = Arc::new(bvh);
     let largest = |f: &[f64]| f.iter().copied().fold(0.0, f64::max);
     // Through the window's middle: from 25 cm behind the wall to 30 cm into the room.

@@ -342,12 +342,13 @@ impl Gather<'_> {
         let (t, b) = orthonormal_basis(n);
         let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
         let mut dir = t * local.x + b * local.y + n * local.z;
-        let projection: Vec<Vec3> = match hemisphere {
-            None => vec![Vec3::ONE],
+        // Per coefficient, what the path's light adds to it (irradiance: itself).
+        let projection = match hemisphere {
+            None => [Vec3::ONE; sh::COEFFICIENTS],
             Some(h) => {
                 // f(wi, wo) is symmetric: the lobe about wi's mirror, evaluated at each wo.
                 let at_vertex = Bsdf::new(point.material.albedo(&self.scene.textures, point.uv), point.material.phong.as_ref(), n, dir);
-                h.transfer(&at_vertex).to_vec()
+                h.transfer(&at_vertex)
             }
         };
         let mut origin = self.bvh.offset_origin(p, n, dir);
@@ -365,7 +366,7 @@ impl Gather<'_> {
                     // Irradiance at the vertex by cosine sampling: L cos / pdf = pi L.
                     let c = PI * throughput * bsdf.eval(wi) * e;
                     let at = j * 3 * self.coefficients;
-                    for (k, t) in projection.iter().enumerate() {
+                    for (k, t) in projection[..self.coefficients].iter().enumerate() {
                         for (sum, c) in sums[at + 3 * k..at + 3 * k + 3].iter_mut().zip((c * *t).to_array()) {
                             *sum += c as f64;
                         }
