@@ -427,6 +427,26 @@ pub fn error_table(
     Ok(table)
 }
 
+/// Sloan et al. 2003's variable allocation: `vectors` basis vectors shared out among clusters
+/// of these descending eigenvalues, each vector to the cluster whose next eigenvalue is the
+/// largest (ties to the lower cluster), at most `most` a cluster, none for an eigenvalue of
+/// rounding noise. Each cluster's vectors are a prefix of its eigenvalues, so this drops the
+/// least squared error any split of that many vectors can.
+pub fn allocate(eigenvalues: &[&[f64]], vectors: usize, most: usize) -> Vec<usize> {
+    let mut candidates: Vec<(f64, usize, usize)> = eigenvalues
+        .iter()
+        .enumerate()
+        .flat_map(|(c, values)| {
+            let floor = RANK_TOLERANCE * values.first().copied().unwrap_or(0.0);
+            values.iter().take(most).enumerate().filter(move |(_, &v)| v > floor && v > 0.0).map(move |(d, &v)| (v, c, d))
+        })
+        .collect();
+    candidates.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut counts = vec![0; eigenvalues.len()];
+    candidates.iter().take(vectors).for_each(|&(_, c, _)| counts[c] += 1);
+    counts
+}
+
 /// The candidate with the fewest stored values whose relative error is within `budget`, ties
 /// going to the smaller error (then the earlier entry); None if none is.
 pub fn choose(table: &[Candidate], budget: f64) -> Option<Candidate> {
@@ -494,6 +514,26 @@ mod tests {
     fn table(counts: &[usize], max_basis: usize) -> Vec<Candidate> {
         let (data, features) = grouped();
         error_table(&data, P, &features, 3, counts, max_basis).unwrap()
+    }
+
+    /// Every split of 6 vectors among three clusters of unequal spectra, against the greedy's.
+    #[test]
+    fn the_variable_allocation_drops_the_least_variance_of_any_split() {
+        let spectra: [&[f64]; 3] = [&[9.0, 1.0, 0.5, 0.1], &[4.0, 3.0, 2.0, 1e-15], &[6.0, 0.2]];
+        let dropped = |counts: &[usize]| -> f64 { spectra.iter().zip(counts).map(|(s, &d)| s.iter().skip(d).sum::<f64>()).sum() };
+        let greedy = allocate(&spectra, 6, 1024);
+        assert_eq!(greedy, vec![2, 3, 1]);
+        for a in 0..=4 {
+            for b in 0..=4usize {
+                let c = 6usize.saturating_sub(a + b).min(2);
+                if a + b + c == 6 {
+                    assert!(dropped(&greedy) <= dropped(&[a, b, c]), "{greedy:?} drops more than {:?}", [a, b, c]);
+                }
+            }
+        }
+        // Rounding noise gets no vector; a cap holds.
+        assert_eq!(allocate(&spectra, 100, 1024), vec![4, 3, 2]);
+        assert_eq!(allocate(&spectra, 100, 1), vec![1, 1, 1]);
     }
 
     #[test]

@@ -43,9 +43,9 @@ fn inside_a_closed_sphere_every_column_is_the_analytic_indirect_irradiance() {
     let cloud = bake(&s, grid, 64, None);
     assert_eq!(cloud.lights.len(), 8, "no grid point lies inside closed geometry");
     let expected = RHO / (RADIUS * RADIUS * (1.0 - RHO));
-    let vertices = cloud.vertex_count();
+    let (vertices, columns) = (cloud.vertex_count(), lc::Columns::new(&cloud));
     for j in 0..cloud.lights.len() {
-        let values: Vec<f32> = (0..vertices).map(|v| cloud.column(v, j).x).collect();
+        let values: Vec<f32> = (0..vertices).map(|v| columns.column(v, j).x).collect();
         let mean = values.iter().map(|&x| x as f64).sum::<f64>() / vertices as f64;
         let rms = (values.iter().map(|&x| (x as f64 - expected as f64).powi(2)).sum::<f64>() / vertices as f64).sqrt();
         println!("light {j} at {}: mean {mean:.4}, rms about the answer {rms:.4} (answer {expected})", cloud.lights[j]);
@@ -133,11 +133,11 @@ fn weights_have_no_jumps_as_a_light_moves() {
 fn with_one_nearest_a_light_at_a_cloud_point_takes_its_column() {
     let s = sphere_scene();
     let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 2, Some(1));
-    let mut weigher = Weigher::new(cloud.lights.len(), 1).unwrap();
+    let (mut weigher, columns) = (Weigher::new(cloud.lights.len(), 1).unwrap(), lc::Columns::new(&cloud));
     for j in 0..cloud.lights.len() {
         let e = cloud.reconstruct(&weigh(&mut weigher, &cloud.lights, &[point_light(cloud.lights[j], Vec3::splat(2.0))]));
         for (v, e) in e.iter().enumerate() {
-            assert!((*e - 2.0 * cloud.column(v, j)).abs().max_element() <= 1e-6 * e.max_element().max(1.0), "light {j}, vertex {v}");
+            assert!((*e - 2.0 * columns.column(v, j)).abs().max_element() <= 1e-6 * e.max_element().max(1.0), "light {j}, vertex {v}");
         }
     }
 }
@@ -197,25 +197,54 @@ fn the_bake_is_the_same_at_any_thread_count() {
 }
 
 /// 004 §5: the clustered PCA's error falls as vectors are added, and a basis as long as the
-/// rows (3 x 8 values) reproduces every column; the GPU's sums-then-vertices order equals
-/// weighing the reconstructed columns.
+/// rows (3 x 8 values) reproduces every column; the same vectors shared out by eigenvalue
+/// (Sloan et al. 2003) lose no more, and less where the clusters' spectra differ (the
+/// sphere's are alike; half its rows varied in every direction make them differ); the GPU's sums-then-vertices order equals weighing the
+/// reconstructed columns, with D the same for every cluster or not.
 #[test]
 fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
     let s = sphere_scene();
     let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 4, None);
-    let errors: Vec<f64> =
-        [0, 1, 2, 4, 8, 24].iter().map(|&d| lc::relative_error(&cloud, &lc::compress(&cloud, 4, d).expect("compress"))).collect();
+    let errors: Vec<f64> = [0, 1, 2, 4, 8, 24]
+        .iter()
+        .map(|&d| lc::relative_error(&cloud, &lc::compress(&cloud, 4, lc::Vectors::Each(d)).expect("compress")))
+        .collect();
     println!("relative error with 0, 1, 2, 4, 8, 24 vectors: {errors:?}");
     assert!(errors.windows(2).all(|w| w[1] <= w[0] + 1e-9), "{errors:?}");
     assert!(errors[0] > 0.01 && errors[5] < 1e-5, "{errors:?}");
-    let compressed = lc::compress(&cloud, 4, 2).unwrap();
+    let mut uneven = cloud.clone();
+    let row = uneven.per_light() * uneven.lights.len();
+    // Rows of one half of the sphere vary in every direction, the other half's as gathered.
+    for (v, x) in uneven.terms.chunks_exact_mut(row).enumerate().filter(|(v, _)| s.meshes[0].positions[*v].y > 0.0) {
+        x.iter_mut().enumerate().for_each(|(j, t)| *t *= 1.0 + 0.8 * (1.7 * j as f32 + 0.3 * v as f32).sin());
+    }
+    let mut gains = Vec::new();
+    for (data, d) in [(&cloud, 1), (&cloud, 2), (&cloud, 4), (&uneven, 1), (&uneven, 2), (&uneven, 4)] {
+        let each = lc::relative_error(data, &lc::compress(data, 4, lc::Vectors::Each(d)).unwrap());
+        let shared = lc::compress(data, 4, lc::Vectors::Shared(d)).unwrap();
+        let error = lc::relative_error(data, &shared);
+        println!("D = {d}: {:?} vectors shared, relative error {error:.5} against {each:.5}", shared.vectors);
+        assert_eq!(shared.vectors.iter().sum::<u32>() as usize, d * shared.cluster_count());
+        assert!(error <= each + 1e-6, "D = {d} shared: {error} against {each} for the same each");
+        if std::ptr::eq(data, &uneven) {
+            gains.push(each - error);
+        }
+    }
+    assert!(gains.iter().any(|&g| g > 0.01 * errors[0]), "sharing gained nothing on uneven clusters: {gains:?}");
     let mut weigher = Weigher::new(cloud.lights.len(), 4).unwrap();
     let weights = weigh(&mut weigher, &cloud.lights, &[point_light(Vec3::new(0.1, 0.2, -0.1), Vec3::new(1.0, 2.0, 3.0))]);
-    for (v, e) in compressed.reconstruct(&weights).iter().enumerate() {
-        let direct = weights.iter().fold(Vec3::ZERO, |sum, w| sum + compressed.column(v, w.light as usize) * w.weight).max(Vec3::ZERO);
-        assert!((*e - direct).abs().max_element() < 1e-5 * direct.max_element().max(1.0), "vertex {v}: {e} against {direct}");
+    for vectors in [lc::Vectors::Each(2), lc::Vectors::Shared(2)] {
+        let compressed = lc::compress(&cloud, 4, vectors).unwrap();
+        let columns = lc::Columns::new(&compressed);
+        for (v, e) in compressed.reconstruct(&weights).iter().enumerate() {
+            let direct = weights.iter().fold(Vec3::ZERO, |sum, w| sum + columns.column(v, w.light as usize) * w.weight).max(Vec3::ZERO);
+            assert!(
+                (*e - direct).abs().max_element() < 1e-5 * direct.max_element().max(1.0),
+                "{vectors:?}, vertex {v}: {e} against {direct}"
+            );
+        }
+        assert!(lc::compress(&compressed, 4, vectors).is_err(), "a compressed cloud is refused");
     }
-    assert!(lc::compress(&compressed, 4, 2).is_err(), "a compressed cloud is refused");
 }
 
 /// The section reads back what was written, uncompressed and clustered, and refuses what a
@@ -233,9 +262,15 @@ fn the_section_round_trips_and_refuses_values_out_of_range() {
         BakeOutput { method: "light-cloud", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
         lc::read(&Artifact::read(&dir).unwrap(), scene).map_err(|e| e.to_string())
     };
-    let compressed = lc::compress(&cloud, 3, 2).unwrap();
+    let compressed = lc::compress(&cloud, 3, lc::Vectors::Each(2)).unwrap();
     assert_eq!(read(&cloud, &s).unwrap(), cloud);
     assert_eq!(read(&compressed, &s).unwrap(), compressed);
+    let shared = lc::compress(&cloud, 3, lc::Vectors::Shared(1)).unwrap();
+    assert_eq!(read(&shared, &s).unwrap(), shared);
+    let mut short = shared.clone();
+    short.coords.pop();
+    let error = read(&short, &s).unwrap_err();
+    assert!(error.contains("light-cloud.bin") && error.contains("the coordinates"), "{error}");
     let mut negative = cloud.clone();
     negative.terms[7] = -0.25;
     let error = read(&negative, &s).unwrap_err();
@@ -322,7 +357,7 @@ fn a_glossy_scene_stores_exitant_radiance_in_sixteen_harmonics() {
     let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 32, None);
     assert_eq!(cloud.coefficients, sh::COEFFICIENTS);
     let expected = RHO / std::f32::consts::PI * RHO / (RADIUS * RADIUS * (1.0 - RHO));
-    let normals: Vec<Vec3> = s.meshes[0].normals.clone();
+    let (normals, columns) = (s.meshes[0].normals.clone(), lc::Columns::new(&cloud));
     for j in 0..cloud.lights.len() {
         for tilt in [0.0f32, 60.0] {
             let mut sum = 0f64;
@@ -330,7 +365,7 @@ fn a_glossy_scene_stores_exitant_radiance_in_sixteen_harmonics() {
                 let (t, _) = relume_bake::sampling::orthonormal_basis(n);
                 let wo = n * tilt.to_radians().cos() + t * tilt.to_radians().sin();
                 let y = sh::eval(wo);
-                sum += (0..sh::COEFFICIENTS).map(|k| cloud.coefficient(v, j, k).y * y[k]).sum::<f32>() as f64;
+                sum += (0..sh::COEFFICIENTS).map(|k| columns.coefficient(v, j, k).y * y[k]).sum::<f32>() as f64;
             }
             let mean = sum / normals.len() as f64;
             assert!((mean - expected as f64).abs() < 0.02 * expected as f64, "light {j}, {tilt} degrees: {mean} against {expected}");

@@ -116,12 +116,13 @@ fn identical_responses_merge_into_one_light_with_the_mean_transfer() {
         assert_eq!(merged.cloud.zone_count(), zones);
         assert_eq!(merged.cloud.lights.len(), zones, "one light a zone: {:?}", merged.groups);
         assert!(merged.cloud.lights.iter().all(|p| p.length() < 1e-6), "at the cloud's mean: {:?}", merged.cloud.lights);
+        let (before, after) = (lc::Columns::new(&cloud), lc::Columns::new(&merged.cloud));
         for v in 0..cloud.vertex_count() {
-            let mean = (0..8).fold(Vec3::ZERO, |s, j| s + cloud.column(v, j)) / 8.0;
+            let mean = (0..8).fold(Vec3::ZERO, |s, j| s + before.column(v, j)) / 8.0;
             let cluster = merged.cloud.assignment[v];
             // One light a zone: the vertex's zone's light is the zone's index.
             let zone = (0..zones).find(|&z| merged.cloud.zone_clusters[z + 1] > cluster).unwrap();
-            assert!((merged.cloud.column(v, zone) - mean).abs().max_element() < 1e-6, "vertex {v}");
+            assert!((after.column(v, zone) - mean).abs().max_element() < 1e-6, "vertex {v}");
         }
         assert!(merged.relative_error > 0.0 && merged.relative_error < 0.3, "the gather's noise: {}", merged.relative_error);
         let apart = reduce(&s, &cloud, zones, Some((0.0, 1e6)));
@@ -175,7 +176,7 @@ fn a_zoned_transfer_round_trips_and_is_the_same_at_any_thread_count() {
     let cloud = gathered(&s, ROOMS_GRID, 2);
     let in_pool = |threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| lc::compress(&reduce(&s, &cloud, 3, Some((0.5, 8.0))).cloud, 6, 2).unwrap())
+        pool.install(|| lc::compress(&reduce(&s, &cloud, 3, Some((0.5, 8.0))).cloud, 6, lc::Vectors::Each(2)).unwrap())
     };
     let zoned = in_pool(1);
     assert_eq!(zoned, in_pool(2));

@@ -16,18 +16,18 @@ struct CloudWeight {
 };
 layout(std430, set = 0, binding = 1) readonly buffer Weights { CloudWeight weights[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Sums { vec4 sums[]; };
-// Per cluster: where its terms start, its zone's first cloud light and light count.
+// Per cluster: where its terms start, its zone's first cloud light and light count, D_c.
 struct Cluster {
     uint offset;
     uint first_light;
     uint lights;
-    uint unused;
+    uint vectors;
 };
 layout(std430, set = 0, binding = 3) readonly buffer Clusters { Cluster clusters[]; };
 
 layout(push_constant) uniform ClusterSumsPush {
     uint term_count;    // C * (1 + D) * n_b
-    uint terms;         // 1 + D
+    uint terms;         // 1 + D, D the most vectors of any cluster
     uint weight_count;
     uint coefficients;  // n_b
 } pc;
@@ -37,8 +37,14 @@ void main() {
     if (index >= pc.term_count) return;
     uint term = index / pc.coefficients, i = index % pc.coefficients;
     Cluster c = clusters[term / pc.terms];
-    uint first = c.offset + 3u * ((term % pc.terms) * c.lights * pc.coefficients + i);
+    uint t = term % pc.terms;
     vec3 sum = vec3(0.0);
+    // Past the cluster's own D_c: zero, which its vertices never read.
+    if (t > c.vectors) {
+        sums[index] = vec4(sum, 0.0);
+        return;
+    }
+    uint first = c.offset + 3u * (t * c.lights * pc.coefficients + i);
     for (uint k = 0u; k < pc.weight_count; ++k) {
         CloudWeight w = weights[k];
         uint j = w.light - c.first_light;

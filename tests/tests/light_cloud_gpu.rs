@@ -1,7 +1,8 @@
 //! The light cloud's run time (004 §6) on the GPU against its CPU twin,
-//! relume_bake::light_cloud::LightCloud::{cluster_sums, irradiance}, uncompressed, clustered
-//! and in zones, as the lights move; its refusals; all with validation and synchronization
-//! validation on.
+//! relume_bake::light_cloud::LightCloud::{cluster_sums, reconstruct}, uncompressed, clustered,
+//! in zones and with vectors shared out among clusters, as the lights move; the single draw
+//! against the paper's alpha-blended passes; its refusals; all with validation and
+//! synchronization validation on.
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
@@ -71,12 +72,16 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     let (scene, cloud, visibility) = baked();
     gpu_equals_cpu(&scene, &cloud, Arc::clone(&visibility));
     // CPCA vertex reconstruction: 16 clusters of 4 vectors.
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, 4).unwrap(), Arc::clone(&visibility));
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, lc::Vectors::Each(4)).unwrap(), Arc::clone(&visibility));
     // 4 zones, each with its own clustered lights (004 §4): every cluster weighs its zone's.
     let reduction = lc::Reduction { zones: 4, weights: Some((0.5, 20.0)) };
     let reduced = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud;
     assert!(reduced.lights.len() < 4 * cloud.lights.len(), "light clustering merged lights");
-    gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, 4).unwrap(), visibility);
+    gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, lc::Vectors::Each(4)).unwrap(), Arc::clone(&visibility));
+    // Sloan's variable allocation: D_c from cluster to cluster.
+    let shared = lc::compress(&reduced, 16, lc::Vectors::Shared(4)).unwrap();
+    assert!(shared.vectors.iter().any(|&d| d != 4), "every cluster kept 4 vectors: {:?}", shared.vectors);
+    gpu_equals_cpu(&scene, &shared, visibility);
 }
 
 #[test]
@@ -148,7 +153,7 @@ fn spherical_harmonic_transfer_equals_the_cpus_as_the_light_moves() {
     let grid = lc::CloudGrid { counts: [2; 3], ..LightCloudSceneSettings::of(&scene).unwrap().grid };
     let cloud = lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, work: WorkOptions::default() }).expect("bake");
     assert_eq!(cloud.coefficients, relume_bake::sh::COEFFICIENTS);
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, 4).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(4)).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
 }
 
 /// The paper's rendering (004 §5, eq. 13) draws every cluster in its own additive pass, its
@@ -178,14 +183,14 @@ fn the_single_draw_equals_the_papers_per_cluster_alpha_blended_passes() {
     let indirect = difference(&single_draw, &direct);
 
     let sums = cloud.cluster_sums(&weights);
-    let terms = 1 + cloud.basis;
+    let (terms, starts) = (1 + cloud.basis(), cloud.coord_starts());
     // Pass c's value at vertex v: x^m + sum_d b_d z_vd of cluster c, times alpha_c(v).
     let pass = |c: usize, v: usize| -> Vec3 {
         if cloud.assignment[v] as usize != c {
             return Vec3::ZERO;
         }
-        let a = (1..terms).fold(sums[c * terms], |a, d| a + sums[c * terms + d] * cloud.coords[v * cloud.basis + d - 1]);
-        a.max(Vec3::ZERO)
+        let z = &cloud.coords[starts[v]..starts[v + 1]];
+        z.iter().enumerate().fold(sums[c * terms], |a, (d, z)| a + sums[c * terms + d + 1] * *z).max(Vec3::ZERO)
     };
     let first_vertex: Vec<usize> = scene.meshes.iter().scan(0, |n, m| Some(std::mem::replace(n, *n + m.positions.len()))).collect();
     let hits = primary_hits(&scene, &bvh, width, height);

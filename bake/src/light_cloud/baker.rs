@@ -15,7 +15,7 @@
 //! hemisphere of y_k(wo) f(wi, wo) dwo (a fixed quadrature), and the sums become the
 //! least-squares coefficients a = G^-1 b, G the hemisphere's Gram matrix of the y_k.
 
-use super::{vertex_count, CloudGrid, LightCloud};
+use super::{vertex_count, CloudGrid, Columns, LightCloud};
 use crate::bsdf::Bsdf;
 use crate::bvh::SceneBvh;
 use crate::cpca;
@@ -174,10 +174,11 @@ impl Hemisphere {
 /// was made from, over every vertex and cloud light.
 pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64 {
     let (mut error, mut total) = (0.0f64, 0.0f64);
+    let (before, after) = (Columns::new(uncompressed), Columns::new(compressed));
     for v in 0..uncompressed.vertex_count() {
         for j in 0..uncompressed.lights.len() {
             for k in 0..uncompressed.coefficients {
-                let (x, y) = (uncompressed.coefficient(v, j, k).as_dvec3(), compressed.coefficient(v, j, k).as_dvec3());
+                let (x, y) = (before.coefficient(v, j, k).as_dvec3(), after.coefficient(v, j, k).as_dvec3());
                 error += (x - y).length_squared();
                 total += x.length_squared();
             }
@@ -193,13 +194,23 @@ pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64
 /// The most rounds of Sloan's refinement (004 §5: "20-30 iterations or until no vertex moves").
 const REFINE_ROUNDS: usize = 20;
 
+/// How many basis vectors each cluster keeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Vectors {
+    /// D for every cluster (004 §5).
+    Each(usize),
+    /// C x D in each zone's C clusters, shared out by eigenvalue: Sloan et al. 2003's variable
+    /// allocation, which drops the least variance those vectors can.
+    Shared(usize),
+}
+
 /// The clustered PCA of an uncompressed cloud (004 §5, after Sloan et al. 2003), zone by zone:
 /// the zone's share of `clusters` (by its vertices, at least one) by the divisive 2-means of
-/// its rows, `basis` vectors each, then refined: vertices move to the cluster that
-/// reconstructs them best until none moves (at most 20 rounds). Clusters left empty are
-/// dropped.
-pub fn compress(cloud: &LightCloud, clusters: usize, basis: usize) -> Result<LightCloud, String> {
-    if cloud.basis != 0 || cloud.cluster_count() != cloud.vertex_count() {
+/// its rows, D vectors each, then refined: vertices move to the cluster that reconstructs them
+/// best until none moves (at most 20 rounds). Clusters left empty are dropped. With
+/// `Vectors::Shared`, the refined clusters then share their vectors out.
+pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result<LightCloud, String> {
+    if cloud.basis() != 0 || cloud.cluster_count() != cloud.vertex_count() {
         return Err("only an uncompressed cloud can be compressed".into());
     }
     let layout = cloud.layout();
@@ -207,21 +218,28 @@ pub fn compress(cloud: &LightCloud, clusters: usize, basis: usize) -> Result<Lig
     for (v, &c) in cloud.assignment.iter().enumerate() {
         zones[cloud.zone_clusters.partition_point(|&start| start <= c) - 1].push(v as u32);
     }
-    let mut out =
-        LightCloud { zone_clusters: vec![0], basis, terms: Vec::new(), coords: vec![0.0; cloud.vertex_count() * basis], ..cloud.clone() };
+    let mut out = LightCloud { zone_clusters: vec![0], vectors: Vec::new(), terms: Vec::new(), coords: Vec::new(), ..cloud.clone() };
+    let mut coords = vec![Vec::new(); cloud.vertex_count()];
     for (zone, members) in zones.iter().enumerate() {
         let cols = cloud.per_light() * cloud.zone_light_range(zone).len();
         let rows: Vec<f32> =
             members.iter().flat_map(|&v| &cloud.terms[layout[cloud.assignment[v as usize] as usize].offset..][..cols]).copied().collect();
         let share = ((clusters * members.len()) as f64 / cloud.vertex_count() as f64).round() as usize;
+        let (Vectors::Each(basis) | Vectors::Shared(basis)) = vectors;
         let first = cpca::fit(&rows, cols, &rows, cols, share.clamp(1, members.len()), basis)?;
-        let (fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
+        let (mut fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
+        if let Vectors::Shared(mean) = vectors {
+            let eigenvalues: Vec<&[f64]> = fitted.clusters.iter().map(|c| c.eigenvalues.as_slice()).collect();
+            let counts = cpca::allocate(&eigenvalues, mean * fitted.clusters.len(), super::MAX_VECTORS);
+            fitted.clusters = fitted.clusters.iter().zip(counts).map(|(c, d)| cpca::cluster_pca(&rows, cols, &c.members, d)).collect();
+        }
         let base = out.cluster_count() as u32;
         for cluster in &fitted.clusters {
+            out.vectors.push(cluster.basis.len() as u32);
             out.terms.extend(&cluster.mean);
             cluster.basis.iter().for_each(|b| out.terms.extend(b));
             for (&k, z) in cluster.members.iter().zip(&cluster.weights) {
-                out.coords[members[k as usize] as usize * basis..][..basis].copy_from_slice(z);
+                coords[members[k as usize] as usize] = z.clone();
             }
         }
         for (&v, &c) in members.iter().zip(&fitted.assignment) {
@@ -229,6 +247,7 @@ pub fn compress(cloud: &LightCloud, clusters: usize, basis: usize) -> Result<Lig
         }
         out.zone_clusters.push(base + fitted.clusters.len() as u32);
     }
+    out.coords = coords.concat();
     Ok(out)
 }
 

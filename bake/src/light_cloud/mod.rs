@@ -133,9 +133,9 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
 /// scene (meshes in order, each mesh's vertices in order: the renderer's vertex buffer) and
 /// per light of its zone, the indirect irradiance a 1 cd isotropic light there gives the
 /// vertex (lux, rgb), as a clustered PCA (004 §5, eq. 11): vertex v of cluster c stores
-/// X_v ~ X^c + sum_d z_vd B^c_d, each term a row of 3 x (the zone's lights) values (rgb per
-/// light, spec light-clouds.md B8). Uncompressed, every vertex is its own cluster and D = 0:
-/// the terms are the rows as gathered.
+/// X_v ~ X^c + sum_{d <= D_c} z_vd B^c_d, each term a row of 3 x (the zone's lights) values
+/// (rgb per light, spec light-clouds.md B8). Uncompressed, every vertex is its own cluster and
+/// D_c = 0: the terms are the rows as gathered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloud {
     /// Every zone's lights, zone after zone.
@@ -151,12 +151,13 @@ pub struct LightCloud {
     pub samples: u32,
     /// Per vertex, its cluster.
     pub assignment: Vec<u32>,
-    /// D, the basis vectors of every cluster.
-    pub basis: usize,
+    /// D_c, each cluster's basis vectors: the same for every cluster, or shared out by
+    /// eigenvalue (Sloan et al. 2003's variable allocation).
+    pub vectors: Vec<u32>,
     /// Cluster after cluster, `[term][zone light][coefficient][rgb]`: term 0 the cluster's mean
     /// X^c, term d its B^c_d.
     pub terms: Vec<f32>,
-    /// `[vertex][d]`: z_vd, d from 1 (D per vertex).
+    /// Vertex after vertex, its cluster's D_c coordinates z_vd, d from 1.
     pub coords: Vec<f32>,
 }
 
@@ -165,6 +166,8 @@ pub struct LightCloud {
 pub struct ClusterLayout {
     /// The first value of its terms in `LightCloud::terms`.
     pub offset: usize,
+    /// D_c: its terms are its mean and D_c basis vectors.
+    pub vectors: u32,
     /// Its zone's first light and light count.
     pub first_light: u32,
     pub lights: u32,
@@ -182,7 +185,7 @@ impl LightCloud {
             lights,
             samples,
             assignment: (0..vertices as u32).collect(),
-            basis: 0,
+            vectors: vec![0; vertices],
             terms: rows,
             coords: Vec::new(),
         }
@@ -205,43 +208,35 @@ impl LightCloud {
         self.zone_clusters.last().map_or(0, |&c| c as usize)
     }
 
+    /// D: the most basis vectors a cluster has (the stride of `cluster_sums`).
+    pub fn basis(&self) -> usize {
+        self.vectors.iter().max().map_or(0, |&d| d as usize)
+    }
+
+    /// Where each vertex's coordinates start in `coords`, and their end (vertices + 1 entries).
+    pub fn coord_starts(&self) -> Vec<usize> {
+        let d = |&c: &u32| self.vectors.get(c as usize).map_or(0, |&d| d as usize);
+        std::iter::once(0).chain(self.assignment.iter().scan(0, |at, c| Some(*at + d(c)).inspect(|&end| *at = end))).collect()
+    }
+
     /// Zone z's lights, as indices into `lights`.
     pub fn zone_light_range(&self, zone: usize) -> std::ops::Range<usize> {
         self.zone_lights[zone] as usize..self.zone_lights[zone + 1] as usize
     }
 
-    /// Cluster `cluster`'s layout (clusters lie zone after zone, each zone's the same size).
-    pub fn cluster_layout(&self, cluster: usize) -> ClusterLayout {
-        let zone = self.zone_clusters.partition_point(|&start| start as usize <= cluster) - 1;
-        let size = |z: usize| (1 + self.basis) * self.per_light() * self.zone_light_range(z).len();
-        let before: usize = (0..zone).map(|z| (self.zone_clusters[z + 1] - self.zone_clusters[z]) as usize * size(z)).sum();
-        let lights = self.zone_light_range(zone);
-        ClusterLayout {
-            offset: before + (cluster - self.zone_clusters[zone] as usize) * size(zone),
-            first_light: lights.start as u32,
-            lights: lights.len() as u32,
-        }
-    }
-
-    /// Every cluster's layout, in cluster order.
+    /// Every cluster's layout, in cluster order (clusters lie zone after zone).
     pub fn layout(&self) -> Vec<ClusterLayout> {
-        (0..self.cluster_count()).map(|c| self.cluster_layout(c)).collect()
-    }
-
-    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed: the
-    /// irradiance, or the radiance's first coefficient; zero for a light of another zone.
-    pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
-        self.coefficient(vertex, light, 0)
-    }
-
-    /// Coefficient `k` of the transfer from cloud light `light` to vertex `vertex`,
-    /// reconstructed; zero for a light of another zone.
-    pub fn coefficient(&self, vertex: usize, light: usize, k: usize) -> Vec3 {
-        let at = self.cluster_layout(self.assignment[vertex] as usize);
-        let Some(j) = light.checked_sub(at.first_light as usize).filter(|&j| j < at.lights as usize) else { return Vec3::ZERO };
-        let row = self.per_light() * at.lights as usize;
-        let value = |t: usize| Vec3::from_slice(&self.terms[at.offset + t * row + self.per_light() * j + 3 * k..][..3]);
-        (1..=self.basis).fold(value(0), |sum, d| sum + value(d) * self.coords[vertex * self.basis + d - 1])
+        let mut offset = 0;
+        let mut layout = Vec::with_capacity(self.cluster_count());
+        for zone in 0..self.zone_count() {
+            let lights = self.zone_light_range(zone);
+            for c in self.zone_clusters[zone]..self.zone_clusters[zone + 1] {
+                let vectors = self.vectors[c as usize];
+                layout.push(ClusterLayout { offset, vectors, first_light: lights.start as u32, lights: lights.len() as u32 });
+                offset += (1 + vectors as usize) * self.per_light() * lights.len();
+            }
+        }
+        layout
     }
 
     /// The shapes agree, every value is finite, every zone has lights and clusters, every
@@ -262,18 +257,23 @@ impl LightCloud {
             return Err(format!("zone {z} has {} lights: at most {MAX_CLOUD_LIGHTS}", self.zone_light_range(z).len()));
         }
         let clusters = self.cluster_count();
-        let expected: usize = self.layout().last().map_or(0, |l| l.offset + (1 + self.basis) * self.per_light() * l.lights as usize);
+        if self.vectors.len() != clusters || self.basis() > MAX_VECTORS {
+            return Err(format!("{} vector counts for {clusters} clusters, each at most {MAX_VECTORS}", self.vectors.len()));
+        }
+        let expected: usize =
+            self.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * self.per_light() * l.lights as usize);
         if self.terms.len() != expected {
             return Err(format!("{} term values for clusters that hold {expected}", self.terms.len()));
-        }
-        if self.coords.len() != self.vertex_count() * self.basis {
-            return Err(format!("{} coordinates for {} vertices of D = {}", self.coords.len(), self.vertex_count(), self.basis));
         }
         if let Some(v) = self.assignment.iter().position(|&c| c as usize >= clusters) {
             return Err(format!("vertex {v} is in cluster {}, of {clusters}", self.assignment[v]));
         }
+        let coords = self.coord_starts().last().copied().unwrap_or(0);
+        if self.coords.len() != coords {
+            return Err(format!("{} coordinates for vertices whose clusters' vectors hold {coords}", self.coords.len()));
+        }
         // Basis vectors and spherical harmonics take both signs; irradiance does not.
-        let negative_allowed = self.basis > 0 || self.coefficients > 1;
+        let negative_allowed = self.basis() > 0 || self.coefficients > 1;
         if let Some(i) = self.terms.iter().chain(&self.coords).position(|t| !(t.is_finite() && (negative_allowed || *t >= 0.0))) {
             return Err(format!(
                 "transfer value {i} is {} (must be finite, and >= 0 uncompressed)",
@@ -285,13 +285,14 @@ impl LightCloud {
 
     /// Each cluster's terms weighed by cloud-light weights (per channel, candela), summed over
     /// the weights of its zone's lights in their order: x^m and b_d of 004 eq. (12), cluster
-    /// after cluster, term after term, coefficient after coefficient.
+    /// after cluster, 1 + D terms each (zero past the cluster's D_c), coefficient after
+    /// coefficient.
     pub fn cluster_sums(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
-        let n = self.per_light();
-        let mut sums = Vec::with_capacity(self.cluster_count() * (1 + self.basis) * self.coefficients);
+        let (n, basis) = (self.per_light(), self.basis());
+        let mut sums = Vec::with_capacity(self.cluster_count() * (1 + basis) * self.coefficients);
         for at in self.layout() {
             let row = n * at.lights as usize;
-            for term in self.terms[at.offset..][..(1 + self.basis) * row].chunks_exact(row) {
+            for term in self.terms[at.offset..][..(1 + at.vectors as usize) * row].chunks_exact(row) {
                 for k in 0..self.coefficients {
                     let zone = weights.iter().filter(|w| (at.first_light..at.first_light + at.lights).contains(&w.light));
                     sums.push(zone.fold(Vec3::ZERO, |sum, w| {
@@ -299,6 +300,7 @@ impl LightCloud {
                     }));
                 }
             }
+            sums.resize(sums.len() + (basis - at.vectors as usize) * self.coefficients, Vec3::ZERO);
         }
         sums
     }
@@ -308,16 +310,48 @@ impl LightCloud {
     /// are evaluated): the CPU oracle of the renderer's two passes.
     pub fn reconstruct(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
         let sums = self.cluster_sums(weights);
-        let (terms, n) = (1 + self.basis, self.coefficients);
+        let (terms, n, starts) = (1 + self.basis(), self.coefficients, self.coord_starts());
         let mut out = Vec::with_capacity(self.vertex_count() * n);
         for v in 0..self.vertex_count() {
             let first = self.assignment[v] as usize * terms * n;
+            let z = &self.coords[starts[v]..starts[v + 1]];
             for k in 0..n {
-                let a = (1..terms).fold(sums[first + k], |a, d| a + sums[first + d * n + k] * self.coords[v * self.basis + d - 1]);
+                let a = z.iter().enumerate().fold(sums[first + k], |a, (d, z)| a + sums[first + (d + 1) * n + k] * *z);
                 out.push(if n == 1 { a.max(Vec3::ZERO) } else { a });
             }
         }
         out
+    }
+}
+
+/// A cloud's single values reconstructed, its layout computed once.
+pub struct Columns<'c> {
+    cloud: &'c LightCloud,
+    layout: Vec<ClusterLayout>,
+    starts: Vec<usize>,
+}
+
+impl<'c> Columns<'c> {
+    pub fn new(cloud: &'c LightCloud) -> Columns<'c> {
+        Columns { cloud, layout: cloud.layout(), starts: cloud.coord_starts() }
+    }
+
+    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed: the
+    /// irradiance, or the radiance's first coefficient; zero for a light of another zone.
+    pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
+        self.coefficient(vertex, light, 0)
+    }
+
+    /// Coefficient `k` of the transfer from cloud light `light` to vertex `vertex`,
+    /// reconstructed; zero for a light of another zone.
+    pub fn coefficient(&self, vertex: usize, light: usize, k: usize) -> Vec3 {
+        let cloud = self.cloud;
+        let at = self.layout[cloud.assignment[vertex] as usize];
+        let Some(j) = light.checked_sub(at.first_light as usize).filter(|&j| j < at.lights as usize) else { return Vec3::ZERO };
+        let row = cloud.per_light() * at.lights as usize;
+        let value = |t: usize| Vec3::from_slice(&cloud.terms[at.offset + t * row + cloud.per_light() * j + 3 * k..][..3]);
+        let z = &cloud.coords[self.starts[vertex]..self.starts[vertex + 1]];
+        z.iter().enumerate().fold(value(0), |sum, (d, z)| sum + value(d + 1) * *z)
     }
 }
 
@@ -354,13 +388,16 @@ pub fn vertex_count(scene: &Scene) -> usize {
 }
 
 pub const SECTION: &str = "light-cloud";
-/// Version 4: spherical harmonics (version 3 had irradiance only, version 2 one zone, version 1
-/// rows only).
-pub const SECTION_VERSION: u32 = 4;
+/// Version 5: basis vectors per cluster (version 4 had one D for all, version 3 irradiance
+/// only, version 2 one zone, version 1 rows only).
+pub const SECTION_VERSION: u32 = 5;
+/// The most basis vectors a cluster may have.
+pub const MAX_VECTORS: usize = 1024;
 const BIN: &str = "light-cloud.bin";
 const MAGIC: &[u8; 8] = b"RLCLOUD\0";
 
-/// The section: `light-cloud.bin` (counts, the lights, the zones, the clustered transfer).
+/// The section: `light-cloud.bin` (counts, the lights, the zones, each cluster's D_c, the
+/// clustered transfer).
 pub fn section(cloud: &LightCloud, summary: Value) -> Section {
     let mut w = Writer::new(MAGIC);
     w.u32s(&[
@@ -368,13 +405,14 @@ pub fn section(cloud: &LightCloud, summary: Value) -> Section {
         cloud.vertex_count() as u32,
         cloud.samples,
         cloud.cluster_count() as u32,
-        cloud.basis as u32,
+        cloud.basis() as u32,
         cloud.zone_count() as u32,
         cloud.coefficients as u32,
     ]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
     w.u32s(&cloud.zone_lights);
     w.u32s(&cloud.zone_clusters);
+    w.u32s(&cloud.vectors);
     w.u32s(&cloud.assignment);
     w.f32s(&cloud.terms);
     w.f32s(&cloud.coords);
@@ -400,7 +438,7 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
         || lights as u64 > MAX_CLOUD_LIGHTS as u64 * zones as u64
         || clusters == 0
         || clusters > vertices
-        || basis > 1024
+        || basis as usize > MAX_VECTORS
         || zones == 0
         || zones > clusters.min(lights)
         || (coefficients != 1 && coefficients as usize != sh::COEFFICIENTS)
@@ -415,26 +453,29 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let zone_lights = r.u32s(zones as usize + 1, "the zones' lights")?;
     let zone_clusters = r.u32s(zones as usize + 1, "the zones' clusters")?;
     check_zones(&zone_lights, &zone_clusters, lights as usize, clusters as usize).map_err(|e| fail(&path, e, REBAKE))?;
+    let vectors = r.u32s(clusters as usize, "the clusters' vector counts")?;
+    if vectors.iter().max() != Some(&basis) {
+        return Err(fail(&path, format!("the clusters' vector counts do not reach D = {basis}"), REBAKE));
+    }
     let assignment = r.u32s(vertices as usize, "the clusters")?;
-    let values: usize = zone_lights
-        .windows(2)
-        .zip(zone_clusters.windows(2))
-        .map(|(l, c)| (1 + basis as usize) * 3 * coefficients as usize * (l[1] - l[0]) as usize * (c[1] - c[0]) as usize)
-        .sum();
-    let terms = r.f32s(values, "the terms")?;
-    let coords = r.f32s(vertices as usize * basis as usize, "the coordinates")?;
-    r.finish("the coordinates")?;
-    let cloud = LightCloud {
+    if let Some(v) = assignment.iter().position(|&c| c >= clusters) {
+        return Err(fail(&path, format!("vertex {v} is in cluster {}, of {clusters}", assignment[v]), REBAKE));
+    }
+    let mut cloud = LightCloud {
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
         coefficients: coefficients as usize,
         zone_lights,
         zone_clusters,
         samples,
         assignment,
-        basis: basis as usize,
-        terms,
-        coords,
+        vectors,
+        terms: Vec::new(),
+        coords: Vec::new(),
     };
+    let values = cloud.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * cloud.per_light() * l.lights as usize);
+    cloud.terms = r.f32s(values, "the terms")?;
+    cloud.coords = r.f32s(*cloud.coord_starts().last().unwrap_or(&0), "the coordinates")?;
+    r.finish("the coordinates")?;
     cloud.validate().map_err(|e| fail(&path, e, REBAKE))?;
     Ok(cloud)
 }

@@ -47,7 +47,7 @@ pub struct Reduced {
 /// Splits a gathered cloud (one zone, uncompressed) into zones and clusters each zone's
 /// lights.
 pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction) -> Result<Reduced, String> {
-    if gathered.basis != 0 || gathered.zone_count() != 1 || gathered.cluster_count() != gathered.vertex_count() {
+    if gathered.basis() != 0 || gathered.zone_count() != 1 || gathered.cluster_count() != gathered.vertex_count() {
         return Err("only a gathered cloud (one zone, uncompressed) can be reduced".into());
     }
     if reduction.zones == 0 {
@@ -102,8 +102,8 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
         zone_lights,
         zone_clusters,
         samples: gathered.samples,
+        vectors: vec![0; cluster as usize],
         assignment,
-        basis: 0,
         terms,
         coords: Vec::new(),
     };

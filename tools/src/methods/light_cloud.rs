@@ -45,6 +45,10 @@ const FADE: Param = Param::number(
 const CLUSTERS: Param =
     Param::count("clusters", "clusters of vertices of the transfer's clustered PCA (004 §5)", 1, 1 << 20, Default::Value("32"));
 const VECTORS: Param = Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, 1024, Default::Value("8"));
+const VARIABLE_VECTORS: Param = Param::flag(
+    "variable-vectors",
+    "share each zone's C x D basis vectors out among its clusters by eigenvalue (Sloan et al. 2003's variable allocation): D becomes the mean",
+);
 const UNCOMPRESSED: Param = Param::flag("uncompressed", "keep every vertex's transfer (one cluster per vertex, no basis)");
 
 const ZONES: Param = Param::count(
@@ -68,7 +72,8 @@ const W2: Param = Param::number(
 );
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 10] = [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &UNCOMPRESSED, &NEAREST, &FADE];
+const PARAMS: [&Param; 11] =
+    [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &VARIABLE_VECTORS, &UNCOMPRESSED, &NEAREST, &FADE];
 
 /// The zones and light clustering the flags ask for.
 fn reduction(values: &Values) -> Result<lc::Reduction> {
@@ -81,14 +86,16 @@ fn reduction(values: &Values) -> Result<lc::Reduction> {
 }
 
 /// The clusters and vectors the flags ask for; None: uncompressed.
-fn compression(values: &Values) -> Result<Option<(usize, usize)>> {
+fn compression(values: &Values) -> Result<Option<(usize, lc::Vectors)>> {
     if values.given(&UNCOMPRESSED) {
-        if values.given(&CLUSTERS) || values.given(&VECTORS) {
-            anyhow::bail!("--uncompressed keeps every vertex's transfer: give it without --clusters or --vectors");
+        if values.given(&CLUSTERS) || values.given(&VECTORS) || values.given(&VARIABLE_VECTORS) {
+            anyhow::bail!("--uncompressed keeps every vertex's transfer: give it without --clusters, --vectors or --variable-vectors");
         }
         return Ok(None);
     }
-    Ok(Some((values.count(&CLUSTERS) as usize, values.count(&VECTORS) as usize)))
+    let d = values.count(&VECTORS) as usize;
+    let vectors = if values.given(&VARIABLE_VECTORS) { lc::Vectors::Shared(d) } else { lc::Vectors::Each(d) };
+    Ok(Some((values.count(&CLUSTERS) as usize, vectors)))
 }
 
 pub(crate) struct LightCloudMethod;
@@ -176,7 +183,11 @@ impl Method for LightCloudMethod {
             }
         };
         let per_zone: Vec<usize> = (0..cloud.zone_count()).map(|z| cloud.zone_light_range(z).len()).collect();
-        let bytes = (cloud.terms.len() + cloud.coords.len() + cloud.assignment.len()) * 4;
+        let bytes = (cloud.terms.len() + cloud.coords.len() + cloud.assignment.len() + cloud.vectors.len()) * 4;
+        let (fewest_vectors, vectors_mean) = (
+            cloud.vectors.iter().min().copied().unwrap_or(0),
+            cloud.vectors.iter().sum::<u32>() as f64 / cloud.cluster_count().max(1) as f64,
+        );
         let cloud_lights = gathered.lights.len();
         let mean_per_zone = per_zone.iter().sum::<usize>() as f64 / per_zone.len() as f64;
         let (fewest, most) = (per_zone.iter().min().copied().unwrap_or(0), per_zone.iter().max().copied().unwrap_or(0));
@@ -187,21 +198,21 @@ impl Method for LightCloudMethod {
             "zones": cloud.zone_count(),
             "lights_per_zone": per_zone,
             "clusters": cloud.cluster_count(),
-            "vectors": cloud.basis,
+            "vectors": { "min": fewest_vectors, "max": cloud.basis(), "mean": vectors_mean },
             "light_clustering_error": reduced.relative_error,
             "relative_error": error,
         });
         let mut summary = format!(
             "{cloud_lights} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex\n\
              {} zones of {fewest}..{most} lights (mean {mean_per_zone:.1}) after light clustering, relative error {:.4}\n\
-             {} clusters of D = {}, relative error {error:.4}; {:.2} MiB -> {:.2} MiB\n",
+             {} clusters of D = {fewest_vectors}..{} (mean {vectors_mean:.1}), relative error {error:.4}; {:.2} MiB -> {:.2} MiB\n",
             settings.grid.points().len(),
             cloud.vertex_count(),
             cloud.samples,
             cloud.zone_count(),
             reduced.relative_error,
             cloud.cluster_count(),
-            cloud.basis,
+            cloud.basis(),
             raw_bytes as f64 / (1 << 20) as f64,
             bytes as f64 / (1 << 20) as f64
         );
@@ -218,7 +229,8 @@ impl Method for LightCloudMethod {
                 "zones": reduction.zones,
                 "light_clustering": reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
                 "clusters": compression.map(|c| c.0),
-                "vectors": compression.map(|c| c.1),
+                "vectors": compression.map(|(_, lc::Vectors::Each(d) | lc::Vectors::Shared(d))| d),
+                "variable_vectors": matches!(compression, Some((_, lc::Vectors::Shared(_)))),
                 "grid": { "box": [settings.grid.min.to_array(), settings.grid.max.to_array()], "counts": settings.grid.counts },
             }),
             stats: json!({
@@ -231,7 +243,9 @@ impl Method for LightCloudMethod {
                 "vertices": cloud.vertex_count(),
                 "samples": cloud.samples,
                 "clusters": cloud.cluster_count(),
-                "vectors": cloud.basis,
+                "vectors_min": fewest_vectors,
+                "vectors_max": cloud.basis(),
+                "vectors_mean": vectors_mean,
                 "relative_error": error,
                 "uncompressed_bytes": raw_bytes,
                 "transfer_bytes": bytes,

@@ -8,15 +8,16 @@
 //! Uploaded at creation (device-local, never written again), the bake's layout:
 //! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's cloud light][coefficient]`
 //!   (term 0 the mean, d the basis vector B_d; n_b coefficients);
-//! - `clusters`: per cluster 4 u32, where its terms start and its zone's first light and light
-//!   count;
-//! - `assignment`: one u32 cluster per vertex;
-//! - `coords`: D f32 per vertex.
+//! - `clusters`: per cluster 4 u32, where its terms start, its zone's first light and light
+//!   count, its D_c;
+//! - `vertices`: per vertex 2 u32, its cluster and where its coordinates start;
+//! - `coords`: D_c f32 per vertex, vertex after vertex.
 //!
 //! Written every frame:
 //! - `weights` (in the command stream, before the passes): up to one per cloud light (of every
 //!   zone), the weight (candela, rgb f32) and the light's index (u32);
-//! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) n_b vec4, rgb x^m then b_d;
+//! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) n_b vec4, rgb x^m then b_d
+//!   (D the most vectors of any cluster; zero past a cluster's D_c);
 //! - `vertex_values` by `reconstruct` (reconstruct.rs): n_b vec4 per vertex, rgb lux (n_b = 1)
 //!   or the exitant radiance's coefficients (n_b = 16).
 //!
@@ -66,13 +67,13 @@ struct GpuCluster {
     offset: u32,
     first_light: u32,
     lights: u32,
-    unused: u32,
+    vectors: u32,
 }
 
 struct Buffers {
     terms: Buffer,
     clusters: Buffer,
-    assignment: Buffer,
+    vertices: Buffer,
     coords: Buffer,
     weights: Buffer,
     cluster_sums: Buffer,
@@ -176,20 +177,21 @@ impl MakeTechnique for LightCloudData<'_> {
         let clusters: Vec<GpuCluster> = cloud
             .layout()
             .iter()
-            .map(|c| GpuCluster { offset: c.offset as u32, first_light: c.first_light, lights: c.lights, unused: 0 })
+            .map(|c| GpuCluster { offset: c.offset as u32, first_light: c.first_light, lights: c.lights, vectors: c.vectors })
             .collect();
-        // A storage buffer may not be empty: D = 0 binds one unread coordinate.
+        let vertices: Vec<[u32; 2]> = cloud.assignment.iter().zip(cloud.coord_starts()).map(|(&c, start)| [c, start as u32]).collect();
+        // A storage buffer may not be empty: no vectors bind one unread coordinate.
         let coords: &[f32] = if cloud.coords.is_empty() { &[0.0] } else { &cloud.coords };
-        let [terms, clusters, assignment, coords] = upload_buffers_blocking(
+        let [terms, clusters, vertices, coords] = upload_buffers_blocking(
             ctx,
             [
                 ("light cloud terms", bytemuck::cast_slice(&cloud.terms)),
                 ("light cloud clusters", bytemuck::cast_slice(&clusters)),
-                ("light cloud assignment", bytemuck::cast_slice(&cloud.assignment)),
+                ("light cloud vertices", bytemuck::cast_slice(&vertices)),
                 ("light cloud coordinates", bytemuck::cast_slice(coords)),
             ],
         )?;
-        let term_count = (cloud.cluster_count() * (1 + cloud.basis) * cloud.coefficients) as u32;
+        let term_count = (cloud.cluster_count() * (1 + cloud.basis()) * cloud.coefficients) as u32;
         let per_frame = |name, bytes: u64| {
             let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
             Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)
@@ -197,7 +199,7 @@ impl MakeTechnique for LightCloudData<'_> {
         let buffers = Buffers {
             terms,
             clusters,
-            assignment,
+            vertices,
             coords,
             weights: Buffer::new(
                 ctx,
@@ -210,12 +212,12 @@ impl MakeTechnique for LightCloudData<'_> {
             vertex_values: per_frame("light cloud vertex values", (cloud.vertex_count() * cloud.coefficients) as u64 * 16)?,
         };
         let mut technique = LightCloudTechnique {
-            cluster_sums: ClusterSumsPass::new(shared, &buffers, (term_count, 1 + cloud.basis as u32, cloud.coefficients as u32))?,
+            cluster_sums: ClusterSumsPass::new(shared, &buffers, (term_count, 1 + cloud.basis() as u32, cloud.coefficients as u32))?,
             reconstruct: ReconstructPass::new(
                 shared,
                 &buffers,
                 cloud.vertex_count() as u32,
-                (cloud.basis as u32, cloud.coefficients as u32),
+                (cloud.basis() as u32, cloud.coefficients as u32),
             )?,
             coefficients: cloud.coefficients,
             buffers,
@@ -244,7 +246,7 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene
         ));
     }
     // Every buffer the passes bind, in bytes, and the workgroups of each dispatch.
-    let terms = (cloud.cluster_count() * (1 + cloud.basis) * cloud.coefficients) as u64;
+    let terms = (cloud.cluster_count() * (1 + cloud.basis()) * cloud.coefficients) as u64;
     let bytes = [
         cloud.terms.len() as u64 * 4,
         cloud.coords.len() as u64 * 4,

@@ -4,9 +4,9 @@
 //! CPU). The paper evaluates this in the vertex program; here it runs as a pass of its own so
 //! that the lighting pass, shared by every method, only reads a vertex term.
 //!
-//! Reads: the cluster sums, the assignment, the coordinates. Writes: the per-vertex values,
-//! every vertex. Cost: one invocation per vertex (workgroups of 64), (1 + D) n_b reads of 16
-//! bytes.
+//! Reads: the cluster sums, the vertices' clusters and coordinate starts, the coordinates,
+//! the cluster table. Writes: the per-vertex values, every vertex. Cost: one invocation per
+//! vertex (workgroups of 64), (1 + D_c) n_b reads of 16 bytes.
 
 use super::Buffers;
 use crate::passes::compute::{ComputePass, Slot};
@@ -31,9 +31,10 @@ impl ReconstructPass {
     pub fn new(shared: &Shared, buffers: &Buffers, vertex_count: u32, (basis, coefficients): (u32, u32)) -> VkResult<ReconstructPass> {
         let slots = [
             Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageRead),
-            Slot::Buffer(&buffers.assignment, Access::ComputeStorageRead),
+            Slot::Buffer(&buffers.vertices, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.coords, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.vertex_values, Access::ComputeStorageWrite),
+            Slot::Buffer(&buffers.clusters, Access::ComputeStorageRead),
         ];
         let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 12, &slots)?;
         Ok(ReconstructPass { pass, push: ReconstructPush { vertex_count, basis, coefficients } })
