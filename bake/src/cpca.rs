@@ -154,9 +154,9 @@ pub struct ClusterPca {
     /// descending, clamped to >= 0: the squared residual of keeping D basis vectors is the sum
     /// of those beyond D.
     pub eigenvalues: Vec<f64>,
-    /// Always D unit P-vectors B^c_d by descending eigenvalue. Where the cluster's rank is below
-    /// D (at most D points, or points on a flatter subspace) the rest are zero vectors, so
-    /// every cluster stores the same D.
+    /// Always D unit P-vectors B^c_d by descending eigenvalue (the D asked of `cluster_pca`).
+    /// Where the cluster's rank is below D (at most D points, or points on a flatter subspace)
+    /// the rest are zero vectors, so every cluster of one `fit` stores the same D.
     pub basis: Vec<Vec<f32>>,
     /// Per member (in `members` order) its D coordinates w^e_d = (x_e - M^c) . B^c_d (0 for a
     /// zero basis vector).
@@ -268,14 +268,14 @@ fn unit(v: &[f64]) -> Vec<f32> {
 }
 
 /// The descending eigenvalues of `cluster_pca` alone (no eigenvectors: cheaper).
-fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f64> {
+pub fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f64> {
     let centred = Centred::new(Rows { values: data, cols }, members);
     let matrix = if cols < members.len() { centred.covariance() } else { centred.gram() };
     descending(&matrix.symmetric_eigenvalues()).iter().map(|o| o.0).collect()
 }
 
 /// Members (ascending) of each of `clusters` clusters.
-fn groups(assignment: &[u32], clusters: usize) -> Vec<Vec<u32>> {
+pub fn groups(assignment: &[u32], clusters: usize) -> Vec<Vec<u32>> {
     let mut members = vec![vec![]; clusters];
     assignment.iter().enumerate().for_each(|(e, &c)| members[c as usize].push(e as u32));
     members

@@ -372,3 +372,23 @@ fn a_glossy_scene_stores_exitant_radiance_in_sixteen_harmonics() {
         }
     }
 }
+
+/// 004 Fig. 5's statistic: each component's share of the clusters' variance lies in [0, 1] and
+/// falls; the sphere's 8 cloud lights give rows of rank 8 at most (one value a light for the
+/// direct light, and grey walls make the indirect light's rgb equal), so 8 components hold all
+/// the variance of both and the rest none.
+#[test]
+fn explained_variance_shares_fall_and_sum_to_one_at_full_rank() {
+    let s = sphere_scene();
+    let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 4, None);
+    let compressed = lc::compress(&cloud, 4, lc::Vectors::Each(2)).unwrap();
+    let shares = lc::explained_variance(&s, &SceneBvh::new(&s), &cloud, &compressed, 12);
+    println!("indirect {:?}\ndirect {:?}", shares.indirect, shares.direct);
+    for (name, values) in [("indirect", &shares.indirect), ("direct", &shares.direct)] {
+        assert_eq!(values.len(), 12);
+        assert!(values.iter().all(|&v| (0.0..=1.0).contains(&v)), "{name}: {values:?}");
+        assert!(values.windows(2).all(|w| w[1] <= w[0] + 1e-12), "{name} does not fall: {values:?}");
+        assert!((values[..8].iter().sum::<f64>() - 1.0).abs() < 1e-6, "{name}: 8 components miss variance: {values:?}");
+        assert!(values[8..].iter().all(|&v| v < 1e-6), "{name}: variance past rank 8: {values:?}");
+    }
+}

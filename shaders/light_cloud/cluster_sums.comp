@@ -16,13 +16,7 @@ struct CloudWeight {
 };
 layout(std430, set = 0, binding = 1) readonly buffer Weights { CloudWeight weights[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Sums { vec4 sums[]; };
-// Per cluster: where its terms start, its zone's first cloud light and light count, D_c.
-struct Cluster {
-    uint offset;
-    uint first_light;
-    uint lights;
-    uint vectors;
-};
+#include "light_cloud/cluster.glsl"
 layout(std430, set = 0, binding = 3) readonly buffer Clusters { Cluster clusters[]; };
 
 layout(push_constant) uniform ClusterSumsPush {

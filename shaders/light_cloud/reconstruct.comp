@@ -11,13 +11,8 @@ layout(std430, set = 0, binding = 1) readonly buffer Vertices { uvec2 vertices[]
 layout(std430, set = 0, binding = 2) readonly buffer Coords { float coords[]; };
 // n_b values per vertex.
 layout(std430, set = 0, binding = 3) writeonly buffer VertexValues { vec4 values[]; };
-// Per cluster as cluster_sums.comp reads it; here only D_c.
-struct Cluster {
-    uint offset;
-    uint first_light;
-    uint lights;
-    uint vectors;
-};
+// Here only each cluster's D_c.
+#include "light_cloud/cluster.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer Clusters { Cluster clusters[]; };
 
 layout(push_constant) uniform ReconstructPush {

@@ -1,6 +1,6 @@
 //! `relume bench` end to end on lavapipe (validation on): the tiny sweep (2 methods x 2
 //! parameter sets x 3 light positions, 32 x 32) writes a row per point with every number
-//! finite, valid SVG and PNG charts and a correct Pareto front; run again on the same
+//! finite, valid SVG and PNG charts (the sweep's own chart too) and a correct Pareto front; run again on the same
 //! reference cache it traces no reference.
 
 use std::collections::HashMap;
@@ -104,7 +104,7 @@ fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
 
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["rows"].as_array().map(Vec::len), Some(12));
-    for chart in ["error_vs_frame_time", "error_vs_bake_time", "error_vs_memory", "error_along_path"] {
+    for chart in ["error_vs_frame_time", "error_vs_bake_time", "error_vs_memory", "error_along_path", "obscurance_indirect_error_vs_rays"] {
         let svg = std::fs::read_to_string(out.join(format!("cornell_{chart}.svg"))).expect("svg chart");
         let document = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{chart}.svg is not XML: {e}"));
         assert_eq!(document.root_element().tag_name().name(), "svg");
@@ -117,6 +117,7 @@ fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
     }
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("cornell_error_vs_frame_time.png") && report.contains("_error.png"));
+    assert!(report.contains("cornell_obscurance_indirect_error_vs_rays.png"), "the sweep's own chart is in the report");
 
     // The rerun, with a budget: every reference from the cache, and a recommendation that meets it.
     let again = temp_dir("again");

@@ -200,8 +200,18 @@ pub enum Vectors {
     /// D for every cluster (004 §5).
     Each(usize),
     /// C x D in each zone's C clusters, shared out by eigenvalue: Sloan et al. 2003's variable
-    /// allocation, which drops the least variance those vectors can.
+    /// allocation, which drops the least variance those vectors can (fewer where the clusters'
+    /// ranks run out first).
     Shared(usize),
+}
+
+impl Vectors {
+    /// D: each cluster's, or their mean.
+    pub fn count(self) -> usize {
+        match self {
+            Vectors::Each(d) | Vectors::Shared(d) => d,
+        }
+    }
 }
 
 /// The clustered PCA of an uncompressed cloud (004 §5, after Sloan et al. 2003), zone by zone:
@@ -225,16 +235,19 @@ pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result
         let rows: Vec<f32> =
             members.iter().flat_map(|&v| &cloud.terms[layout[cloud.assignment[v as usize] as usize].offset..][..cols]).copied().collect();
         let share = ((clusters * members.len()) as f64 / cloud.vertex_count() as f64).round() as usize;
-        let (Vectors::Each(basis) | Vectors::Shared(basis)) = vectors;
-        let first = cpca::fit(&rows, cols, &rows, cols, share.clamp(1, members.len()), basis)?;
-        let (mut fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
-        if let Vectors::Shared(mean) = vectors {
-            let eigenvalues: Vec<&[f64]> = fitted.clusters.iter().map(|c| c.eigenvalues.as_slice()).collect();
-            let counts = cpca::allocate(&eigenvalues, mean * fitted.clusters.len(), super::MAX_VECTORS);
-            fitted.clusters = fitted.clusters.iter().zip(counts).map(|(c, d)| cpca::cluster_pca(&rows, cols, &c.members, d)).collect();
-        }
+        let first = cpca::fit(&rows, cols, &rows, cols, share.clamp(1, members.len()), vectors.count())?;
+        let (fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
+        let clusters = match vectors {
+            Vectors::Each(_) => fitted.clusters,
+            Vectors::Shared(mean) => {
+                let eigenvalues: Vec<&[f64]> = fitted.clusters.iter().map(|c| c.eigenvalues.as_slice()).collect();
+                let counts = cpca::allocate(&eigenvalues, mean * fitted.clusters.len(), super::MAX_VECTORS);
+                let refit = |(c, d): (cpca::ClusterPca, usize)| if d == mean { c } else { cpca::cluster_pca(&rows, cols, &c.members, d) };
+                fitted.clusters.into_iter().zip(counts).map(refit).collect()
+            }
+        };
         let base = out.cluster_count() as u32;
-        for cluster in &fitted.clusters {
+        for cluster in &clusters {
             out.vectors.push(cluster.basis.len() as u32);
             out.terms.extend(&cluster.mean);
             cluster.basis.iter().for_each(|b| out.terms.extend(b));
@@ -245,7 +258,7 @@ pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result
         for (&v, &c) in members.iter().zip(&fitted.assignment) {
             out.assignment[v as usize] = base + c;
         }
-        out.zone_clusters.push(base + fitted.clusters.len() as u32);
+        out.zone_clusters.push(base + clusters.len() as u32);
     }
     out.coords = coords.concat();
     Ok(out)

@@ -16,11 +16,15 @@
 mod baker;
 #[cfg(feature = "baking")]
 mod reduce;
+#[cfg(feature = "baking")]
+mod variance;
 mod weights;
 #[cfg(feature = "baking")]
 pub use baker::*;
 #[cfg(feature = "baking")]
 pub use reduce::*;
+#[cfg(feature = "baking")]
+pub use variance::*;
 pub use weights::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
@@ -224,6 +228,11 @@ impl LightCloud {
         self.zone_lights[zone] as usize..self.zone_lights[zone + 1] as usize
     }
 
+    /// How many values the clusters' terms hold, by the layout.
+    pub fn term_values(&self) -> usize {
+        self.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * self.per_light() * l.lights as usize)
+    }
+
     /// Every cluster's layout, in cluster order (clusters lie zone after zone).
     pub fn layout(&self) -> Vec<ClusterLayout> {
         let mut offset = 0;
@@ -260,8 +269,7 @@ impl LightCloud {
         if self.vectors.len() != clusters || self.basis() > MAX_VECTORS {
             return Err(format!("{} vector counts for {clusters} clusters, each at most {MAX_VECTORS}", self.vectors.len()));
         }
-        let expected: usize =
-            self.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * self.per_light() * l.lights as usize);
+        let expected = self.term_values();
         if self.terms.len() != expected {
             return Err(format!("{} term values for clusters that hold {expected}", self.terms.len()));
         }
@@ -472,8 +480,7 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
         terms: Vec::new(),
         coords: Vec::new(),
     };
-    let values = cloud.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * cloud.per_light() * l.lights as usize);
-    cloud.terms = r.f32s(values, "the terms")?;
+    cloud.terms = r.f32s(cloud.term_values(), "the terms")?;
     cloud.coords = r.f32s(*cloud.coord_starts().last().unwrap_or(&0), "the coordinates")?;
     r.finish("the coordinates")?;
     cloud.validate().map_err(|e| fail(&path, e, REBAKE))?;

@@ -5,6 +5,7 @@
 
 mod charts;
 mod config;
+mod figures;
 mod pareto;
 mod perceptual;
 mod reference_cache;
@@ -116,6 +117,14 @@ fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
         let tables = if entry.params.is_empty() { vec![toml::Table::new()] } else { entry.params.clone() };
         for table in tables {
             configs.push(config::config(method, table)?);
+        }
+    }
+    for (i, chart) in sweep.charts.iter().enumerate() {
+        let Some(x) = &chart.x else { continue };
+        let method = methods::find(&chart.method)?;
+        if !method.params().iter().any(|p| p.name == x) && !config::FRAME_KEYS.contains(&x.as_str()) {
+            let names: Vec<&str> = method.params().iter().map(|p| p.name).collect();
+            bail!("charts[{i}].x \"{x}\": not a parameter of {}; use one of {}", chart.method, names.join(", "));
         }
     }
     Ok(configs)

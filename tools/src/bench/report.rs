@@ -10,11 +10,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// One method configuration on one scene, over its light configurations.
-struct Summary<'r> {
+pub(super) struct Summary<'r> {
     rows: Vec<&'r Row>,
     mean_nrmse: f64,
     mean_flip: f64,
-    mean_indirect_nrmse: f64,
+    pub(super) mean_indirect_nrmse: f64,
     max_flicker: Option<f64>,
     gpu_ms: f64,
     cpu_ms: f64,
@@ -22,7 +22,7 @@ struct Summary<'r> {
 }
 
 impl Summary<'_> {
-    fn first(&self) -> &Row {
+    pub(super) fn first(&self) -> &Row {
         self.rows[0]
     }
     fn artifact_mib(&self) -> f64 {
@@ -151,7 +151,9 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     let mut charts_md = String::new();
     for scene in &scenes {
         let of_scene: Vec<&Summary> = summaries.iter().filter(|s| s.first().scene == *scene && s.ok()).collect();
-        for (stem, md) in write_scene_charts(&mut outputs, out, scene, &of_scene)? {
+        let mut written = write_scene_charts(&mut outputs, out, scene, &of_scene)?;
+        written.extend(super::figures::write(&mut outputs, out, &outcome.sweep.charts, scene, &of_scene)?);
+        for (stem, md) in written {
             let _ = writeln!(charts_md, "![{md}]({stem}.png) ([SVG]({stem}.svg))\n");
         }
     }

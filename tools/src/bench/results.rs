@@ -15,6 +15,9 @@ pub(crate) struct BakeCost {
     pub peak_memory_bytes: u64,
     /// Every file of the bake artifact.
     pub artifact_bytes: u64,
+    /// The bake's stats.json, for charts of its statistics.
+    #[serde(skip)]
+    pub statistics: serde_json::Value,
 }
 
 impl BakeCost {
@@ -47,6 +50,7 @@ impl BakeCost {
             peak_memory_bytes: stages.iter().map(|s| s.2).max().unwrap_or(0),
             stages: stages.into_iter().map(|(name, seconds, _)| (name, seconds)).collect(),
             artifact_bytes,
+            statistics: stats,
         })
     }
 }

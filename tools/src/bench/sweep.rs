@@ -26,6 +26,21 @@ pub(crate) struct Sweep {
     pub warmup_seconds: f64,
     pub scenes: Vec<SweepScene>,
     pub methods: Vec<SweepMethod>,
+    /// Charts of one method beyond the standard ones, per scene.
+    #[serde(default)]
+    pub charts: Vec<SweepChart>,
+}
+
+/// One method's configurations drawn on their own: mean indirect NRMSE against one of its
+/// parameters (`x`; those configurations that give it, a line per set of their other
+/// parameters), or a bake statistic (`statistic`: an object of number arrays in the bake's
+/// stats.json, each array a line against its index from 1).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SweepChart {
+    pub method: String,
+    pub x: Option<String>,
+    pub statistic: Option<String>,
 }
 
 fn default_size() -> u32 {
@@ -143,6 +158,20 @@ impl Sweep {
         }
         if self.scenes.is_empty() || self.methods.is_empty() {
             bail!("a sweep needs at least one [[scenes]] and one [[methods]] entry");
+        }
+        for (i, chart) in self.charts.iter().enumerate() {
+            if chart.x.is_some() == chart.statistic.is_some() {
+                bail!("charts[{i}]: give `x` (a parameter) or `statistic` (a bake statistic), one of them");
+            }
+            let named = |s: &Option<String>| {
+                s.as_deref().is_none_or(|s| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)))
+            };
+            if !named(&chart.x) || !named(&chart.statistic) {
+                bail!("charts[{i}]: `x` and `statistic` are names of letters, digits, '-' and '_' (they name files)");
+            }
+            if !self.methods.iter().any(|m| m.method == chart.method) {
+                bail!("charts[{i}].method \"{}\": no [[methods]] entry measures it", chart.method);
+            }
         }
         for (i, scene) in self.scenes.iter().enumerate() {
             let name = scene.name();

@@ -70,10 +70,29 @@ const W2: Param = Param::number(
     (0.0, 1e6, false),
     Default::Value("20"),
 );
+const EXPLAINED_VARIANCE: Param = Param::flag(
+    "explained-variance",
+    "record each principal component's share of the clusters' variance, indirect (stored) and direct (not), in stats.json (004 Fig. 5)",
+);
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 11] =
-    [&SAMPLES, &ZONES, &W1, &W2, &NO_LIGHT_CLUSTERING, &CLUSTERS, &VECTORS, &VARIABLE_VECTORS, &UNCOMPRESSED, &NEAREST, &FADE];
+const PARAMS: [&Param; 12] = [
+    &SAMPLES,
+    &ZONES,
+    &W1,
+    &W2,
+    &NO_LIGHT_CLUSTERING,
+    &CLUSTERS,
+    &VECTORS,
+    &VARIABLE_VECTORS,
+    &UNCOMPRESSED,
+    &EXPLAINED_VARIANCE,
+    &NEAREST,
+    &FADE,
+];
+
+/// Components of 004 Fig. 5 recorded.
+const VARIANCE_COMPONENTS: usize = 16;
 
 /// The zones and light clustering the flags ask for.
 fn reduction(values: &Values) -> Result<lc::Reduction> {
@@ -88,8 +107,10 @@ fn reduction(values: &Values) -> Result<lc::Reduction> {
 /// The clusters and vectors the flags ask for; None: uncompressed.
 fn compression(values: &Values) -> Result<Option<(usize, lc::Vectors)>> {
     if values.given(&UNCOMPRESSED) {
-        if values.given(&CLUSTERS) || values.given(&VECTORS) || values.given(&VARIABLE_VECTORS) {
-            anyhow::bail!("--uncompressed keeps every vertex's transfer: give it without --clusters, --vectors or --variable-vectors");
+        if [&CLUSTERS, &VECTORS, &VARIABLE_VECTORS, &EXPLAINED_VARIANCE].iter().any(|p| values.given(p)) {
+            anyhow::bail!(
+                "--uncompressed keeps every vertex's transfer: give it without --clusters, --vectors, --variable-vectors or --explained-variance (of the clusters' PCA)"
+            );
         }
         return Ok(None);
     }
@@ -174,12 +195,15 @@ impl Method for LightCloudMethod {
         let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
         let raw_bytes = gathered.terms.len() * 4;
         let reduced = stages.timed("light clustering", || lc::reduce(scene, &bvh, &gathered, reduction)).map_err(at)?;
-        let (cloud, error) = match compression {
-            None => (reduced.cloud, 0.0),
+        let (cloud, error, variance) = match compression {
+            None => (reduced.cloud, 0.0, None),
             Some((clusters, vectors)) => {
                 let cloud = stages.timed("cpca", || lc::compress(&reduced.cloud, clusters, vectors)).map_err(at)?;
                 let error = lc::relative_error(&reduced.cloud, &cloud);
-                (cloud, error)
+                let variance = values.given(&EXPLAINED_VARIANCE).then(|| {
+                    stages.timed("explained variance", || lc::explained_variance(scene, &bvh, &reduced.cloud, &cloud, VARIANCE_COMPONENTS))
+                });
+                (cloud, error, variance)
             }
         };
         let per_zone: Vec<usize> = (0..cloud.zone_count()).map(|z| cloud.zone_light_range(z).len()).collect();
@@ -216,6 +240,14 @@ impl Method for LightCloudMethod {
             raw_bytes as f64 / (1 << 20) as f64,
             bytes as f64 / (1 << 20) as f64
         );
+        if let Some(v) = &variance {
+            let first = |shares: &[f64]| shares.iter().take(4).map(|s| format!("{s:.3}")).collect::<Vec<_>>().join(" ");
+            summary.push_str(&format!(
+                "the first components' shares of the variance (004 Fig. 5): indirect {}, direct {}\n",
+                first(&v.indirect),
+                first(&v.direct)
+            ));
+        }
         let (lone, vertices) = lc::lone_vertices(scene);
         if 2 * lone > vertices {
             summary.push_str(&format!(
@@ -229,11 +261,12 @@ impl Method for LightCloudMethod {
                 "zones": reduction.zones,
                 "light_clustering": reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
                 "clusters": compression.map(|c| c.0),
-                "vectors": compression.map(|(_, lc::Vectors::Each(d) | lc::Vectors::Shared(d))| d),
+                "vectors": compression.map(|(_, v)| v.count()),
                 "variable_vectors": matches!(compression, Some((_, lc::Vectors::Shared(_)))),
                 "grid": { "box": [settings.grid.min.to_array(), settings.grid.max.to_array()], "counts": settings.grid.counts },
             }),
             stats: json!({
+                "explained_variance": variance.map(|v| json!({ "indirect": v.indirect, "direct": v.direct })),
                 "cloud_lights": cloud_lights,
                 "zones": cloud.zone_count(),
                 "lights_per_zone_mean": mean_per_zone,

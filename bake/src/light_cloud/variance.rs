@@ -1,0 +1,102 @@
+//! 004 Fig. 5: how much of the transfer's variation each principal component accounts for,
+//! for the indirect light the cloud stores and for the direct light it leaves to shadow maps.
+//! The paper plots the back wall of its Cornell box; relume averages over the clusters of a
+//! compressed cloud (each cluster is one PCA), weighted by their vertices.
+
+use super::{Columns, LightCloud};
+use crate::bvh::SceneBvh;
+use crate::cpca;
+use crate::scene::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Per component k (from the first), its share of the variance: the mean over `compressed`'s
+/// clusters (by their vertices; those without variance left out) of eigenvalue k / the sum of
+/// the cluster's eigenvalues.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExplainedVariance {
+    /// The transfer as gathered (before compression): `reduced`'s rows.
+    pub indirect: Vec<f64>,
+    /// A 1 cd light's direct irradiance at each vertex, from the same lights: cos / r^2, zero
+    /// where the light is hidden or behind the surface.
+    pub direct: Vec<f64>,
+}
+
+/// The first `components` shares of both, over the clusters of `compressed`, which was made
+/// from `reduced` (uncompressed, the same zones and lights).
+pub fn explained_variance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    reduced: &LightCloud,
+    compressed: &LightCloud,
+    components: usize,
+) -> ExplainedVariance {
+    let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
+    let normals: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.normals.iter().copied()).collect();
+    let (columns, layout) = (Columns::new(reduced), compressed.layout());
+    let members = cpca::groups(&compressed.assignment, compressed.cluster_count());
+    let (mut indirect_shares, mut direct_shares) = (Shares::new(components), Shares::new(components));
+    for (vertices, at) in members.iter().zip(&layout).filter(|(m, _)| !m.is_empty()) {
+        let lights = at.first_light as usize..(at.first_light + at.lights) as usize;
+        let mut indirect = Vec::with_capacity(vertices.len() * lights.len() * reduced.per_light());
+        for &v in vertices {
+            for j in lights.clone() {
+                (0..reduced.coefficients).for_each(|k| indirect.extend(columns.coefficient(v as usize, j, k).to_array()));
+            }
+        }
+        // White light: one value a light (its rgb are equal and share the same components).
+        let direct: Vec<f32> = vertices
+            .par_iter()
+            .flat_map_iter(|&v| {
+                let (p, n) = (positions[v as usize], normals[v as usize]);
+                lights.clone().map(move |j| direct_irradiance(bvh, p, n, reduced.lights[j]))
+            })
+            .collect();
+        indirect_shares.add(&indirect, vertices.len());
+        direct_shares.add(&direct, vertices.len());
+    }
+    ExplainedVariance { indirect: indirect_shares.mean(), direct: direct_shares.mean() }
+}
+
+/// Per component, the shares of the clusters' variance summed by vertices.
+struct Shares {
+    sums: Vec<f64>,
+    vertices: usize,
+}
+
+impl Shares {
+    fn new(components: usize) -> Shares {
+        Shares { sums: vec![0.0; components], vertices: 0 }
+    }
+
+    /// Adds a cluster of `members` rows; one without variance (a single vertex, or all dark)
+    /// has no shares and counts for nothing.
+    fn add(&mut self, rows: &[f32], members: usize) {
+        let eigenvalues = cpca::cluster_eigenvalues(rows, rows.len() / members, &(0..members as u32).collect::<Vec<_>>());
+        let total: f64 = eigenvalues.iter().sum();
+        if total > 0.0 {
+            self.sums.iter_mut().zip(&eigenvalues).for_each(|(s, e)| *s += members as f64 * e / total);
+            self.vertices += members;
+        }
+    }
+
+    fn mean(self) -> Vec<f64> {
+        let vertices = self.vertices.max(1) as f64;
+        self.sums.iter().map(|s| s / vertices).collect()
+    }
+}
+
+/// The irradiance a 1 cd light at `light` gives a surface at `p` facing `n` (lux).
+fn direct_irradiance(bvh: &SceneBvh, p: Vec3, n: Vec3, light: Vec3) -> f32 {
+    let to_light = light - p;
+    let (distance, cos) = (to_light.length(), n.dot(to_light.normalize_or_zero()));
+    if cos <= 0.0 || distance == 0.0 {
+        return 0.0;
+    }
+    let origin = bvh.offset_origin(p, n, to_light);
+    if bvh.visible(origin, light) {
+        cos / (distance * distance)
+    } else {
+        0.0
+    }
+}

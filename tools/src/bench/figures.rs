@@ -1,0 +1,97 @@
+//! A sweep's own charts of one method (`[[charts]]`, docs/BENCH.md): its error against one of
+//! its parameters (a paper's "error against vectors" figure), or a statistic its bakes
+//! recorded (a paper's spectrum).
+
+use super::charts::{self, Chart, Series};
+use super::report::Summary;
+use super::sweep::SweepChart;
+use anyhow::Result;
+use relume_bake::outputs::Outputs;
+use std::path::Path;
+
+/// The scene's charts of `charts` that have points; returns (file stem, caption) of each.
+pub(crate) fn write(
+    outputs: &mut Outputs,
+    out: &Path,
+    charts: &[SweepChart],
+    scene: &str,
+    of_scene: &[&Summary],
+) -> Result<Vec<(String, String)>> {
+    let mut written = Vec::new();
+    for chart in charts {
+        let of_method: Vec<&Summary> = of_scene.iter().copied().filter(|s| s.first().method == chart.method).collect();
+        let (stem, drawn) = match (&chart.x, &chart.statistic) {
+            (Some(x), _) => (format!("{scene}_{}_indirect_error_vs_{x}", chart.method), against_parameter(&of_method, x)),
+            (_, Some(statistic)) => (format!("{scene}_{}_{statistic}", chart.method), statistic_lines(&of_method, statistic)),
+            (None, None) => continue,
+        };
+        let Some(mut drawn) = drawn else {
+            eprintln!("{scene}: chart {stem} skipped: no configuration of {} has points for it", chart.method);
+            continue;
+        };
+        drawn.title = format!("{scene}: {}", drawn.title);
+        charts::write(outputs, &out.join(&stem), &drawn)?;
+        written.push((stem, drawn.title));
+    }
+    Ok(written)
+}
+
+/// A parameter's value as a number (counts and numbers; true is 1).
+fn number(value: &toml::Value) -> Option<f64> {
+    match value {
+        toml::Value::Integer(i) => Some(*i as f64),
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Boolean(b) => Some(*b as u8 as f64),
+        _ => None,
+    }
+}
+
+/// Mean indirect NRMSE against parameter `x`, a line per set of the other parameters.
+fn against_parameter<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart<'a>> {
+    let mut series: Vec<Series> = Vec::new();
+    for s in of_method {
+        let table = &s.first().params_table;
+        let Some(at) = table.get(x).and_then(number) else { continue };
+        let others: Vec<String> = table.iter().filter(|(k, _)| *k != x).map(|(k, v)| format!("{k} = {v}")).collect();
+        let label = if others.is_empty() { "defaults".to_string() } else { others.join(", ") };
+        match series.iter_mut().find(|line| line.label == label) {
+            Some(line) => line.points.push((at, s.mean_indirect_nrmse)),
+            None => series.push(Series { label, points: vec![(at, s.mean_indirect_nrmse)] }),
+        }
+    }
+    series.iter_mut().for_each(|line| line.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
+    (!series.is_empty()).then(|| Chart {
+        title: format!("{} indirect error against {x}", of_method[0].first().method),
+        x_label: x,
+        y_label: "indirect NRMSE vs reference (mean over lights)",
+        series,
+        lines: true,
+        front: Vec::new(),
+    })
+}
+
+/// Each number array of the bakes' statistic `name` against its index, a line per array and
+/// configuration.
+fn statistic_lines<'a>(of_method: &[&Summary], name: &'a str) -> Option<Chart<'a>> {
+    let mut series = Vec::new();
+    for s in of_method {
+        let Some(arrays) = s.first().bake.statistics[name].as_object() else { continue };
+        for (key, values) in arrays {
+            let points: Vec<(f64, f64)> =
+                values.as_array().into_iter().flatten().enumerate().filter_map(|(i, v)| Some(((i + 1) as f64, v.as_f64()?))).collect();
+            if points.is_empty() {
+                continue;
+            }
+            let params = &s.first().params;
+            series.push(Series { label: if params.is_empty() { key.clone() } else { format!("{key} [{params}]") }, points });
+        }
+    }
+    (!series.is_empty()).then(|| Chart {
+        title: format!("{} {name}", of_method[0].first().method),
+        x_label: "index (from 1)",
+        y_label: name,
+        series,
+        lines: true,
+        front: Vec::new(),
+    })
+}
