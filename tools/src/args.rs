@@ -122,6 +122,11 @@ pub(crate) struct PathTracerArgs {
 }
 
 pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
+    Ok(load_scene_noting(args)?.0)
+}
+
+/// [`load_scene`], and the load's warnings (also printed), for showing them elsewhere.
+pub(crate) fn load_scene_noting(args: &SceneArgs) -> Result<(Scene, Vec<String>)> {
     let camera = args.camera.as_deref().map(CameraOverride::parse).transpose()?;
     let options = LoadOptions {
         camera: camera.as_ref(),
@@ -129,9 +134,9 @@ pub(crate) fn load_scene(args: &SceneArgs) -> Result<Scene> {
         max_texture_pixels: Some(args.max_texture_pixels),
         ..Default::default()
     };
-    let mut scene = load(&args.scene, args.lights.as_deref(), options)?;
+    let (mut scene, warnings) = load_noting(&args.scene, args.lights.as_deref(), options)?;
     replace_environment(&mut scene, args.environment.as_deref())?;
-    Ok(scene)
+    Ok((scene, warnings))
 }
 
 /// Lights `scene` by `image` instead of its own environment, when one is given
@@ -165,13 +170,17 @@ fn replaced_environment(scene: &Scene, image: &Path) -> Result<Environment> {
 /// The scene at `path`, its load warnings printed; lit by `lights_file` when given, else by
 /// its own lights or, having none, the default rig.
 pub(crate) fn load(path: &Path, lights_file: Option<&Path>, options: LoadOptions) -> Result<Scene> {
+    Ok(load_noting(path, lights_file, options)?.0)
+}
+
+fn load_noting(path: &Path, lights_file: Option<&Path>, options: LoadOptions) -> Result<(Scene, Vec<String>)> {
     let given = lights_file.map(lights_file::read).transpose()?;
     let lights = given.as_deref().map_or(LightChoice::SceneOrDefaultRig, LightChoice::Given);
     let loaded = load_with_options(path, &LoadOptions { lights, ..options })?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
-    Ok(loaded.scene)
+    Ok((loaded.scene, loaded.warnings))
 }
 
 /// `--ambient`: "r,g,b" or one value for all three channels.

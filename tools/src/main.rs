@@ -16,6 +16,7 @@ mod methods;
 mod reference;
 mod render;
 mod report;
+mod view;
 
 #[derive(Parser)]
 #[command(name = "relume", version, about = "Precomputed lighting, measured against a path tracer")]
@@ -44,6 +45,10 @@ enum Command {
     /// default rig of a scene without light) as a lights file to edit and give back with
     /// --lights.
     Lights(lights::LightsArgs),
+    /// Open a window on a scene: move the camera and the lights, switch between the methods
+    /// of the bakes given (and those without a bake), see each pass's GPU time, and trace the
+    /// reference of the view on demand (keys and overlay: relume-viewer; F1 shows the keys).
+    View(view::ViewArgs),
     /// List the methods and their parameters (bake and run time, with ranges and defaults).
     Methods {
         /// One method's name (default: every method).
@@ -104,6 +109,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Run(args) => report::run_main_job(&args),
         Command::Bench(args) => bench::bench_command(&args),
         Command::Lights(args) => lights::lights_command(&args),
+        Command::View(args) => view::view_command(&args),
         Command::Methods { name } => {
             let listed = match name {
                 Some(name) => vec![methods::find(&name)?],

@@ -1,0 +1,744 @@
+//! The event loop: winit's events drive the camera, the lights and the method; a frame is
+//! drawn only when something changed (the loop sleeps in `ControlFlow::Wait` otherwise), and
+//! a script, when given, replays one step a frame.
+
+use crate::camera::CameraControl;
+use crate::device::{Device, Messages};
+use crate::overlay::Overlay;
+use crate::presenter::Presenter;
+use crate::script::Step;
+use crate::swapchain::{Fit, Swapchain};
+use crate::truth::Truth;
+use crate::ui::{self, Action, Panel};
+use crate::{ViewMethod, ViewOptions};
+use anyhow::{anyhow, bail, Context as _, Result};
+use ash::vk;
+use glam::Vec3;
+use relume_bake::image::Image as HdrImage;
+use relume_bake::scene::{Light, LightKind, Scene};
+use relume_renderer::vk::{Context, Readback};
+use relume_renderer::{FrameTimings, RenderSettings, Renderer};
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// How a session ended.
+pub struct Outcome {
+    pub frames: u64,
+    /// The validation layer's messages over the whole session, teardown included.
+    pub validation_messages: Vec<String>,
+}
+
+/// Opens the window and runs until it is closed (or the script ends). Without a display: one
+/// error saying so.
+pub fn run(methods: Vec<ViewMethod>, options: ViewOptions) -> Result<Outcome> {
+    if methods.is_empty() {
+        bail!("no method to view");
+    }
+    let event_loop = EventLoop::new().map_err(|e| {
+        anyhow!(
+            "cannot open a window: no display ({e}); run it in a desktop session, or set DISPLAY (X11, e.g. under Xvfb) or WAYLAND_DISPLAY"
+        )
+    })?;
+    let mut app = App::new(methods, options);
+    event_loop.run_app(&mut app).context("the window's event loop")?;
+    app.gpu = None;
+    if let Some(error) = app.error.take() {
+        return Err(error);
+    }
+    let validation_messages = app.messages.as_ref().map(|m| m.lock().map(|m| m.clone()).unwrap_or_default()).unwrap_or_default();
+    Ok(Outcome { frames: app.frames, validation_messages })
+}
+
+/// Everything on the device, dropped top to bottom after the queue is idle.
+struct Gpu {
+    renderer: Renderer,
+    /// The live frame's radiance, read back while a reference is shown (for its NRMSE).
+    radiance: Readback,
+    presenter: Presenter,
+    overlay: Overlay,
+    swapchain: Swapchain,
+    ctx: Arc<Context>,
+    device: Device,
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        let _ = self.device.wait_queue_idle();
+    }
+}
+
+enum Wait {
+    Frames(u64),
+    Size(u32, u32),
+    Reference,
+    Screenshot,
+}
+
+#[derive(Clone, Copy)]
+enum Drag {
+    Orbit,
+    Pan,
+    Light(usize, bool),
+}
+
+struct App {
+    methods: Vec<ViewMethod>,
+    options: ViewOptions,
+    active: usize,
+    lights: Vec<Light>,
+    camera: CameraControl,
+    selected: Option<usize>,
+    gpu: Option<Gpu>,
+    window: Option<Window>,
+    messages: Option<Messages>,
+    /// What the next frame must do first: make the renderer again (method, size or light
+    /// count changed), move the lights.
+    remake: bool,
+    lights_moved: bool,
+    dirty: bool,
+    overlay_visible: bool,
+    cursor: PhysicalPosition<f64>,
+    drag: Option<Drag>,
+    modifiers: ModifiersState,
+    script: Option<VecDeque<Step>>,
+    waiting: Option<Wait>,
+    capture: Option<std::path::PathBuf>,
+    truth: Option<Truth>,
+    truth_samples: u32,
+    /// The reference shown, its texture, and the live frame's NRMSE against it.
+    shown_truth: Option<ui::Truth>,
+    live: Option<HdrImage>,
+    frames: u64,
+    /// Whether the renderer has drawn a frame whose timings are still to read.
+    drawn: bool,
+    timings: FrameTimings,
+    last_frame: Option<Instant>,
+    frame_ms: f64,
+    device_name: String,
+    notes: Vec<String>,
+    error: Option<anyhow::Error>,
+}
+
+impl App {
+    fn new(methods: Vec<ViewMethod>, options: ViewOptions) -> App {
+        let scene = methods[0].source.scene();
+        let camera = CameraControl::new(scene.camera, scene.bounds());
+        let lights = scene.lights.clone();
+        let script = options.script.clone().map(VecDeque::from);
+        let notes = options.notes.clone();
+        App {
+            methods,
+            options,
+            active: 0,
+            lights,
+            camera,
+            selected: None,
+            gpu: None,
+            window: None,
+            messages: None,
+            remake: false,
+            lights_moved: false,
+            dirty: true,
+            overlay_visible: true,
+            cursor: PhysicalPosition::default(),
+            drag: None,
+            modifiers: ModifiersState::empty(),
+            script,
+            waiting: None,
+            capture: None,
+            truth: None,
+            truth_samples: 0,
+            shown_truth: None,
+            live: None,
+            frames: 0,
+            drawn: false,
+            timings: FrameTimings::default(),
+            last_frame: None,
+            frame_ms: 0.0,
+            device_name: String::new(),
+            notes,
+            error: None,
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: anyhow::Error) {
+        self.error.get_or_insert(error);
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let s = &self.options.settings;
+        let title = format!("relume view: {}", self.methods[0].source.scene().source.display());
+        let attributes = Window::default_attributes().with_title(title).with_inner_size(PhysicalSize::new(s.width, s.height));
+        let window = event_loop.create_window(attributes).context("cannot create the window")?;
+        let device = Device::new(&window, self.options.validation, self.options.device.as_deref())?;
+        self.messages = Some(device.message_log());
+        let ctx = device.relume_context()?;
+        let size = window.inner_size();
+        let swapchain = Swapchain::new(&device, vk::Extent2D { width: size.width.max(1), height: size.height.max(1) }, None)?;
+        let overlay = Overlay::new(&window, &device, swapchain.format)?;
+        let presenter = Presenter::new(&ctx, &device, swapchain.extent)?;
+        let renderer = self.make_renderer(&ctx, swapchain.extent)?;
+        let radiance = Readback::for_image(&ctx, "live radiance", renderer.radiance())?;
+        eprintln!("relume view: {} on {}", self.methods[self.active].name, device.name);
+        self.device_name = device.name.clone();
+        self.gpu = Some(Gpu { renderer, radiance, presenter, overlay, swapchain, ctx, device });
+        self.window = Some(window);
+        Ok(())
+    }
+
+    /// The active method's renderer at `extent`, with the lights and camera as they are now.
+    fn make_renderer(&self, ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Renderer> {
+        let method = &self.methods[self.active];
+        let mut scene: Scene = method.source.scene().clone();
+        scene.lights = self.lights.clone();
+        let settings = RenderSettings {
+            width: extent.width,
+            height: extent.height,
+            ambient: method.ambient.0,
+            beta: method.ambient.1,
+            ..self.options.settings.clone()
+        };
+        let techniques = method.source.techniques();
+        let techniques: Vec<&dyn relume_renderer::MakeTechnique> = techniques.iter().map(|t| t.as_ref()).collect();
+        let mut renderer =
+            Renderer::new_blocking(ctx, &scene, &settings, &techniques).with_context(|| format!("method {}", method.name))?;
+        renderer.set_camera(self.camera.camera);
+        Ok(renderer)
+    }
+
+    /// One window frame, if the window has an area.
+    fn draw(&mut self) -> Result<()> {
+        let (Some(gpu), Some(window)) = (self.gpu.as_mut(), self.window.as_ref()) else { return Ok(()) };
+        let size = window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(());
+        }
+        gpu.presenter.wait()?;
+        // The renderer's last frame, when it drew one (a new renderer has nothing to read).
+        if std::mem::take(&mut self.drawn) {
+            self.timings = gpu.renderer.timings()?;
+            if self.shown_truth.is_some() {
+                self.read_live()?;
+            }
+        }
+        let gpu = self.gpu.as_mut().expect("checked above");
+        let extent = vk::Extent2D { width: size.width, height: size.height };
+        if self.remake || extent != gpu.swapchain.extent {
+            self.rebuild(extent)?;
+        }
+        let gpu = self.gpu.as_mut().expect("checked above");
+        let (fit, index) = gpu.swapchain.acquire()?;
+        if fit == Fit::OutOfDate {
+            self.remake = true;
+            self.dirty = true;
+            return Ok(());
+        }
+        let now = Instant::now();
+        let seconds = self.last_frame.map_or(0.0, |t| (now - t).as_secs_f32());
+        self.frame_ms = seconds as f64 * 1e3;
+        self.last_frame = Some(now);
+        gpu.renderer.set_camera(self.camera.camera);
+        if std::mem::take(&mut self.lights_moved) {
+            gpu.renderer.move_lights(&self.lights, seconds.min(0.1))?;
+        }
+        let actions = self.prepare_overlay()?;
+        let gpu = self.gpu.as_mut().expect("checked above");
+        let capture = self.capture.is_some();
+        let read_live = self.shown_truth.is_some().then_some(&gpu.radiance);
+        let visible = self.overlay_visible;
+        let overlay = &mut gpu.overlay;
+        let mut draw = |cmd, extent| overlay.draw(cmd, extent);
+        let draw_overlay: Option<crate::presenter::DrawOverlay> = if visible { Some(&mut draw) } else { None };
+        gpu.presenter.frame(&mut gpu.renderer, &gpu.swapchain, index, draw_overlay, capture, read_live)?;
+        if gpu.swapchain.present(gpu.device.queue, index)? == Fit::OutOfDate {
+            self.remake = true;
+        }
+        self.frames += 1;
+        self.drawn = true;
+        if let Some(path) = self.capture.take() {
+            gpu.presenter.wait()?;
+            let rgba = gpu.presenter.screenshot(&gpu.swapchain)?;
+            write_png(&path, gpu.swapchain.extent, &rgba)?;
+            eprintln!("relume view: wrote {}", path.display());
+            if matches!(self.waiting, Some(Wait::Screenshot)) {
+                self.waiting = None;
+            }
+        }
+        for action in actions {
+            self.apply(action)?;
+        }
+        Ok(())
+    }
+
+    /// Makes the swapchain (for a new size) and the renderer again; waits for the queue,
+    /// which only a resize, a method switch or a new light count does.
+    fn rebuild(&mut self, extent: vk::Extent2D) -> Result<()> {
+        let gpu = self.gpu.as_mut().expect("drawn with a device");
+        gpu.device.wait_queue_idle()?;
+        if extent != gpu.swapchain.extent {
+            let swapchain = Swapchain::new(&gpu.device, extent, Some(&gpu.swapchain))?;
+            gpu.swapchain = swapchain;
+            gpu.presenter.resize(gpu.swapchain.extent)?;
+            self.truth = None;
+            self.shown_truth = None;
+        }
+        let (ctx, extent) = (Arc::clone(&gpu.ctx), gpu.swapchain.extent);
+        let renderer = self.make_renderer(&ctx, extent)?;
+        let gpu = self.gpu.as_mut().expect("drawn with a device");
+        gpu.radiance = Readback::for_image(&ctx, "live radiance", renderer.radiance())?;
+        gpu.renderer = renderer;
+        self.drawn = false;
+        self.remake = false;
+        self.lights_moved = false;
+        Ok(())
+    }
+
+    /// The last frame's radiance, and its NRMSE against the reference shown.
+    fn read_live(&mut self) -> Result<()> {
+        let gpu = self.gpu.as_ref().expect("drawn with a device");
+        let floats = gpu.radiance.floats()?;
+        let (w, h) = (gpu.swapchain.extent.width, gpu.swapchain.extent.height);
+        let mut live = HdrImage::new(w, h);
+        for (p, rgba) in live.pixels.iter_mut().zip(floats.chunks_exact(4)) {
+            *p = Vec3::new(rgba[0], rgba[1], rgba[2]);
+        }
+        if let Some(shown) = self.shown_truth.as_mut() {
+            shown.live_nrmse = relume_bake::metrics::compare(&live, &shown.image).ok().map(|e| e.nrmse);
+        }
+        self.live = Some(live);
+        Ok(())
+    }
+
+    fn prepare_overlay(&mut self) -> Result<Vec<Action>> {
+        if !self.overlay_visible {
+            return Ok(Vec::new());
+        }
+        let panel = Panel {
+            methods: self.methods.iter().map(|m| m.name.as_str()).collect(),
+            active: self.active,
+            device: &self.device_name,
+            timings: &self.timings,
+            frame_ms: self.frame_ms,
+            lights: &self.lights,
+            selected: self.selected,
+            notes: &self.notes,
+            truth: self.shown_truth.as_ref(),
+            tracing: self.truth.as_ref().map(|t| (self.truth_samples, t.target())),
+        };
+        let mut actions = Vec::new();
+        let (gpu, window) = (self.gpu.as_mut().expect("drawn with a device"), self.window.as_ref().expect("open"));
+        let again = gpu.overlay.prepare(window, |ctx| actions = ui::panel(ctx, &panel))?;
+        self.dirty |= again;
+        Ok(actions)
+    }
+
+    fn apply(&mut self, action: Action) -> Result<()> {
+        match action {
+            Action::Method(index) => self.switch_method(index),
+            Action::Select(index) => self.selected = index,
+            Action::Light(index, light) => {
+                self.lights[index] = light;
+                self.lights_changed();
+            }
+            Action::StartTruth => self.start_truth(256),
+            Action::StopTruth => self.truth = None,
+            Action::SaveLights => self.save_lights(&self.options.lights_file.clone())?,
+        }
+        self.dirty = true;
+        Ok(())
+    }
+
+    fn switch_method(&mut self, index: usize) {
+        if index < self.methods.len() && index != self.active {
+            self.active = index;
+            self.remake = true;
+            self.dirty = true;
+            eprintln!("relume view: {}", self.methods[index].name);
+        }
+    }
+
+    /// The reference of the view stays valid across a method switch (that is the point) and
+    /// is dropped when what it shows changes.
+    fn view_changed(&mut self) {
+        self.truth = None;
+        self.shown_truth = None;
+        self.dirty = true;
+    }
+
+    fn lights_changed(&mut self) {
+        self.lights_moved = true;
+        self.view_changed();
+    }
+
+    fn start_truth(&mut self, samples: u32) {
+        let Some(gpu) = self.gpu.as_ref() else { return };
+        let mut scene = self.methods[self.active].source.scene().clone();
+        scene.lights = self.lights.clone();
+        scene.camera = self.camera.camera;
+        let extent = gpu.swapchain.extent;
+        self.truth = Some(Truth::start(scene, extent.width, extent.height, samples));
+        self.truth_samples = 0;
+        self.dirty = true;
+    }
+
+    /// Takes the reference's newest pass when there is one.
+    fn poll_truth(&mut self) {
+        let Some(progress) = self.truth.as_ref().and_then(Truth::latest) else { return };
+        if progress.samples != self.truth_samples {
+            self.truth_samples = progress.samples;
+            self.shown_truth = Some(ui::Truth::new(progress.image, progress.samples, self.options.settings.exposure));
+            self.dirty = true;
+        }
+    }
+
+    fn save_lights(&mut self, path: &Path) -> Result<()> {
+        let mut outputs = relume_bake::outputs::Outputs::new();
+        outputs.bytes(path, relume_bake::lights_file::to_json(&self.lights).as_bytes())?;
+        outputs.commit()?;
+        let note = format!("saved the lights to {} (give it to any command with --lights)", path.display());
+        eprintln!("relume view: {note}");
+        self.notes.push(note);
+        Ok(())
+    }
+
+    /// The next script step, when the one before is done.
+    fn step_script(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let done = match &self.waiting {
+            None => true,
+            Some(Wait::Frames(until)) => self.frames >= *until,
+            Some(Wait::Size(w, h)) => self.gpu.as_ref().is_some_and(|g| (g.swapchain.extent.width, g.swapchain.extent.height) == (*w, *h)),
+            Some(Wait::Reference) => {
+                self.truth.as_ref().is_some_and(Truth::finished) && self.shown_truth.as_ref().is_some_and(|t| t.live_nrmse.is_some())
+            }
+            Some(Wait::Screenshot) => false,
+        };
+        if !done {
+            self.dirty = true;
+            return Ok(());
+        }
+        self.waiting = None;
+        let Some(step) = self.script.as_mut().and_then(VecDeque::pop_front) else {
+            if self.script.is_some() {
+                event_loop.exit();
+            }
+            return Ok(());
+        };
+        self.dirty = true;
+        self.run_step(event_loop, step)
+    }
+
+    fn run_step(&mut self, event_loop: &ActiveEventLoop, step: Step) -> Result<()> {
+        fn light(lights: &mut [Light], i: usize) -> Result<&mut Light> {
+            let count = lights.len();
+            lights.get_mut(i).ok_or_else(|| anyhow!("script: light {i}: the scene has {count} light(s), numbered from 0"))
+        }
+        match step {
+            Step::Method(name) => {
+                let index = self.methods.iter().position(|m| m.name == name).ok_or_else(|| {
+                    let names: Vec<&str> = self.methods.iter().map(|m| m.name.as_str()).collect();
+                    anyhow!("script: method {name}: not open in this window (open: {})", names.join(", "))
+                })?;
+                self.switch_method(index);
+            }
+            Step::LightPosition(i, at) => {
+                light(&mut self.lights, i)?.position = at;
+                self.lights_changed();
+            }
+            Step::LightIntensity(i, intensity) => {
+                light(&mut self.lights, i)?.intensity = intensity;
+                self.lights_changed();
+            }
+            Step::LightCone(i, inner, outer) => {
+                let l = light(&mut self.lights, i)?;
+                set_cone(l, inner.to_radians(), outer.to_radians()).map_err(|e| anyhow!("script: light {i}: {e}"))?;
+                self.lights_changed();
+            }
+            Step::Size(w, h) => {
+                let window = self.window.as_ref().expect("open");
+                let _ = window.request_inner_size(PhysicalSize::new(w, h));
+                self.waiting = Some(Wait::Size(w, h));
+            }
+            Step::Overlay(on) => self.overlay_visible = on,
+            Step::Orbit(yaw, pitch) => {
+                self.camera.orbit(yaw.to_radians(), pitch.to_radians());
+                self.view_changed();
+            }
+            Step::Reference(samples) => {
+                self.start_truth(samples);
+                self.waiting = Some(Wait::Reference);
+            }
+            Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64)),
+            Step::Screenshot(path) => {
+                self.capture = Some(path);
+                self.waiting = Some(Wait::Screenshot);
+            }
+            Step::SaveLights(path) => self.save_lights(&path)?,
+            Step::Quit => event_loop.exit(),
+        }
+        Ok(())
+    }
+
+    fn key(&mut self, key: &Key) -> Result<()> {
+        let step = match key {
+            Key::Named(NamedKey::Tab) => {
+                let n = self.methods.len();
+                let next = if self.modifiers.shift_key() { self.active + n - 1 } else { self.active + 1 };
+                self.switch_method(next % n);
+                return Ok(());
+            }
+            Key::Named(NamedKey::Home) => {
+                self.camera.reset();
+                self.view_changed();
+                return Ok(());
+            }
+            Key::Named(NamedKey::F1) => {
+                self.overlay_visible = !self.overlay_visible;
+                self.dirty = true;
+                return Ok(());
+            }
+            Key::Named(NamedKey::Delete) => return self.delete_light(),
+            Key::Named(NamedKey::Escape) => {
+                self.selected = None;
+                self.dirty = true;
+                return Ok(());
+            }
+            Key::Character(c) => c.to_lowercase(),
+            _ => return Ok(()),
+        };
+        let fly = match step.as_str() {
+            "w" => Vec3::Z,
+            "s" => Vec3::NEG_Z,
+            "a" => Vec3::NEG_X,
+            "d" => Vec3::X,
+            "e" => Vec3::Y,
+            "q" => Vec3::NEG_Y,
+            _ => Vec3::ZERO,
+        };
+        if fly != Vec3::ZERO && !self.modifiers.control_key() {
+            self.camera.fly(fly);
+            self.view_changed();
+            return Ok(());
+        }
+        match step.as_str() {
+            "s" if self.modifiers.control_key() => self.save_lights(&self.options.lights_file.clone())?,
+            "r" => {
+                self.camera.reset();
+                self.view_changed();
+            }
+            "t" if self.truth.is_some() => self.truth = None,
+            "t" => self.start_truth(256),
+            "n" => self.add_light(),
+            "+" | "=" => self.scale_selected(1.25),
+            "-" => self.scale_selected(0.8),
+            "[" => self.widen_selected(-2f32.to_radians()),
+            "]" => self.widen_selected(2f32.to_radians()),
+            digit if digit.len() == 1 && digit.as_bytes()[0].is_ascii_digit() && digit != "0" => {
+                self.switch_method(digit.parse::<usize>().unwrap_or(1) - 1);
+            }
+            _ => {}
+        }
+        self.dirty = true;
+        Ok(())
+    }
+
+    fn scale_selected(&mut self, factor: f32) {
+        if let Some(i) = self.selected {
+            self.lights[i].intensity *= factor;
+            self.lights_changed();
+        }
+    }
+
+    fn widen_selected(&mut self, by: f32) {
+        if let Some(light) = self.selected.map(|i| &mut self.lights[i]) {
+            if let LightKind::Spot { inner_cone, outer_cone } = light.kind {
+                let outer = (outer_cone + by).clamp(1f32.to_radians(), std::f32::consts::FRAC_PI_2);
+                let _ = set_cone(light, inner_cone.min(outer * 0.9), outer);
+                self.lights_changed();
+            }
+        }
+    }
+
+    /// A new point light at the orbit's pivot, as bright as the first light (1 cd without
+    /// any); the renderer is made again for the new count.
+    fn add_light(&mut self) {
+        let intensity = self.lights.first().map_or(Vec3::ONE, |l| l.intensity);
+        let (_, _, forward) = self.camera.axes();
+        let position = self.camera.position() + forward * self.camera.metres_per_pixel(self.camera.position() + forward, 1) * 0.5;
+        let name = format!("light {}", self.lights.len());
+        self.lights.push(Light { name, kind: LightKind::Point, intensity, range: None, position, direction: Vec3::NEG_Y });
+        self.selected = Some(self.lights.len() - 1);
+        self.remake = true;
+        self.view_changed();
+    }
+
+    fn delete_light(&mut self) -> Result<()> {
+        let Some(i) = self.selected else { return Ok(()) };
+        if self.lights.len() == 1 {
+            self.notes.push("the last light stays: relume renders a scene with at least one light".into());
+        } else {
+            self.lights.remove(i);
+            self.selected = None;
+            self.remake = true;
+            self.view_changed();
+        }
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// The light whose window position is within 24 pixels of the cursor, nearest first.
+    fn light_under_cursor(&self) -> Option<usize> {
+        let size = self.window.as_ref()?.inner_size();
+        let (cx, cy) = (self.cursor.x as f32, self.cursor.y as f32);
+        let distances = self.lights.iter().enumerate().filter_map(|(i, l)| {
+            let (x, y) = self.camera.project(l.position, size.width, size.height)?;
+            Some((i, ((x - cx).powi(2) + (y - cy).powi(2)).sqrt()))
+        });
+        distances.filter(|(_, d)| *d < 24.0).min_by(|a, b| a.1.total_cmp(&b.1)).map(|(i, _)| i)
+    }
+
+    fn pointer(&mut self, event: &WindowEvent) {
+        match event {
+            WindowEvent::MouseInput { state: ElementState::Pressed, button, .. } => {
+                self.drag = match button {
+                    MouseButton::Left => match self.light_under_cursor() {
+                        Some(i) => {
+                            self.selected = Some(i);
+                            Some(Drag::Light(i, self.modifiers.shift_key()))
+                        }
+                        None => Some(Drag::Orbit),
+                    },
+                    MouseButton::Right | MouseButton::Middle => Some(Drag::Pan),
+                    _ => None,
+                };
+                self.dirty = true;
+            }
+            WindowEvent::MouseInput { state: ElementState::Released, .. } => self.drag = None,
+            WindowEvent::CursorMoved { position, .. } => {
+                let (dx, dy) = ((position.x - self.cursor.x) as f32, (position.y - self.cursor.y) as f32);
+                self.cursor = *position;
+                self.dragged(dx, dy);
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => *y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.camera.dolly(notches);
+                self.view_changed();
+            }
+            _ => {}
+        }
+    }
+
+    fn dragged(&mut self, dx: f32, dy: f32) {
+        let Some(drag) = self.drag else { return };
+        let height = self.window.as_ref().map_or(1, |w| w.inner_size().height);
+        let (right, up, forward) = self.camera.axes();
+        match drag {
+            Drag::Orbit => self.camera.orbit(-dx * 0.01, -dy * 0.01),
+            Drag::Pan => self.camera.fly(Vec3::new(-dx, dy, 0.0) * 0.05),
+            Drag::Light(i, along_view) => {
+                let light = &mut self.lights[i];
+                let scale = self.camera.metres_per_pixel(light.position, height);
+                // In the view plane, or (with Shift) towards and away from the camera.
+                light.position += match along_view {
+                    false => (right * dx - up * dy) * scale,
+                    true => forward * (-dy * scale),
+                };
+                self.lights_moved = true;
+            }
+        }
+        self.view_changed();
+    }
+}
+
+/// A spot light's cone; refused for other kinds and for angles out of 0 <= inner < outer <= 90°.
+fn set_cone(light: &mut Light, inner: f32, outer: f32) -> Result<(), String> {
+    if !matches!(light.kind, LightKind::Spot { .. }) {
+        return Err("not a spot light".into());
+    }
+    if !(0.0 <= inner && inner < outer && outer <= std::f32::consts::FRAC_PI_2) {
+        return Err("a cone needs 0 <= inner < outer <= 90 degrees".into());
+    }
+    light.kind = LightKind::Spot { inner_cone: inner, outer_cone: outer };
+    Ok(())
+}
+
+fn write_png(path: &Path, extent: vk::Extent2D, rgba: &[u8]) -> Result<()> {
+    let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let mut outputs = relume_bake::outputs::Outputs::new();
+    relume_bake::image::write_png_rgb8(&mut outputs, path, extent.width, extent.height, &rgb)?;
+    outputs.commit()?;
+    Ok(())
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_none() {
+            if let Err(e) = self.open(event_loop) {
+                self.fail(event_loop, e);
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let (Some(window), Some(gpu)) = (self.window.as_ref(), self.gpu.as_mut()) else { return };
+        let taken = self.overlay_visible && gpu.overlay.on_event(window, &event);
+        if taken {
+            self.dirty = true;
+        }
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => self.draw(),
+            WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
+                self.dirty = true;
+                Ok(())
+            }
+            WindowEvent::ModifiersChanged(m) => {
+                self.modifiers = m.state();
+                Ok(())
+            }
+            WindowEvent::KeyboardInput { event, .. } if !taken && event.state == ElementState::Pressed => self.key(&event.logical_key),
+            WindowEvent::MouseInput { .. } | WindowEvent::CursorMoved { .. } | WindowEvent::MouseWheel { .. }
+                if !taken || self.drag.is_some() =>
+            {
+                self.pointer(&event);
+                Ok(())
+            }
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        self.poll_truth();
+        if let Err(e) = self.step_script(event_loop) {
+            self.fail(event_loop, e);
+            return;
+        }
+        if std::mem::take(&mut self.dirty) {
+            if let Some(window) = &self.window {
+                window.request_redraw();
+            }
+        }
+        // Asleep until an event, or polling a reference under way a few times a second.
+        event_loop.set_control_flow(match self.truth.as_ref().is_some_and(|t| !t.finished()) {
+            true => ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(100)),
+            false => ControlFlow::Wait,
+        });
+    }
+}
