@@ -77,6 +77,8 @@ impl Drop for Gpu {
 
 enum Wait {
     Frames(u64),
+    /// Until this instant, from this many frames and allocations.
+    Idle(Instant, u64, u64),
     Size(u32, u32),
     Reference,
     Screenshot,
@@ -416,10 +418,16 @@ impl App {
             None => true,
             Some(Wait::Frames(until)) => self.frames >= *until,
             Some(Wait::Size(w, h)) => self.gpu.as_ref().is_some_and(|g| (g.swapchain.extent.width, g.swapchain.extent.height) == (*w, *h)),
-            Some(Wait::Reference) => {
-                self.truth.as_ref().is_some_and(Truth::finished) && self.shown_truth.as_ref().is_some_and(|t| t.live_nrmse.is_some())
-            }
+            Some(Wait::Reference) => self.reference_compared(),
             Some(Wait::Screenshot) => false,
+            Some(Wait::Idle(until, frames, allocations)) => {
+                if Instant::now() < *until {
+                    return Ok(());
+                }
+                let allocations = crate::alloc::allocations_on_this_thread() - allocations;
+                eprintln!("relume view: idle: {} frame(s), {allocations} heap allocation(s) on the window's thread", self.frames - frames);
+                true
+            }
         };
         if !done {
             self.dirty = true;
@@ -434,6 +442,19 @@ impl App {
         };
         self.dirty = true;
         self.run_step(event_loop, step)
+    }
+
+    /// Whether the reference asked for is finished and the live frame compared with it (said
+    /// on stderr once).
+    fn reference_compared(&self) -> bool {
+        let finished = self.truth.as_ref().is_some_and(Truth::finished);
+        match self.shown_truth.as_ref().and_then(|t| t.live_nrmse.map(|e| (t.samples, e))) {
+            Some((samples, nrmse)) if finished => {
+                eprintln!("relume view: reference of the view: {samples} spp, live NRMSE {nrmse:.4}");
+                true
+            }
+            _ => false,
+        }
     }
 
     fn run_step(&mut self, event_loop: &ActiveEventLoop, step: Step) -> Result<()> {
@@ -477,6 +498,11 @@ impl App {
                 self.waiting = Some(Wait::Reference);
             }
             Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64)),
+            Step::Idle(ms) => {
+                let until = Instant::now() + Duration::from_millis(ms as u64);
+                self.waiting = Some(Wait::Idle(until, self.frames, crate::alloc::allocations_on_this_thread()));
+                self.dirty = false;
+            }
             Step::Screenshot(path) => {
                 self.capture = Some(path);
                 self.waiting = Some(Wait::Screenshot);
@@ -736,9 +762,11 @@ impl ApplicationHandler for App {
             }
         }
         // Asleep until an event, or polling a reference under way a few times a second.
-        event_loop.set_control_flow(match self.truth.as_ref().is_some_and(|t| !t.finished()) {
-            true => ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(100)),
-            false => ControlFlow::Wait,
+        let tracing = self.truth.as_ref().is_some_and(|t| !t.finished());
+        event_loop.set_control_flow(match (&self.waiting, tracing) {
+            (Some(Wait::Idle(until, ..)), _) => ControlFlow::WaitUntil(*until),
+            (_, true) => ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(100)),
+            _ => ControlFlow::Wait,
         });
     }
 }

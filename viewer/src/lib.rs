@@ -9,6 +9,7 @@
 //! backend would); `presenter` records and submits a window frame; `overlay` is egui;
 //! `camera`, `script` and `truth` are plain Rust; `app` is the event loop that ties them.
 
+mod alloc;
 mod app;
 mod camera;
 mod device;
@@ -19,6 +20,7 @@ mod swapchain;
 mod truth;
 mod ui;
 
+pub use alloc::{allocations_on_this_thread, CountingAllocator};
 pub use app::{run, Outcome};
 
 use glam::Vec3;

@@ -11,6 +11,7 @@
 //! | `orbit YAW PITCH` | turns the camera about its pivot, degrees |
 //! | `reference SPP` | traces the reference of the current view to SPP samples and waits |
 //! | `frames N` | draws N frames |
+//! | `idle MS` | asks for no frame for MS milliseconds, then reports the frames drawn and the heap allocations the window's thread made meanwhile |
 //! | `screenshot PATH` | writes the swapchain image as PNG |
 //! | `save-lights PATH` | writes the lights file |
 //! | `quit` | closes the window |
@@ -30,6 +31,7 @@ pub enum Step {
     Orbit(f32, f32),
     Reference(u32),
     Frames(u32),
+    Idle(u32),
     Screenshot(PathBuf),
     SaveLights(PathBuf),
     Quit,
@@ -82,10 +84,11 @@ fn step(line: &str) -> Result<Step> {
         }
         ["reference", _] => Step::Reference(count(words.get(1))?),
         ["frames", _] => Step::Frames(count(words.get(1))?),
+        ["idle", _] => Step::Idle(count(words.get(1))?),
         ["screenshot", path] => Step::Screenshot(path.into()),
         ["save-lights", path] => Step::SaveLights(path.into()),
         ["quit"] => Step::Quit,
-        _ => bail!("unknown step; steps are method, light, size, overlay, orbit, reference, frames, screenshot, save-lights, quit"),
+        _ => bail!("unknown step; steps are method, light, size, overlay, orbit, reference, frames, idle, screenshot, save-lights, quit"),
     })
 }
 
