@@ -11,7 +11,7 @@ const METHOD_NAMES: [&str; 8] = ["obscurance", "light-path-maps", "light_path_ma
 
 /// Files that must stay method-agnostic, relative to the repository root; besides these,
 /// every file of `tools/src` outside the registry (`methods/`) and the scene generator
-/// (`scenegen/`, which writes each method's block of the scene settings).
+/// (`scenegen/`, which writes each method's block of the scene settings), and of `viewer/src`.
 const AGNOSTIC: [&str; 11] = [
     "renderer/src/frame.rs",
     "renderer/src/technique.rs",
@@ -36,10 +36,11 @@ fn names_a_method(line: &str) -> Option<&'static str> {
     })
 }
 
-/// The tools' files outside the registry and the scene generator.
+/// The tools' files outside the registry and the scene generator, and the viewer's (every
+/// method reaches the window through the registry).
 fn tools_dispatch() -> Vec<String> {
     let mut files = Vec::new();
-    let mut folders = vec![repo_root().join("tools/src")];
+    let mut folders = vec![repo_root().join("tools/src"), repo_root().join("viewer/src")];
     while let Some(folder) = folders.pop() {
         for entry in std::fs::read_dir(&folder).unwrap_or_else(|e| panic!("{}: {e}", folder.display())) {
             let path = entry.expect("a folder entry").path();

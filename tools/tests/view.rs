@@ -106,7 +106,11 @@ fn a_scripted_session_ends_with_the_headless_image_no_validation_message_and_an_
     let traced = log.lines().find(|l| l.contains("reference of the view")).unwrap_or_else(|| panic!("no reference finished: {log}"));
     assert!(traced.contains("2 spp"), "{traced}");
 
-    let render = relume(&["render", cornell, "--bake", "bake", "--lights", "lights.json", "--width", "160", "--height", "120", "--out", "render.exr"], &dir, None);
+    let render = relume(
+        &["render", cornell, "--bake", "bake", "--lights", "lights.json", "--width", "160", "--height", "120", "--out", "render.exr"],
+        &dir,
+        None,
+    );
     assert!(render.status.success(), "{}", stderr(&render));
     let (width, height, shown) = pixels(&dir.join("view.png"));
     let (_, _, rendered) = pixels(&dir.join("render.png"));
@@ -139,7 +143,11 @@ fn a_bad_script_and_a_bake_for_another_scene_are_refused_before_any_window() {
     assert!(log.contains("bad.txt") && log.contains("line 2") && log.contains("3 finite number"), "{log}");
 
     let cornell = scene("cornell");
-    let bake = relume(&["bake", cornell.to_str().unwrap(), "--method", "obscurance", "--patches", "500", "--rays", "4", "--out", "bake"], &dir, None);
+    let bake = relume(
+        &["bake", cornell.to_str().unwrap(), "--method", "obscurance", "--patches", "500", "--rays", "4", "--out", "bake"],
+        &dir,
+        None,
+    );
     assert!(bake.status.success(), "{}", stderr(&bake));
     let view = relume(&["view", scene("occluder-plane").to_str().unwrap(), "--bake", "bake"], &dir, None);
     let log = stderr(&view);

@@ -76,7 +76,8 @@ impl Drop for Gpu {
 }
 
 enum Wait {
-    Frames(u64),
+    /// Until this many frames are drawn; each frame's interval and GPU time (ms) meanwhile.
+    Frames(u64, Vec<(f64, f64)>),
     /// Until this instant, from this many frames and allocations.
     Idle(Instant, u64, u64),
     Size(u32, u32),
@@ -119,6 +120,8 @@ struct App {
     shown_truth: Option<ui::Truth>,
     live: Option<HdrImage>,
     frames: u64,
+    /// When a scripted light change happened, until the frame that shows it has finished.
+    latency_from: Option<Instant>,
     /// Whether the renderer has drawn a frame whose timings are still to read.
     drawn: bool,
     timings: FrameTimings,
@@ -162,6 +165,7 @@ impl App {
             live: None,
             frames: 0,
             drawn: false,
+            latency_from: None,
             timings: FrameTimings::default(),
             last_frame: None,
             frame_ms: 0.0,
@@ -228,6 +232,9 @@ impl App {
         // The renderer's last frame, when it drew one (a new renderer has nothing to read).
         if std::mem::take(&mut self.drawn) {
             self.timings = gpu.renderer.timings()?;
+            if let Some(Wait::Frames(_, times)) = &mut self.waiting {
+                times.push((self.frame_ms, self.timings.total_ms()));
+            }
             if self.shown_truth.is_some() {
                 self.read_live()?;
             }
@@ -263,6 +270,10 @@ impl App {
         gpu.presenter.frame(&mut gpu.renderer, &gpu.swapchain, index, draw_overlay, capture, read_live)?;
         if gpu.swapchain.present(gpu.device.queue, index)? == Fit::OutOfDate {
             self.remake = true;
+        }
+        if let Some(changed) = self.latency_from.take() {
+            gpu.presenter.wait()?;
+            eprintln!("relume view: light change to finished frame: {:.1} ms", changed.elapsed().as_secs_f64() * 1e3);
         }
         self.frames += 1;
         self.drawn = true;
@@ -377,6 +388,9 @@ impl App {
     }
 
     fn lights_changed(&mut self) {
+        if self.script.is_some() {
+            self.latency_from = Some(Instant::now());
+        }
         self.lights_moved = true;
         self.view_changed();
     }
@@ -416,7 +430,13 @@ impl App {
     fn step_script(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let done = match &self.waiting {
             None => true,
-            Some(Wait::Frames(until)) => self.frames >= *until,
+            Some(Wait::Frames(until, times)) => {
+                let done = self.frames >= *until;
+                if done && times.len() > 1 {
+                    report_frame_times(times);
+                }
+                done
+            }
             Some(Wait::Size(w, h)) => self.gpu.as_ref().is_some_and(|g| (g.swapchain.extent.width, g.swapchain.extent.height) == (*w, *h)),
             Some(Wait::Reference) => self.reference_compared(),
             Some(Wait::Screenshot) => false,
@@ -497,7 +517,7 @@ impl App {
                 self.start_truth(samples);
                 self.waiting = Some(Wait::Reference);
             }
-            Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64)),
+            Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64, Vec::with_capacity(n as usize))),
             Step::Idle(ms) => {
                 let until = Instant::now() + Duration::from_millis(ms as u64);
                 self.waiting = Some(Wait::Idle(until, self.frames, crate::alloc::allocations_on_this_thread()));
@@ -685,6 +705,18 @@ impl App {
         }
         self.view_changed();
     }
+}
+
+/// The median interval between frames (the window's frame time) and the median GPU time of
+/// the frames a `frames` step drew (the first interval, from before the step, left out).
+fn report_frame_times(times: &[(f64, f64)]) {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let interval = median(times[1..].iter().map(|t| t.0).collect());
+    let gpu = median(times[1..].iter().map(|t| t.1).collect());
+    eprintln!("relume view: {} frames: median frame time {interval:.2} ms, GPU {gpu:.2} ms", times.len() - 1);
 }
 
 /// A spot light's cone; refused for other kinds and for angles out of 0 <= inner < outer <= 90°.
