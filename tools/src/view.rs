@@ -67,7 +67,7 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
     let options = ViewOptions {
         settings,
         validation: args.gpu.validation,
-        device: args.gpu.device.clone(),
+        device: args.gpu.device.clone().or_else(|| std::env::var("RELUME_DEVICE").ok()),
         script,
         lights_file: args.save_lights.clone(),
         notes,

@@ -4,8 +4,10 @@
 //! same state, no validation message (teardown included), an idle window that draws and
 //! allocates nothing; and the refusals: no display, a bad script, a bake for another scene.
 
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("relume-view-{}-{name}", std::process::id()));
@@ -18,16 +20,32 @@ fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.gltf"))
 }
 
+/// Runs relume with no display but `display`, killed (and the test failed) past 10 minutes.
 fn relume(args: &[&str], dir: &Path, display: Option<&str>) -> Output {
     let mut command = Command::new(env!("CARGO_BIN_EXE_relume"));
-    command.args(args).current_dir(dir).env_remove("WAYLAND_DISPLAY").env_remove("DISPLAY");
+    command.args(args).current_dir(dir).stdout(Stdio::piped()).stderr(Stdio::piped());
+    for variable in ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"] {
+        command.env_remove(variable);
+    }
     if let Some(display) = display {
         command.env("DISPLAY", display);
     }
-    command.output().expect("run relume")
+    let mut child = command.spawn().expect("run relume");
+    let deadline = Instant::now() + Duration::from_secs(600);
+    while child.try_wait().expect("wait for relume").is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let output = child.wait_with_output().expect("relume's output");
+            panic!("relume {args:?} ran past 10 minutes: {}", String::from_utf8_lossy(&output.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("relume's output")
 }
 
-/// An X server of its own (24-bit: Mesa's WSI refuses Xvfb's old 8-bit default), killed on drop.
+/// An X server of its own, on a display it chose free itself (-displayfd: it writes the
+/// number once it listens), 24-bit (Mesa's WSI refuses Xvfb's old 8-bit default); killed on
+/// drop.
 struct Xvfb {
     child: Child,
     display: String,
@@ -35,30 +53,17 @@ struct Xvfb {
 
 impl Xvfb {
     fn start() -> Xvfb {
-        for number in (90 + std::process::id() % 100)..400 {
-            if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
-                continue;
-            }
-            let display = format!(":{number}");
-            let child = Command::new("Xvfb")
-                .args([display.as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("Xvfb (tools/setup.sh installs the xvfb package)");
-            let mut server = Xvfb { child, display };
-            for _ in 0..100 {
-                if Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
-                    return server;
-                }
-                if server.child.try_wait().ok().flatten().is_some() {
-                    break;
-                }
-                std::thread::sleep(std::time::Duration::from_millis(50));
-            }
-            let _ = server.child.kill();
-        }
-        panic!("no free X display for Xvfb");
+        let mut child = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb (tools/setup.sh installs the xvfb package)");
+        let mut line = String::new();
+        let stdout = child.stdout.take().expect("Xvfb's stdout");
+        BufReader::new(stdout).read_line(&mut line).expect("Xvfb's display number");
+        let number: u32 = line.trim().parse().unwrap_or_else(|_| panic!("Xvfb did not start: {line:?}"));
+        Xvfb { child, display: format!(":{number}") }
     }
 }
 
@@ -95,7 +100,21 @@ fn a_scripted_session_ends_with_the_headless_image_no_validation_message_and_an_
     std::fs::write(dir.join("script.txt"), script).unwrap();
     let xvfb = Xvfb::start();
     let view = relume(
-        &["view", cornell, "--bake", "bake", "--width", "200", "--height", "150", "--validation", "--script", "script.txt"],
+        &[
+            "view",
+            cornell,
+            "--bake",
+            "bake",
+            "--width",
+            "200",
+            "--height",
+            "150",
+            "--validation",
+            "--script",
+            "script.txt",
+            "--device",
+            "llvmpipe",
+        ],
         &dir,
         Some(&xvfb.display),
     );
@@ -107,7 +126,22 @@ fn a_scripted_session_ends_with_the_headless_image_no_validation_message_and_an_
     assert!(traced.contains("2 spp"), "{traced}");
 
     let render = relume(
-        &["render", cornell, "--bake", "bake", "--lights", "lights.json", "--width", "160", "--height", "120", "--out", "render.exr"],
+        &[
+            "render",
+            cornell,
+            "--bake",
+            "bake",
+            "--lights",
+            "lights.json",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--out",
+            "render.exr",
+            "--device",
+            "llvmpipe",
+        ],
         &dir,
         None,
     );

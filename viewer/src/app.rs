@@ -80,7 +80,8 @@ enum Wait {
     Frames(u64, Vec<(f64, f64)>),
     /// Until this instant, from this many frames and allocations.
     Idle(Instant, u64, u64),
-    Size(u32, u32),
+    /// Until the swapchain has this size, asked for at that instant.
+    Size(u32, u32, Instant),
     Reference,
     Screenshot,
 }
@@ -105,6 +106,10 @@ struct App {
     /// What the next frame must do first: make the renderer again (method, size or light
     /// count changed), move the lights.
     remake: bool,
+    /// The swapchain is out of date or suboptimal: make it again before the next frame.
+    stale: bool,
+    /// The window size the swapchain was last made for.
+    built_for: vk::Extent2D,
     lights_moved: bool,
     dirty: bool,
     overlay_visible: bool,
@@ -118,7 +123,6 @@ struct App {
     truth_samples: u32,
     /// The reference shown, its texture, and the live frame's NRMSE against it.
     shown_truth: Option<ui::Truth>,
-    live: Option<HdrImage>,
     frames: u64,
     /// When a scripted light change happened, until the frame that shows it has finished.
     latency_from: Option<Instant>,
@@ -150,6 +154,8 @@ impl App {
             window: None,
             messages: None,
             remake: false,
+            stale: false,
+            built_for: vk::Extent2D::default(),
             lights_moved: false,
             dirty: true,
             overlay_visible: true,
@@ -162,7 +168,6 @@ impl App {
             truth: None,
             truth_samples: 0,
             shown_truth: None,
-            live: None,
             frames: 0,
             drawn: false,
             latency_from: None,
@@ -196,6 +201,7 @@ impl App {
         let radiance = Readback::for_image(&ctx, "live radiance", renderer.radiance())?;
         eprintln!("relume view: {} on {}", self.methods[self.active].name, device.name);
         self.device_name = device.name.clone();
+        self.built_for = vk::Extent2D { width: size.width, height: size.height };
         self.gpu = Some(Gpu { renderer, radiance, presenter, overlay, swapchain, ctx, device });
         self.window = Some(window);
         Ok(())
@@ -223,32 +229,22 @@ impl App {
 
     /// One window frame, if the window has an area.
     fn draw(&mut self) -> Result<()> {
-        let (Some(gpu), Some(window)) = (self.gpu.as_mut(), self.window.as_ref()) else { return Ok(()) };
-        let size = window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        let Some(size) = self.window.as_ref().map(Window::inner_size) else { return Ok(()) };
+        if size.width == 0 || size.height == 0 || self.gpu.is_none() {
             return Ok(());
         }
-        gpu.presenter.wait()?;
-        // The renderer's last frame, when it drew one (a new renderer has nothing to read).
-        if std::mem::take(&mut self.drawn) {
-            self.timings = gpu.renderer.timings()?;
-            if let Some(Wait::Frames(_, times)) = &mut self.waiting {
-                times.push((self.frame_ms, self.timings.total_ms()));
-            }
-            if self.shown_truth.is_some() {
-                self.read_live()?;
-            }
+        self.finish_last_frame()?;
+        let wanted = vk::Extent2D { width: size.width, height: size.height };
+        if self.stale || wanted != self.built_for {
+            self.rebuild_swapchain(wanted)?;
         }
-        let gpu = self.gpu.as_mut().expect("checked above");
-        let extent = vk::Extent2D { width: size.width, height: size.height };
-        if self.remake || extent != gpu.swapchain.extent {
-            self.rebuild(extent)?;
+        if self.remake {
+            self.remake_renderer()?;
         }
         let gpu = self.gpu.as_mut().expect("checked above");
         let (fit, index) = gpu.swapchain.acquire()?;
         if fit == Fit::OutOfDate {
-            self.remake = true;
-            self.dirty = true;
+            (self.stale, self.dirty) = (true, true);
             return Ok(());
         }
         let now = Instant::now();
@@ -261,30 +257,19 @@ impl App {
         }
         let actions = self.prepare_overlay()?;
         let gpu = self.gpu.as_mut().expect("checked above");
-        let capture = self.capture.is_some();
-        let read_live = self.shown_truth.is_some().then_some(&gpu.radiance);
-        let visible = self.overlay_visible;
-        let overlay = &mut gpu.overlay;
+        let read_live = self.shown_truth.is_some();
+        let (visible, overlay) = (self.overlay_visible, &mut gpu.overlay);
         let mut draw = |cmd, extent| overlay.draw(cmd, extent);
         let draw_overlay: Option<crate::presenter::DrawOverlay> = if visible { Some(&mut draw) } else { None };
-        gpu.presenter.frame(&mut gpu.renderer, &gpu.swapchain, index, draw_overlay, capture, read_live)?;
+        let radiance = read_live.then_some(&gpu.radiance);
+        gpu.presenter.frame(&mut gpu.renderer, &gpu.swapchain, index, draw_overlay, self.capture.is_some(), radiance)?;
         if gpu.swapchain.present(gpu.device.queue, index)? == Fit::OutOfDate {
-            self.remake = true;
-        }
-        if let Some(changed) = self.latency_from.take() {
-            gpu.presenter.wait()?;
-            eprintln!("relume view: light change to finished frame: {:.1} ms", changed.elapsed().as_secs_f64() * 1e3);
+            (self.stale, self.dirty) = (true, true);
         }
         self.frames += 1;
         self.drawn = true;
-        if let Some(path) = self.capture.take() {
-            gpu.presenter.wait()?;
-            let rgba = gpu.presenter.screenshot(&gpu.swapchain)?;
-            write_png(&path, gpu.swapchain.extent, &rgba)?;
-            eprintln!("relume view: wrote {}", path.display());
-            if matches!(self.waiting, Some(Wait::Screenshot)) {
-                self.waiting = None;
-            }
+        if self.latency_from.is_some() || self.capture.is_some() || read_live {
+            self.after_frame(read_live)?;
         }
         for action in actions {
             self.apply(action)?;
@@ -292,30 +277,74 @@ impl App {
         Ok(())
     }
 
-    /// Makes the swapchain (for a new size) and the renderer again; waits for the queue,
-    /// which only a resize, a method switch or a new light count does.
-    fn rebuild(&mut self, extent: vk::Extent2D) -> Result<()> {
+    /// Waits for the frame in flight and reads its timings (a new renderer has none to read).
+    fn finish_last_frame(&mut self) -> Result<()> {
+        let gpu = self.gpu.as_mut().expect("drawn with a device");
+        gpu.presenter.wait()?;
+        if std::mem::take(&mut self.drawn) {
+            self.timings = gpu.renderer.timings()?;
+            if let Some(Wait::Frames(_, times)) = &mut self.waiting {
+                times.push((self.frame_ms, self.timings.total_ms()));
+            }
+        }
+        Ok(())
+    }
+
+    /// What needs the frame just submitted finished: the latency of a scripted light change,
+    /// a screenshot, the live NRMSE against the reference shown.
+    fn after_frame(&mut self, read_live: bool) -> Result<()> {
+        let gpu = self.gpu.as_mut().expect("drawn with a device");
+        gpu.presenter.wait()?;
+        if let Some(changed) = self.latency_from.take() {
+            eprintln!("relume view: light change to finished frame: {:.1} ms", changed.elapsed().as_secs_f64() * 1e3);
+        }
+        if let Some(path) = self.capture.take() {
+            let rgba = gpu.presenter.screenshot(&gpu.swapchain)?;
+            write_png(&path, gpu.swapchain.extent, &rgba)?;
+            eprintln!("relume view: wrote {}", path.display());
+            if matches!(self.waiting, Some(Wait::Screenshot)) {
+                self.waiting = None;
+            }
+        }
+        if read_live {
+            self.read_live()?;
+        }
+        Ok(())
+    }
+
+    /// A swapchain for the window's size (or because the old one is out of date); the
+    /// renderer follows when the size changed. Waits for the queue: only on a resize.
+    fn rebuild_swapchain(&mut self, wanted: vk::Extent2D) -> Result<()> {
         let gpu = self.gpu.as_mut().expect("drawn with a device");
         gpu.device.wait_queue_idle()?;
-        if extent != gpu.swapchain.extent {
-            let swapchain = Swapchain::new(&gpu.device, extent, Some(&gpu.swapchain))?;
-            gpu.swapchain = swapchain;
-            gpu.presenter.resize(gpu.swapchain.extent)?;
-            self.truth = None;
-            self.shown_truth = None;
+        let swapchain = Swapchain::new(&gpu.device, wanted, Some(&gpu.swapchain))?;
+        gpu.swapchain = swapchain;
+        let extent = gpu.swapchain.extent;
+        let settings = gpu.renderer.settings();
+        if (settings.width, settings.height) != (extent.width, extent.height) {
+            gpu.presenter.resize(extent)?;
+            self.remake = true;
+            self.view_changed();
         }
+        (self.built_for, self.stale) = (wanted, false);
+        Ok(())
+    }
+
+    /// The renderer again, for another method, size or number of lights; waits for the queue.
+    fn remake_renderer(&mut self) -> Result<()> {
+        let gpu = self.gpu.as_mut().expect("drawn with a device");
+        gpu.device.wait_queue_idle()?;
         let (ctx, extent) = (Arc::clone(&gpu.ctx), gpu.swapchain.extent);
         let renderer = self.make_renderer(&ctx, extent)?;
         let gpu = self.gpu.as_mut().expect("drawn with a device");
         gpu.radiance = Readback::for_image(&ctx, "live radiance", renderer.radiance())?;
         gpu.renderer = renderer;
-        self.drawn = false;
-        self.remake = false;
-        self.lights_moved = false;
+        (self.drawn, self.remake, self.lights_moved) = (false, false, false);
         Ok(())
     }
 
-    /// The last frame's radiance, and its NRMSE against the reference shown.
+    /// The frame's radiance (its fence has signalled), and its NRMSE against the reference
+    /// shown; a new value is drawn once more, so the panel never shows an older frame's.
     fn read_live(&mut self) -> Result<()> {
         let gpu = self.gpu.as_ref().expect("drawn with a device");
         let floats = gpu.radiance.floats()?;
@@ -325,9 +354,10 @@ impl App {
             *p = Vec3::new(rgba[0], rgba[1], rgba[2]);
         }
         if let Some(shown) = self.shown_truth.as_mut() {
-            shown.live_nrmse = relume_bake::metrics::compare(&live, &shown.image).ok().map(|e| e.nrmse);
+            let nrmse = relume_bake::metrics::compare(&live, &shown.image).ok().map(|e| e.nrmse);
+            self.dirty |= nrmse != shown.live_nrmse;
+            shown.live_nrmse = nrmse;
         }
-        self.live = Some(live);
         Ok(())
     }
 
@@ -364,7 +394,7 @@ impl App {
             }
             Action::StartTruth => self.start_truth(256),
             Action::StopTruth => self.truth = None,
-            Action::SaveLights => self.save_lights(&self.options.lights_file.clone())?,
+            Action::SaveLights => self.save_lights_noting(),
         }
         self.dirty = true;
         Ok(())
@@ -426,6 +456,16 @@ impl App {
         Ok(())
     }
 
+    /// Saves the lights to `--save-lights`; a failure is a note on screen, not the end of the
+    /// session (its edits would be lost).
+    fn save_lights_noting(&mut self) {
+        if let Err(e) = self.save_lights(&self.options.lights_file.clone()) {
+            let note = format!("could not save the lights: {e:#}");
+            eprintln!("relume view: {note}");
+            self.notes.push(note);
+        }
+    }
+
     /// The next script step, when the one before is done.
     fn step_script(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let done = match &self.waiting {
@@ -437,7 +477,16 @@ impl App {
                 }
                 done
             }
-            Some(Wait::Size(w, h)) => self.gpu.as_ref().is_some_and(|g| (g.swapchain.extent.width, g.swapchain.extent.height) == (*w, *h)),
+            Some(Wait::Size(w, h, asked)) => {
+                let size = self.gpu.as_ref().map(|g| (g.swapchain.extent.width, g.swapchain.extent.height));
+                if size != Some((*w, *h)) && asked.elapsed() > Duration::from_secs(10) {
+                    bail!("script: size {w} {h}: the window system kept the window at {size:?} for 10 s");
+                }
+                size == Some((*w, *h))
+            }
+            Some(Wait::Reference) if self.truth.is_none() => {
+                bail!("script: reference: the reference was dropped (the view changed) before it finished")
+            }
             Some(Wait::Reference) => self.reference_compared(),
             Some(Wait::Screenshot) => false,
             Some(Wait::Idle(until, frames, allocations)) => {
@@ -504,9 +553,10 @@ impl App {
                 self.lights_changed();
             }
             Step::Size(w, h) => {
-                let window = self.window.as_ref().expect("open");
-                let _ = window.request_inner_size(PhysicalSize::new(w, h));
-                self.waiting = Some(Wait::Size(w, h));
+                if let Some(window) = &self.window {
+                    let _ = window.request_inner_size(PhysicalSize::new(w, h));
+                }
+                self.waiting = Some(Wait::Size(w, h, Instant::now()));
             }
             Step::Overlay(on) => self.overlay_visible = on,
             Step::Orbit(yaw, pitch) => {
@@ -517,7 +567,7 @@ impl App {
                 self.start_truth(samples);
                 self.waiting = Some(Wait::Reference);
             }
-            Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64, Vec::with_capacity(n as usize))),
+            Step::Frames(n) => self.waiting = Some(Wait::Frames(self.frames + n as u64, Vec::with_capacity(n.min(10_000) as usize))),
             Step::Idle(ms) => {
                 let until = Instant::now() + Duration::from_millis(ms as u64);
                 self.waiting = Some(Wait::Idle(until, self.frames, crate::alloc::allocations_on_this_thread()));
@@ -575,7 +625,7 @@ impl App {
             return Ok(());
         }
         match step.as_str() {
-            "s" if self.modifiers.control_key() => self.save_lights(&self.options.lights_file.clone())?,
+            "s" if self.modifiers.control_key() => self.save_lights_noting(),
             "r" => {
                 self.camera.reset();
                 self.view_changed();
@@ -613,12 +663,11 @@ impl App {
         }
     }
 
-    /// A new point light at the orbit's pivot, as bright as the first light (1 cd without
+    /// A new point light at the orbit's pivot (the scene's centre, as flown), as bright as the first light (1 cd without
     /// any); the renderer is made again for the new count.
     fn add_light(&mut self) {
         let intensity = self.lights.first().map_or(Vec3::ONE, |l| l.intensity);
-        let (_, _, forward) = self.camera.axes();
-        let position = self.camera.position() + forward * self.camera.metres_per_pixel(self.camera.position() + forward, 1) * 0.5;
+        let position = self.camera.pivot();
         let name = format!("light {}", self.lights.len());
         self.lights.push(Light { name, kind: LightKind::Point, intensity, range: None, position, direction: Vec3::NEG_Y });
         self.selected = Some(self.lights.len() - 1);
@@ -632,7 +681,7 @@ impl App {
             self.notes.push("the last light stays: relume renders a scene with at least one light".into());
         } else {
             self.lights.remove(i);
-            self.selected = None;
+            (self.selected, self.drag) = (None, None);
             self.remake = true;
             self.view_changed();
         }
@@ -693,7 +742,7 @@ impl App {
             Drag::Orbit => self.camera.orbit(-dx * 0.01, -dy * 0.01),
             Drag::Pan => self.camera.fly(Vec3::new(-dx, dy, 0.0) * 0.05),
             Drag::Light(i, along_view) => {
-                let light = &mut self.lights[i];
+                let Some(light) = self.lights.get_mut(i) else { return };
                 let scale = self.camera.metres_per_pixel(light.position, height);
                 // In the view plane, or (with Shift) towards and away from the camera.
                 light.position += match along_view {
@@ -783,6 +832,9 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gpu.is_none() || self.error.is_some() {
+            return;
+        }
         self.poll_truth();
         if let Err(e) = self.step_script(event_loop) {
             self.fail(event_loop, e);

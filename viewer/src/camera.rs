@@ -28,6 +28,11 @@ impl CameraControl {
         self.pivot = self.start_pivot;
     }
 
+    /// The point orbits turn about.
+    pub fn pivot(&self) -> Vec3 {
+        self.pivot
+    }
+
     pub fn position(&self) -> Vec3 {
         self.camera.position()
     }

@@ -1,14 +1,20 @@
 //! The on-screen overlay: egui (an immediate-mode UI) for text and controls, fed by winit's
 //! events through egui-winit and recorded into the viewer's command buffer by
 //! egui-ash-renderer with dynamic rendering, onto the swapchain image after relume's frame.
-//! Its vertex buffers grow only when the UI does; its font atlas is uploaded once (that
-//! upload waits for the queue: at the first frame, never in steady state).
+//! Its vertex buffers grow only when the UI does; a texture is uploaded when egui changes it
+//! (the font atlas at the first frame and when new glyphs appear, the reference as it refines:
+//! that upload waits for the queue, never in steady state). Each texture is uploaded whole
+//! from a copy kept here: egui-ash-renderer 0.11 updates a part of a texture after moving the
+//! whole of it from an undefined layout, which may lose the rest on drivers that re-tile.
 
 use crate::device::Device;
 use anyhow::Result;
 use ash::vk;
-use egui::{ClippedPrimitive, TextureId};
+use egui::epaint::{ImageData, ImageDelta};
+use egui::{ClippedPrimitive, ColorImage, TextureId};
 use egui_ash_renderer::{DynamicRendering, Options, Renderer};
+use std::collections::HashMap;
+use std::sync::Arc;
 use winit::event::WindowEvent;
 use winit::window::Window;
 
@@ -23,6 +29,8 @@ pub struct Overlay {
     primitives: Vec<ClippedPrimitive>,
     pixels_per_point: f32,
     to_free: Vec<TextureId>,
+    /// Every live texture as uploaded last, to apply egui's partial updates to.
+    textures: HashMap<TextureId, Arc<ColorImage>>,
 }
 
 impl Overlay {
@@ -45,6 +53,7 @@ impl Overlay {
             primitives: Vec::new(),
             pixels_per_point: 1.0,
             to_free: Vec::new(),
+            textures: HashMap::new(),
         })
     }
 
@@ -59,15 +68,38 @@ impl Overlay {
         let input = self.state.take_egui_input(window);
         let output = self.ctx.run(input, ui);
         self.state.handle_platform_output(window, output.platform_output);
-        self.renderer.free_textures(&std::mem::take(&mut self.to_free))?;
+        let freed = std::mem::take(&mut self.to_free);
+        self.renderer.free_textures(&freed)?;
+        freed.iter().for_each(|id| _ = self.textures.remove(id));
         if !output.textures_delta.set.is_empty() {
-            self.renderer.set_textures(self.queue, self.pool, &output.textures_delta.set)?;
+            let whole: Vec<(TextureId, ImageDelta)> =
+                output.textures_delta.set.iter().map(|(id, delta)| (*id, self.whole(*id, delta))).collect();
+            self.renderer.set_textures(self.queue, self.pool, &whole)?;
         }
         self.to_free = output.textures_delta.free;
         self.pixels_per_point = output.pixels_per_point;
         self.primitives = self.ctx.tessellate(output.shapes, output.pixels_per_point);
         let again = output.viewport_output.get(&egui::ViewportId::ROOT).is_some_and(|v| v.repaint_delay.is_zero());
         Ok(again)
+    }
+
+    /// The whole texture `id` after `delta`.
+    fn whole(&mut self, id: TextureId, delta: &ImageDelta) -> ImageDelta {
+        let ImageData::Color(patch) = &delta.image;
+        let image = match (delta.pos, self.textures.get(&id)) {
+            (Some([x0, y0]), Some(old)) => {
+                let mut image = ColorImage::clone(old);
+                let width = image.size[0];
+                for (row, pixels) in patch.pixels.chunks_exact(patch.size[0].max(1)).enumerate() {
+                    let at = (y0 + row) * width + x0;
+                    image.pixels[at..at + pixels.len()].copy_from_slice(pixels);
+                }
+                Arc::new(image)
+            }
+            _ => Arc::clone(patch),
+        };
+        self.textures.insert(id, Arc::clone(&image));
+        ImageDelta::full(ImageData::Color(image), delta.options)
     }
 
     /// Records the prepared UI inside the caller's dynamic rendering.

@@ -69,7 +69,8 @@ impl Swapchain {
             .pre_transform(caps.current_transform)
             .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
             .present_mode(vk::PresentModeKHR::FIFO)
-            .clipped(true)
+            // Screenshots read every pixel, also where another window covers this one.
+            .clipped(false)
             .old_swapchain(old.map_or(vk::SwapchainKHR::null(), |o| o.raw));
         let loader = ash::khr::swapchain::Device::new(&base.instance, &device.device);
         let d = &device.device;

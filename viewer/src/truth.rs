@@ -10,7 +10,6 @@ use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 
 /// The latest average and how many samples per pixel it holds.
 #[derive(Clone)]
@@ -24,7 +23,6 @@ pub struct Truth {
     target: u32,
     cancel: Arc<AtomicBool>,
     latest: Arc<Mutex<Option<Progress>>>,
-    worker: Option<JoinHandle<()>>,
 }
 
 impl Truth {
@@ -34,8 +32,9 @@ impl Truth {
         let cancel = Arc::new(AtomicBool::new(false));
         let latest = Arc::new(Mutex::new(None));
         let (stop, out) = (Arc::clone(&cancel), Arc::clone(&latest));
-        let worker = std::thread::spawn(move || trace(&scene, width, height, samples, &stop, &out));
-        Truth { target: samples, cancel, latest, worker: Some(worker) }
+        // Detached: a pass under way ends on its own after a cancel, without holding the window.
+        std::thread::spawn(move || trace(&scene, width, height, samples, &stop, &out));
+        Truth { target: samples, cancel, latest }
     }
 
     pub fn latest(&self) -> Option<Progress> {
@@ -53,12 +52,9 @@ impl Truth {
 }
 
 impl Drop for Truth {
-    /// Cancels and waits for the pass under way (a pass is short: at most 16 samples).
+    /// Cancels: the worker stops after its pass under way (at most 16 samples), unwaited.
     fn drop(&mut self) {
         self.cancel.store(true, Ordering::Relaxed);
-        if let Some(worker) = self.worker.take() {
-            let _ = worker.join();
-        }
     }
 }
 

@@ -56,7 +56,12 @@ impl Truth {
                 let [r, g, b] = tonemap_to_srgb8(*p, self.exposure);
                 Color32::from_rgb(r, g, b)
             });
-            let image = ColorImage::new([self.image.width as usize, self.image.height as usize], pixels.collect());
+            // Every step-th pixel: shown at a third of the window, within egui's texture limit.
+            let step = (self.image.width.max(self.image.height) as usize).div_ceil(1024);
+            let (w, h) = (self.image.width as usize, self.image.height as usize);
+            let pixels: Vec<Color32> = pixels.collect();
+            let kept = (0..h).step_by(step).flat_map(|y| (0..w).step_by(step).map(move |x| y * w + x));
+            let image = ColorImage::new([w.div_ceil(step), h.div_ceil(step)], kept.map(|i| pixels[i]).collect());
             ctx.load_texture("reference", image, TextureOptions::LINEAR)
         })
     }
