@@ -23,6 +23,7 @@ pub mod testing;
 pub mod fiv;
 pub mod light_cloud;
 pub mod light_path_maps;
+pub mod mrt;
 pub mod obscurance;
 
 #[cfg(feature = "baking")]

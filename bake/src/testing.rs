@@ -42,6 +42,16 @@ pub fn scene(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, lights: Ve
 }
 
 /// A camera at `eye` looking at `target`, `up` roughly up, vertical field of view `yfov`.
+/// `count` points spread over the cube [lo, hi]^3 by a fixed hash (the same at every call).
+pub fn scattered_points(count: u32, lo: f32, hi: f32) -> Vec<Vec3> {
+    (0..count)
+        .map(|i| {
+            let h = |k: u32| ((i.wrapping_mul(2_654_435_761) ^ k.wrapping_mul(40_503)) % 1000) as f32 / 1000.0;
+            Vec3::new(h(1), h(2), h(3)) * (hi - lo) + Vec3::splat(lo)
+        })
+        .collect()
+}
+
 pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Camera {
     // glTF cameras look down their local -Z with +Y up.
     let forward = (target - eye).normalize();

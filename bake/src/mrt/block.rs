@@ -1,0 +1,249 @@
+//! One block's reduced direct-to-indirect transfer (§4): the one-bounce operator F gathered
+//! on the block's samples, the light prior L_d of sphere lights in and beyond the block, and
+//! the operators U_b, T_d->b and L_imp, with the prior enriched as App. A says.
+//!
+//! Quantities (spec B1): l_d is the direct radiosity's irradiance part, rho * E_direct (the
+//! prior's albedo is 1); F is albedo-free: a cosine-weighted gather of l_d, read bilinearly on
+//! the face a ray hits, 0 through an open face. The block is convex, so a ray from a sample
+//! leaves it through exactly one face: no ray tracing beyond a ray-box exit.
+
+use super::svd::{self, Svd};
+use super::{Face, Samples, Shape};
+use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
+use crate::work::with_threads;
+use glam::{Vec2, Vec3};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// What one block's operators are built from (spec A2 and B3; the paper's values by default).
+#[derive(Clone, Debug)]
+pub struct BlockSettings {
+    /// Samples per face side: 16 (n = 6 x 16^2 for a closed cube).
+    pub samples_per_face: usize,
+    /// Cosine-weighted gather rays per sample for F: 16,384.
+    pub gather_rays: u32,
+    /// Sphere lights of the prior per axis, in the block and in each open neighbour: 6.
+    pub prior_grid: usize,
+    /// The prior's sphere lights' radius, in block sides: 0.05.
+    pub light_radius: f32,
+    /// k_d: prior modes kept: 64.
+    pub prior_modes: usize,
+    /// k_self (k_b): indirect modes kept: 32.
+    pub modes: usize,
+    /// App. A: enrich the prior with per-face constants and the first U_b, then rebuild.
+    pub enrich: bool,
+    pub seed: u64,
+    pub threads: Option<usize>,
+}
+
+impl Default for BlockSettings {
+    fn default() -> Self {
+        BlockSettings {
+            samples_per_face: 16,
+            gather_rays: 16_384,
+            prior_grid: 6,
+            light_radius: 0.05,
+            prior_modes: 64,
+            modes: 32,
+            enrich: true,
+            seed: 0,
+            threads: None,
+        }
+    }
+}
+
+/// One block's operators (n samples, k modes); matrices are nalgebra's, column-major.
+pub struct BlockOperators {
+    pub shape: Shape,
+    pub samples: Samples,
+    /// U_b (n x k): the indirect light basis, columns scaled by Sigma_m (eq. 3).
+    pub u_b: DMatrix<f64>,
+    /// T_d->b (k x n): direct light to coefficients b (eq. 3).
+    pub t_d_b: DMatrix<f64>,
+    /// L_imp (n x k): the implicit lighting, F L_imp = U_b (§4.1).
+    pub l_imp: DMatrix<f64>,
+    /// Sigma_m, every singular value of M = F P S.
+    pub m_sigma: Vec<f64>,
+    /// Sigma_d, every singular value of the (unenriched) prior L_d.
+    pub prior_sigma: Vec<f64>,
+}
+
+impl BlockOperators {
+    /// U_b T_d->b l_d: the block's own indirect light for direct light `l_d`.
+    pub fn indirect(&self, l_d: &DVector<f64>) -> DVector<f64> {
+        &self.u_b * (&self.t_d_b * l_d)
+    }
+}
+
+/// The relative error of the block's own indirect light `U_b T_d->b l_d` against the
+/// brute-force bounce `F l_d`, over the direct light of unit sphere lights at `lights`.
+pub fn transfer_error(ops: &BlockOperators, f: &DMatrix<f64>, lights: &[Vec3], radius: f32) -> f64 {
+    let (mut squared, mut total) = (0.0, 0.0);
+    for &light in lights {
+        let direct = direct_irradiance(ops.shape, &ops.samples, light, radius);
+        let truth = f * &direct;
+        squared += (ops.indirect(&direct) - &truth).norm_squared();
+        total += truth.norm_squared();
+    }
+    (squared / total).sqrt()
+}
+
+/// The block's operators: F, the prior, and the reduction (with enrichment when asked).
+pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
+    let samples = Samples::new(shape, settings.samples_per_face);
+    let f = with_threads(settings.threads, || gather(shape, &samples, settings.gather_rays, settings.seed));
+    let l_d = prior(shape, &samples, settings.prior_grid, settings.light_radius);
+    reduce(shape, samples, &f, &l_d, settings)
+}
+
+/// F (n x n): row i averages, over cosine-weighted directions from sample i, the bilinear
+/// weights of the samples around where the ray leaves the block (none through an open face).
+pub fn gather(shape: Shape, samples: &Samples, rays: u32, seed: u64) -> DMatrix<f64> {
+    let n = samples.len();
+    let rows: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut row = vec![0.0f64; n];
+            let (_, origin, normal) = samples.sample(i);
+            let (t, b) = orthonormal_basis(normal);
+            for r in 0..rays {
+                let u = PathSampler::new(seed, i as u32, r).sobol4(0);
+                let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
+                let direction = t * local.x + b * local.y + normal * local.z;
+                let (face, point) = exit(origin, direction);
+                if let Some(slot) = samples.faces.iter().position(|f| *f == face).filter(|_| !shape.is_open(face)) {
+                    for (j, w) in samples.bilinear(slot, face.uv(point)) {
+                        row[j] += w as f64;
+                    }
+                }
+            }
+            row.iter_mut().for_each(|v| *v /= rays as f64);
+            row
+        })
+        .collect();
+    DMatrix::from_fn(n, n, |i, j| rows[i][j])
+}
+
+/// Where a ray from inside the unit cube leaves it: the face and the point.
+fn exit(origin: Vec3, direction: Vec3) -> (Face, Vec3) {
+    let mut best = (f32::INFINITY, Face::ALL[0]);
+    for axis in 0..3 {
+        let d = direction[axis];
+        if d.abs() > 1e-12 {
+            let positive = d > 0.0;
+            let t = ((positive as u32 as f32) - origin[axis]) / d;
+            if t >= 0.0 && t < best.0 {
+                best = (t, Face { axis, positive });
+            }
+        }
+    }
+    let (t, face) = best;
+    let mut point = origin + direction * t;
+    point[face.axis] = face.positive as u32 as f32;
+    (face, point.clamp(Vec3::ZERO, Vec3::ONE))
+}
+
+/// L_d (n x m): the direct irradiance of unit sphere lights at the centres of a grid^3 lattice
+/// in the block and in the cube beyond each open face (spec B3), seen through the opening.
+pub fn prior(shape: Shape, samples: &Samples, grid: usize, radius: f32) -> DMatrix<f64> {
+    let lattice: Vec<Vec3> = (0..grid * grid * grid)
+        .map(|c| (Vec3::new((c % grid) as f32, (c / grid % grid) as f32, (c / grid / grid) as f32) + 0.5) / grid as f32)
+        .collect();
+    let mut lights: Vec<Vec3> = lattice.clone();
+    for face in shape.open_faces() {
+        lights.extend(lattice.iter().map(|p| *p - face.inward()));
+    }
+    let columns: Vec<DVector<f64>> = lights.iter().map(|&light| direct_irradiance(shape, samples, light, radius)).collect();
+    DMatrix::from_columns(&columns)
+}
+
+/// The irradiance each sample receives from a unit-intensity sphere light of `radius` at
+/// `light` (cos / r^2, r at least the radius), visible where the light is in the block or its
+/// line of sight crosses an open face into the cube beyond it.
+pub fn direct_irradiance(shape: Shape, samples: &Samples, light: Vec3, radius: f32) -> DVector<f64> {
+    DVector::from_iterator(
+        samples.len(),
+        (0..samples.len()).map(|i| {
+            let (_, x, n) = samples.sample(i);
+            let to = light - x;
+            let r = to.length().max(radius);
+            let cos = n.dot(to) / to.length().max(1e-9);
+            if cos <= 0.0 || !visible(shape, x, light) {
+                return 0.0;
+            }
+            (cos / (r * r)) as f64
+        }),
+    )
+}
+
+fn visible(shape: Shape, x: Vec3, light: Vec3) -> bool {
+    if light.cmpge(Vec3::ZERO).all() && light.cmple(Vec3::ONE).all() {
+        return true;
+    }
+    shape.open_faces().into_iter().any(|face| {
+        let plane = face.positive as u32 as f32;
+        let (a, b) = (x[face.axis], light[face.axis]);
+        if (a - plane) * (b - plane) > 0.0 || (a - b).abs() < 1e-9 {
+            return false;
+        }
+        let crossing = x + (light - x) * ((plane - a) / (b - a));
+        let uv = face.uv(crossing);
+        (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y)
+    })
+}
+
+/// U_b, T_d->b and L_imp from F and L_d (eq. 2-3), after App. A's enrichment when asked.
+pub fn reduce(shape: Shape, samples: Samples, f: &DMatrix<f64>, l_d: &DMatrix<f64>, settings: &BlockSettings) -> BlockOperators {
+    let prior_svd = svd::thin(l_d);
+    let (mut p, mut s) = leading(&prior_svd, settings.prior_modes);
+    let mut reduced = from_prior(f, &p, &s, settings.modes);
+    if settings.enrich {
+        (p, s) = enriched(&p, &s, &reduced.0, &samples, settings.prior_modes);
+        reduced = from_prior(f, &p, &s, settings.modes);
+    }
+    let (u_b, t_d_b, l_imp, m_sigma) = reduced;
+    BlockOperators { shape, samples, u_b, t_d_b, l_imp, m_sigma, prior_sigma: prior_svd.sigma }
+}
+
+/// P (the first `k` left singular vectors) and S (their singular values).
+fn leading(svd: &Svd, k: usize) -> (DMatrix<f64>, Vec<f64>) {
+    let k = k.min(svd.sigma.len());
+    (svd.u.columns(0, k).into_owned(), svd.sigma[..k].to_vec())
+}
+
+/// (U_b, T_d->b, L_imp, Sigma_m) of the prior P, S: M = F P S = U_m Sigma_m V_m^T (eq. 2).
+fn from_prior(f: &DMatrix<f64>, p: &DMatrix<f64>, s: &[f64], modes: usize) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Vec<f64>) {
+    let s_diag = DMatrix::from_diagonal(&DVector::from_column_slice(s));
+    let ps = p * &s_diag;
+    let m = f * &ps;
+    let m_svd = svd::thin(&m);
+    let k = modes.min(m_svd.sigma.len());
+    let v = m_svd.v.columns(0, k).into_owned();
+    let sigma_k = DMatrix::from_diagonal(&DVector::from_column_slice(&m_svd.sigma[..k]));
+    let u_b = m_svd.u.columns(0, k) * sigma_k;
+    let s_inverse = DMatrix::from_diagonal(&DVector::from_iterator(s.len(), s.iter().map(|x| 1.0 / x)));
+    let t_d_b = v.transpose() * s_inverse * p.transpose();
+    let l_imp = ps * v;
+    (u_b, t_d_b, l_imp, m_svd.sigma)
+}
+
+/// App. A (spec B4): the SVD of [PS, C, U_b], each block scaled to unit Frobenius norm (C: one
+/// indicator column per present face); the new P and S are its leading `k` vectors and values.
+fn enriched(p: &DMatrix<f64>, s: &[f64], u_b: &DMatrix<f64>, samples: &Samples, k: usize) -> (DMatrix<f64>, Vec<f64>) {
+    let ps = p * DMatrix::from_diagonal(&DVector::from_column_slice(s));
+    let per_face = samples.grid * samples.grid;
+    let c = DMatrix::from_fn(samples.len(), samples.faces.len(), |i, face| (i / per_face == face) as u8 as f64);
+    let unit = |m: DMatrix<f64>| {
+        let norm = m.norm();
+        m / norm
+    };
+    let blocks = [unit(ps), unit(c), unit(u_b.clone())];
+    let columns: usize = blocks.iter().map(|b| b.ncols()).sum();
+    let mut joined = DMatrix::zeros(samples.len(), columns);
+    let mut at = 0;
+    for b in &blocks {
+        joined.columns_mut(at, b.ncols()).copy_from(b);
+        at += b.ncols();
+    }
+    leading(&svd::thin(&joined), k)
+}

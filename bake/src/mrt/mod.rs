@@ -1,0 +1,200 @@
+//! Modular radiance transfer (Loos et al. 2011, paper 002; ../shared/specs/mrt.md): indirect
+//! light for block-structured levels from a dictionary of simple shapes built once for all
+//! scenes. This part holds the dictionary's shapes and, behind `baking`, the reduced
+//! direct-to-indirect operators of one block (§4 with the enrichment of App. A): the one-bounce
+//! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
+//! and the implicit lighting L_imp. Interfaces, the level and the run time come next.
+
+#[cfg(feature = "baking")]
+pub mod block;
+#[cfg(feature = "baking")]
+mod svd;
+#[cfg(feature = "baking")]
+pub use svd::modes_for_energy;
+
+use glam::{Vec2, Vec3};
+
+/// A face of the unit cube [0, 1]^3: the axis it is normal to and the side it lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Face {
+    pub axis: usize,
+    pub positive: bool,
+}
+
+impl Face {
+    /// -x, +x, -y, +y, -z, +z.
+    pub const ALL: [Face; 6] = [
+        Face { axis: 0, positive: false },
+        Face { axis: 0, positive: true },
+        Face { axis: 1, positive: false },
+        Face { axis: 1, positive: true },
+        Face { axis: 2, positive: false },
+        Face { axis: 2, positive: true },
+    ];
+
+    pub fn index(self) -> usize {
+        self.axis * 2 + self.positive as usize
+    }
+
+    /// The unit normal pointing into the cube.
+    pub fn inward(self) -> Vec3 {
+        let mut n = Vec3::ZERO;
+        n[self.axis] = if self.positive { -1.0 } else { 1.0 };
+        n
+    }
+
+    /// The face's other two axes, in increasing order: its (u, v).
+    fn tangents(self) -> (usize, usize) {
+        match self.axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        }
+    }
+
+    /// The point of the face at (u, v) in [0, 1]^2.
+    pub fn point(self, uv: Vec2) -> Vec3 {
+        let (a, b) = self.tangents();
+        let mut p = Vec3::ZERO;
+        p[self.axis] = self.positive as u32 as f32;
+        (p[a], p[b]) = (uv.x, uv.y);
+        p
+    }
+
+    /// (u, v) of a point on (the plane of) the face.
+    pub fn uv(self, p: Vec3) -> Vec2 {
+        let (a, b) = self.tangents();
+        Vec2::new(p[a], p[b])
+    }
+
+    /// The face's four corners, in order around it.
+    pub fn corners(self) -> [Vec3; 4] {
+        [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)].map(|uv| self.point(uv))
+    }
+}
+
+/// A block of the 2D dictionary: the unit cube with some of its side faces (±x, ±z) open to
+/// neighbouring blocks; the top and bottom are always closed (§6.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shape {
+    open: [bool; 6],
+}
+
+impl Shape {
+    pub fn closed() -> Shape {
+        Shape { open: [false; 6] }
+    }
+
+    /// The cube with `faces` open; refused for the top or bottom (the 2D dictionary has none).
+    pub fn with_open(faces: &[Face]) -> Result<Shape, String> {
+        let mut shape = Shape::closed();
+        for face in faces {
+            if face.axis == 1 {
+                return Err("a block of the 2D dictionary has its top and bottom closed; open a side face (±x, ±z)".into());
+            }
+            shape.open[face.index()] = true;
+        }
+        Ok(shape)
+    }
+
+    /// The six shapes of the 2D dictionary, 0 to 4 side faces open up to a turn about +y:
+    /// none, one, two adjacent, two opposite, three, four (§6.1: 12 open faces in all).
+    pub fn dictionary() -> [Shape; 6] {
+        let [nx, px, _, _, nz, pz] = Face::ALL;
+        let open = |faces: &[Face]| Shape::with_open(faces).expect("side faces");
+        [open(&[]), open(&[nz]), open(&[nz, px]), open(&[nz, pz]), open(&[nz, px, pz]), open(&[nx, px, nz, pz])]
+    }
+
+    pub fn is_open(self, face: Face) -> bool {
+        self.open[face.index()]
+    }
+
+    /// The faces that are there (closed), in `Face::ALL` order.
+    pub fn present(self) -> Vec<Face> {
+        Face::ALL.into_iter().filter(|f| !self.is_open(*f)).collect()
+    }
+
+    pub fn open_faces(self) -> Vec<Face> {
+        Face::ALL.into_iter().filter(|f| self.is_open(*f)).collect()
+    }
+}
+
+/// A block's sample points: the texel centres of a `grid` x `grid` raster on each present
+/// face, face by face (`Shape::present` order), rows of v, u within (spec B14).
+#[derive(Clone, Debug)]
+pub struct Samples {
+    pub grid: usize,
+    pub faces: Vec<Face>,
+}
+
+impl Samples {
+    pub fn new(shape: Shape, grid: usize) -> Samples {
+        Samples { grid, faces: shape.present() }
+    }
+
+    /// n: the number of samples.
+    pub fn len(&self) -> usize {
+        self.faces.len() * self.grid * self.grid
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Sample `i`'s face, position and inward normal.
+    pub fn sample(&self, i: usize) -> (Face, Vec3, Vec3) {
+        let per_face = self.grid * self.grid;
+        let face = self.faces[i / per_face];
+        let (x, y) = (i % per_face % self.grid, i % per_face / self.grid);
+        let uv = (Vec2::new(x as f32, y as f32) + 0.5) / self.grid as f32;
+        (face, face.point(uv), face.inward())
+    }
+
+    /// The samples of face `face` (an index into `faces`) and their bilinear weights at (u, v)
+    /// on it: clamped to the outer texel centres (four (sample, weight) pairs, weights summing
+    /// to 1).
+    pub fn bilinear(&self, face: usize, uv: Vec2) -> [(usize, f32); 4] {
+        let g = self.grid;
+        let at = |t: f32| {
+            let x = (t * g as f32 - 0.5).clamp(0.0, (g - 1) as f32);
+            let x0 = (x.floor() as usize).min(g - 1);
+            (x0, (x0 + 1).min(g - 1), x - x0 as f32)
+        };
+        let ((x0, x1, fx), (y0, y1, fy)) = (at(uv.x), at(uv.y));
+        let base = face * g * g;
+        [
+            (base + y0 * g + x0, (1.0 - fx) * (1.0 - fy)),
+            (base + y0 * g + x1, fx * (1.0 - fy)),
+            (base + y1 * g + x0, (1.0 - fx) * fy),
+            (base + y1 * g + x1, fx * fy),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_2d_dictionary_has_six_shapes_and_twelve_open_faces_and_refuses_an_open_top() {
+        let shapes = Shape::dictionary();
+        assert_eq!(shapes.iter().map(|s| s.open_faces().len()).sum::<usize>(), 12);
+        assert!(Shape::with_open(&[Face::ALL[3]]).is_err());
+    }
+
+    #[test]
+    fn samples_lie_on_their_faces_and_bilinear_weights_sum_to_one_and_reproduce_a_sample() {
+        let samples = Samples::new(Shape::dictionary()[1], 4);
+        assert_eq!(samples.len(), 5 * 16);
+        for i in 0..samples.len() {
+            let (face, p, n) = samples.sample(i);
+            assert_eq!(p[face.axis], face.positive as u32 as f32);
+            assert_eq!(n, face.inward());
+            let f = samples.faces.iter().position(|x| *x == face).unwrap();
+            let weights = samples.bilinear(f, face.uv(p));
+            assert!((weights.iter().map(|w| w.1).sum::<f32>() - 1.0).abs() < 1e-6);
+            let own: f32 = weights.iter().filter(|w| w.0 == i).map(|w| w.1).sum();
+            assert!((own - 1.0).abs() < 1e-5, "sample {i} reads itself: {weights:?}");
+        }
+    }
+}
