@@ -7,7 +7,8 @@
 //!     cargo run --release -p relume-bake --example mrt_blocks [THREADS]
 
 use nalgebra::DVector;
-use relume_bake::mrt::block::{self, BlockSettings};
+use relume_bake::mrt::block;
+use relume_bake::mrt::BlockSettings;
 use relume_bake::mrt::{modes_for_energy, Samples, Shape};
 use relume_bake::testing::scattered_points;
 use relume_bake::work::with_threads;

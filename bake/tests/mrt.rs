@@ -5,8 +5,8 @@
 
 use glam::Vec3;
 use nalgebra::DVector;
-use relume_bake::mrt::block::{self, BlockOperators, BlockSettings};
-use relume_bake::mrt::{Face, Samples, Shape};
+use relume_bake::mrt::block::{self, BlockOperators};
+use relume_bake::mrt::{BlockSettings, Face, Samples, Shape};
 use relume_bake::testing::scattered_points;
 
 /// The paper's settings but fewer gather rays, for test time (the noise stays below the bars).
@@ -186,4 +186,28 @@ fn feedback_converges_to_the_geometric_series_in_a_closed_cube() {
     // Bar from the first measurement (0.029; the spec's estimate was 0.02): the one-bounce
     // error under uniform light (0.027) carried through the series.
     assert!(worst <= 0.035, "within 3.5 % of the closed form: {worst:.4}");
+}
+
+#[test]
+fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
+    use relume_bake::artifact::{Artifact, BakeOutput};
+    use relume_bake::mrt::dictionary::{self, Dictionary};
+    let small =
+        BlockSettings { samples_per_face: 4, gather_rays: 64, prior_grid: 3, prior_modes: 12, modes: 6, ..BlockSettings::default() };
+    let blocks = Shape::dictionary()[..2].iter().map(|&shape| block::build(shape, &small).data()).collect();
+    let made = Dictionary { settings: small.clone(), blocks };
+    let dir = std::env::temp_dir().join(format!("relume-mrt-dictionary-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let sections = vec![dictionary::section(&made, serde_json::json!({}))];
+    BakeOutput { method: "mrt-dictionary", scene: None, parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+        .write(&dir)
+        .expect("written");
+    let artifact = Artifact::read(&dir).expect("read");
+    let back = dictionary::read(&artifact, &small).expect("the same parameters");
+    assert_eq!(back.blocks, made.blocks);
+    let other = dictionary::read(&artifact, &BlockSettings { modes: 8, ..small.clone() }).unwrap_err().to_string();
+    assert!(other.contains("mrt-dictionary.bin") && other.contains("modes 6, not the 8"), "{other}");
+    let radius = dictionary::read(&artifact, &BlockSettings { light_radius: 0.1, ..small }).unwrap_err().to_string();
+    assert!(radius.contains("light-radius 0.05, not the 0.1"), "{radius}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,13 +4,14 @@
 //! a little-endian u32 length, then the first file, then the second.
 //! 0: manifest.json; 1: atlas.bin; 2: obscurance.exr after a u16 width and height of the atlas;
 //! 3: light-path-maps.bin after a u16 width and height; 4: fiv_environment.bin;
-//! 5: fiv_environment.bin and fiv_occluder_0.bin; 6: light-cloud.bin (for cornell-cloud).
+//! 5: fiv_environment.bin and fiv_occluder_0.bin; 6: light-cloud.bin (for cornell-cloud);
+//! 7: mrt-dictionary.bin (keyed to nothing, read for a small dictionary's parameters).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use relume_bake::artifact::{Artifact, BakeOutput, Key, PageLayout, Section};
 use relume_bake::scene::Scene;
-use relume_bake::{atlas, fiv, light_cloud, light_path_maps, obscurance};
+use relume_bake::{atlas, fiv, light_cloud, light_path_maps, mrt, obscurance};
 use serde_json::json;
 use std::sync::OnceLock;
 
@@ -65,7 +66,7 @@ fn scene_section(name: &str, file: &str, bytes: &[u8]) -> (String, Key, String, 
 }
 
 fn read(which: u8, data: &[u8]) -> Option<()> {
-    match which % 7 {
+    match which % 8 {
         0 => {
             let dir = relume_fuzz::scratch().join("manifest");
             std::fs::create_dir_all(&dir).ok()?;
@@ -94,6 +95,12 @@ fn read(which: u8, data: &[u8]) -> Option<()> {
         6 => {
             let sections = vec![scene_section(light_cloud::SECTION, "light-cloud.bin", data)];
             let _ = light_cloud::read(&artifact(cornell_cloud(), sections, light_cloud::SECTION_VERSION)?, cornell_cloud());
+        }
+        7 => {
+            let sections = vec![(mrt::dictionary::SECTION.into(), Key::Nothing, "mrt-dictionary.bin".into(), data.to_vec())];
+            let small =
+                mrt::BlockSettings { samples_per_face: 4, gather_rays: 64, prior_grid: 3, prior_modes: 12, modes: 6, ..Default::default() };
+            let _ = mrt::dictionary::read(&artifact(cornell(), sections, mrt::dictionary::SECTION_VERSION)?, &small);
         }
         _ => {
             let (environment, table) = two_files(data)?;

@@ -7,50 +7,14 @@
 //! the face a ray hits, 0 through an open face. The block is convex, so a ray from a sample
 //! leaves it through exactly one face: no ray tracing beyond a ray-box exit.
 
+use super::dictionary::BlockData;
 use super::svd::{self, Svd};
-use super::{Face, Samples, Shape};
+use super::{BlockSettings, Face, Samples, Shape};
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::work::with_threads;
 use glam::{Vec2, Vec3};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-
-/// What one block's operators are built from (spec A2 and B3; the paper's values by default).
-#[derive(Clone, Debug)]
-pub struct BlockSettings {
-    /// Samples per face side: 16 (n = 6 x 16^2 for a closed cube).
-    pub samples_per_face: usize,
-    /// Cosine-weighted gather rays per sample for F: 16,384.
-    pub gather_rays: u32,
-    /// Sphere lights of the prior per axis, in the block and in each open neighbour: 6.
-    pub prior_grid: usize,
-    /// The prior's sphere lights' radius, in block sides: 0.05.
-    pub light_radius: f32,
-    /// k_d: prior modes kept: 64.
-    pub prior_modes: usize,
-    /// k_self (k_b): indirect modes kept: 32.
-    pub modes: usize,
-    /// App. A: enrich the prior with per-face constants and the first U_b, then rebuild.
-    pub enrich: bool,
-    pub seed: u64,
-    pub threads: Option<usize>,
-}
-
-impl Default for BlockSettings {
-    fn default() -> Self {
-        BlockSettings {
-            samples_per_face: 16,
-            gather_rays: 16_384,
-            prior_grid: 6,
-            light_radius: 0.05,
-            prior_modes: 64,
-            modes: 32,
-            enrich: true,
-            seed: 0,
-            threads: None,
-        }
-    }
-}
 
 /// One block's operators (n samples, k modes); matrices are nalgebra's, column-major.
 pub struct BlockOperators {
@@ -72,6 +36,19 @@ impl BlockOperators {
     /// U_b T_d->b l_d: the block's own indirect light for direct light `l_d`.
     pub fn indirect(&self, l_d: &DVector<f64>) -> DVector<f64> {
         &self.u_b * (&self.t_d_b * l_d)
+    }
+
+    /// The operators as the dictionary stores them (f32, column-major).
+    pub fn data(&self) -> BlockData {
+        let f32s = |m: &DMatrix<f64>| m.iter().map(|&v| v as f32).collect();
+        BlockData {
+            shape: self.shape,
+            samples: self.samples.len(),
+            modes: self.u_b.ncols(),
+            u_b: f32s(&self.u_b),
+            t_d_b: f32s(&self.t_d_b),
+            l_imp: f32s(&self.l_imp),
+        }
     }
 }
 

@@ -3,10 +3,12 @@
 //! scenes. This part holds the dictionary's shapes and, behind `baking`, the reduced
 //! direct-to-indirect operators of one block (§4 with the enrichment of App. A): the one-bounce
 //! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
-//! and the implicit lighting L_imp. Interfaces, the level and the run time come next.
+//! and the implicit lighting L_imp, and the dictionary's section that stores them.
+//! Interfaces, the level and the run time come next.
 
 #[cfg(feature = "baking")]
 pub mod block;
+pub mod dictionary;
 #[cfg(feature = "baking")]
 mod svd;
 #[cfg(feature = "baking")]
@@ -116,6 +118,58 @@ impl Shape {
 
     pub fn open_faces(self) -> Vec<Face> {
         Face::ALL.into_iter().filter(|f| self.is_open(*f)).collect()
+    }
+
+    /// Bit `Face::index` set for each open face.
+    pub fn open_mask(self) -> u32 {
+        Face::ALL.iter().filter(|f| self.is_open(**f)).map(|f| 1 << f.index()).sum()
+    }
+
+    /// The shape of `open_mask`; refused for unknown bits and an open top or bottom.
+    pub fn from_open_mask(mask: u32) -> Result<Shape, String> {
+        if mask >= 1 << 6 {
+            return Err(format!("open-face mask {mask} names faces a cube lacks"));
+        }
+        let faces: Vec<Face> = Face::ALL.into_iter().filter(|f| mask & (1 << f.index()) != 0).collect();
+        Shape::with_open(&faces)
+    }
+}
+
+/// What one block's operators are built from (spec A2 and B3; the paper's values by default).
+#[derive(Clone, Debug)]
+pub struct BlockSettings {
+    /// Samples per face side: 16 (n = 6 x 16^2 for a closed cube).
+    pub samples_per_face: usize,
+    /// Cosine-weighted gather rays per sample for F: 16,384.
+    pub gather_rays: u32,
+    /// Sphere lights of the prior per axis, in the block and in each open neighbour: 6.
+    pub prior_grid: usize,
+    /// The prior's sphere lights' radius, in block sides: 0.05.
+    pub light_radius: f32,
+    /// k_d: prior modes kept: 64.
+    pub prior_modes: usize,
+    /// k_self (k_b): indirect modes kept: 32.
+    pub modes: usize,
+    /// App. A: enrich the prior with per-face constants and the first U_b, then rebuild.
+    pub enrich: bool,
+    pub seed: u64,
+    /// Worker threads (None: all); the operators do not depend on it.
+    pub threads: Option<usize>,
+}
+
+impl Default for BlockSettings {
+    fn default() -> Self {
+        BlockSettings {
+            samples_per_face: 16,
+            gather_rays: 16_384,
+            prior_grid: 6,
+            light_radius: 0.05,
+            prior_modes: 64,
+            modes: 32,
+            enrich: true,
+            seed: 0,
+            threads: None,
+        }
     }
 }
 
