@@ -77,10 +77,31 @@ pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
 /// weights of the samples around where the ray leaves the block (none through an open face).
 pub fn gather(shape: Shape, samples: &Samples, rays: u32, seed: u64) -> DMatrix<f64> {
     let n = samples.len();
-    let rows: Vec<Vec<f64>> = (0..n)
+    let rows = gather_rows(samples, rays, seed, n, |face, point, _, row| {
+        if let Some(slot) = samples.faces.iter().position(|f| *f == face).filter(|_| !shape.is_open(face)) {
+            for (j, w) in samples.bilinear(slot, face.uv(point)) {
+                row[j] += w as f64;
+            }
+        }
+    });
+    DMatrix::from_fn(n, n, |i, j| rows[i][j])
+}
+
+/// For each sample (in parallel; each row on its own, so the result does not depend on the
+/// thread count) `rays` cosine-distributed directions about its normal: `visit(face, point,
+/// direction, row)` adds what the ray brings, where it leaves the block, into the sample's row
+/// of `width` values; the rows are then averaged over the rays.
+pub(super) fn gather_rows(
+    samples: &Samples,
+    rays: u32,
+    seed: u64,
+    width: usize,
+    visit: impl Fn(Face, Vec3, Vec3, &mut [f64]) + Sync,
+) -> Vec<Vec<f64>> {
+    (0..samples.len())
         .into_par_iter()
         .map(|i| {
-            let mut row = vec![0.0f64; n];
+            let mut row = vec![0.0f64; width];
             let (_, origin, normal) = samples.sample(i);
             let (t, b) = orthonormal_basis(normal);
             for r in 0..rays {
@@ -88,21 +109,16 @@ pub fn gather(shape: Shape, samples: &Samples, rays: u32, seed: u64) -> DMatrix<
                 let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
                 let direction = t * local.x + b * local.y + normal * local.z;
                 let (face, point) = exit(origin, direction);
-                if let Some(slot) = samples.faces.iter().position(|f| *f == face).filter(|_| !shape.is_open(face)) {
-                    for (j, w) in samples.bilinear(slot, face.uv(point)) {
-                        row[j] += w as f64;
-                    }
-                }
+                visit(face, point, direction, &mut row);
             }
             row.iter_mut().for_each(|v| *v /= rays as f64);
             row
         })
-        .collect();
-    DMatrix::from_fn(n, n, |i, j| rows[i][j])
+        .collect()
 }
 
 /// Where a ray from inside the unit cube leaves it: the face and the point.
-fn exit(origin: Vec3, direction: Vec3) -> (Face, Vec3) {
+pub(super) fn exit(origin: Vec3, direction: Vec3) -> (Face, Vec3) {
     let mut best = (f32::INFINITY, Face::ALL[0]);
     for axis in 0..3 {
         let d = direction[axis];

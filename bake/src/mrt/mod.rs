@@ -3,12 +3,15 @@
 //! scenes. This part holds the dictionary's shapes and, behind `baking`, the reduced
 //! direct-to-indirect operators of one block (§4 with the enrichment of App. A): the one-bounce
 //! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
-//! and the implicit lighting L_imp, and the dictionary's section that stores them.
-//! Interfaces, the level and the run time come next.
+//! and the implicit lighting L_imp; the interface operators between blocks (§5.1: the reduced
+//! lightfield basis, R_b->rlf, the three turns, U_r and T_rlf->r); and the dictionary's section
+//! (the blocks' operators so far). The level and the run time come next.
 
 #[cfg(feature = "baking")]
 pub mod block;
 pub mod dictionary;
+#[cfg(feature = "baking")]
+pub mod interface;
 #[cfg(feature = "baking")]
 mod svd;
 #[cfg(feature = "baking")]

@@ -1,0 +1,59 @@
+//! The tests' own brute-force one bounce across block openings, independent of the MRT
+//! operators (shared by bake/tests/mrt.rs and the mrt_interfaces example).
+
+use glam::Vec3;
+use nalgebra::DVector;
+use relume_bake::mrt::block::BlockOperators;
+use relume_bake::mrt::{Face, Samples};
+
+/// Where a ray from inside (or on) the unit cube leaves it: the face's axis, its side and the
+/// point. The tests' own, independent of the operators'.
+pub fn leave(origin: Vec3, d: Vec3) -> (usize, bool, Vec3) {
+    let mut best = (f32::INFINITY, 0, false);
+    for axis in 0..3 {
+        if d[axis].abs() > 1e-12 {
+            let t = (if d[axis] > 0.0 { 1.0 } else { 0.0 } - origin[axis]) / d[axis];
+            if t >= 0.0 && t < best.0 {
+                best = (t, axis, d[axis] > 0.0);
+            }
+        }
+    }
+    (best.1, best.2, (origin + d * best.0).clamp(Vec3::ZERO, Vec3::ONE))
+}
+
+/// Brute-force one bounce into the canonical receiver (the unit cube open at -z) from a row of
+/// `empty` blocks and then `source` behind it along -z: for each receiver sample, the mean over
+/// cosine rays of the source's direct light where a ray lands on it (bilinear on its samples),
+/// 0 where it lands on a wall of an empty block.
+pub fn brute_force(receiver: &Samples, source: &BlockOperators, l_d: &DVector<f64>, empty: usize, rays: u32) -> DVector<f64> {
+    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
+    DVector::from_iterator(
+        receiver.len(),
+        (0..receiver.len()).map(|i| {
+            let (_, origin, normal) = receiver.sample(i);
+            let (t, b) = orthonormal_basis(normal);
+            let mut sum = 0.0;
+            for r in 0..rays {
+                let u = PathSampler::new(7, i as u32, r).sobol4(0);
+                let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
+                let d = t * local.x + b * local.y + normal * local.z;
+                let (mut axis, mut positive, mut point) = leave(origin, d);
+                for _ in 0..empty {
+                    if (axis, positive) != (2, false) {
+                        break;
+                    }
+                    (axis, positive, point) = leave(Vec3::new(point.x, point.y, 1.0), d);
+                }
+                if (axis, positive) != (2, false) {
+                    continue;
+                }
+                let (axis, positive, point) = leave(Vec3::new(point.x, point.y, 1.0), d);
+                let face = Face { axis, positive };
+                if let Some(slot) = source.samples.faces.iter().position(|f| *f == face) {
+                    sum += source.samples.bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[*j]).sum::<f64>();
+                }
+            }
+            sum / rays as f64
+        }),
+    )
+}
