@@ -5,7 +5,9 @@
 //!
 //!     cargo run --release -p relume-bake --example mrt_interfaces
 
+// Shared with the tests, which use more of it.
 #[path = "../tests/common/mrt_oracle.rs"]
+#[allow(dead_code)]
 mod oracle;
 
 use glam::Vec3;

@@ -149,7 +149,7 @@ pub enum Turn {
 const ENTRY: Face = Face { axis: 2, positive: false };
 
 /// The face of a block entered through `entry` that light leaves through after `turn`.
-fn target(entry: Face, turn: Turn) -> Face {
+pub(crate) fn target(entry: Face, turn: Turn) -> Face {
     let n = entry.inward();
     let right = Vec3::Y.cross(n);
     let out = match turn {

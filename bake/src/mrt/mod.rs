@@ -4,14 +4,17 @@
 //! direct-to-indirect operators of one block (§4 with the enrichment of App. A): the one-bounce
 //! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
 //! and the implicit lighting L_imp; the interface operators between blocks (§5.1: the reduced
-//! lightfield basis, R_b->rlf, the three turns, U_r and T_rlf->r); and the dictionary's section
-//! (the blocks' operators so far). The level and the run time come next.
+//! lightfield basis, R_b->rlf, the three turns, U_r and T_rlf->r); a level's blocks on a grid
+//! and the traversal behind T_b->r (§6.3); and the dictionary's section (the blocks' operators
+//! so far). The scene's block proxy, the padded atlas and the run time come next.
 
 #[cfg(feature = "baking")]
 pub mod block;
 pub mod dictionary;
 #[cfg(feature = "baking")]
 pub mod interface;
+#[cfg(feature = "baking")]
+pub mod level;
 #[cfg(feature = "baking")]
 mod svd;
 #[cfg(feature = "baking")]
@@ -72,6 +75,16 @@ impl Face {
         Vec2::new(p[a], p[b])
     }
 
+    /// The face after `quarter_turns` turns of 90 degrees about +y (x to -z, z to x).
+    pub fn turned(self, quarter_turns: u32) -> Face {
+        let mut n = -self.inward();
+        for _ in 0..quarter_turns % 4 {
+            n = Vec3::new(n.z, n.y, -n.x);
+        }
+        let axis = (0..3).find(|&a| n[a] != 0.0).expect("a unit axis");
+        Face { axis, positive: n[axis] > 0.0 }
+    }
+
     /// The face's four corners, in order around it.
     pub fn corners(self) -> [Vec3; 4] {
         [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)].map(|uv| self.point(uv))
@@ -121,6 +134,21 @@ impl Shape {
 
     pub fn open_faces(self) -> Vec<Face> {
         Face::ALL.into_iter().filter(|f| self.is_open(*f)).collect()
+    }
+
+    /// This shape as a dictionary shape turned about +y: (its index in `Shape::dictionary`,
+    /// quarter turns q) such that turning that shape's faces by q gives this one's.
+    pub fn canonical(self) -> (usize, u32) {
+        let dictionary = Shape::dictionary();
+        for (i, shape) in dictionary.iter().enumerate() {
+            for q in 0..4 {
+                let turned: Vec<Face> = shape.open_faces().into_iter().map(|f| f.turned(q)).collect();
+                if Shape::with_open(&turned).is_ok_and(|t| t == self) {
+                    return (i, q);
+                }
+            }
+        }
+        unreachable!("the 2D dictionary holds every side-face shape up to a turn")
     }
 
     /// Bit `Face::index` set for each open face.
@@ -237,6 +265,20 @@ mod tests {
         let shapes = Shape::dictionary();
         assert_eq!(shapes.iter().map(|s| s.open_faces().len()).sum::<usize>(), 12);
         assert!(Shape::with_open(&[Face::ALL[3]]).is_err());
+    }
+
+    #[test]
+    fn every_side_face_shape_is_a_dictionary_shape_turned() {
+        let sides = [Face::ALL[0], Face::ALL[1], Face::ALL[4], Face::ALL[5]];
+        for mask in 0..16u32 {
+            let open: Vec<Face> = (0..4).filter(|b| mask & (1 << b) != 0).map(|b| sides[b]).collect();
+            let shape = Shape::with_open(&open).unwrap();
+            let (i, q) = shape.canonical();
+            let turned: Vec<Face> = Shape::dictionary()[i].open_faces().into_iter().map(|f| f.turned(q)).collect();
+            assert_eq!(Shape::with_open(&turned).unwrap(), shape);
+        }
+        assert_eq!(Face::ALL[1].turned(1), Face::ALL[4], "+x turns to -z");
+        assert_eq!(Face::ALL[3].turned(3), Face::ALL[3], "+y stays");
     }
 
     #[test]

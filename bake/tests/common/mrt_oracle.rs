@@ -57,3 +57,58 @@ pub fn brute_force(receiver: &Samples, source: &BlockOperators, l_d: &DVector<f6
         }),
     )
 }
+
+/// Brute-force one bounce from block `source` (its direct light `l_d` on its own samples
+/// `source_samples`) onto block `receiver`'s samples, walking rays through the level of
+/// `cells`: a ray leaves a block into the neighbour across the face, or lands on the wall (the
+/// source's direct light there, 0 in any other block).
+pub fn walk(
+    cells: &[(i32, i32)],
+    source: usize,
+    source_samples: &Samples,
+    l_d: &DVector<f64>,
+    receiver: usize,
+    samples: &Samples,
+    rays: u32,
+) -> DVector<f64> {
+    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
+    DVector::from_iterator(
+        samples.len(),
+        (0..samples.len()).map(|i| {
+            let (_, origin, normal) = samples.sample(i);
+            let (t, b) = orthonormal_basis(normal);
+            let mut sum = 0.0;
+            for r in 0..rays {
+                let u = PathSampler::new(7, i as u32, r).sobol4(0);
+                let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
+                let d = t * local.x + b * local.y + normal * local.z;
+                let (mut block, mut p) = (receiver, origin);
+                for _ in 0..32 {
+                    let (axis, positive, point) = leave(p, d);
+                    let (x, z) = cells[block];
+                    let step = if positive { 1 } else { -1 };
+                    let next = match axis {
+                        0 => cells.iter().position(|c| *c == (x + step, z)),
+                        2 => cells.iter().position(|c| *c == (x, z + step)),
+                        _ => None,
+                    };
+                    match next {
+                        Some(n) => {
+                            (block, p) = (n, point);
+                            p[axis] = if positive { 0.0 } else { 1.0 };
+                        }
+                        None => {
+                            if block == source {
+                                let face = Face { axis, positive };
+                                let slot = source_samples.faces.iter().position(|f| *f == face).expect("a wall");
+                                sum += source_samples.bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[*j]).sum::<f64>();
+                            }
+                            break;
+                        }
+                    }
+                }
+            }
+            sum / rays as f64
+        }),
+    )
+}

@@ -1,0 +1,153 @@
+//! A level's blocks and T_b->r (§6.3): which block lies next to which, each block as a
+//! dictionary shape turned about +y, and the traversal that carries every block's light from
+//! its openings through the level. For each source block the traversal is a dynamic programme
+//! over (directed crossing, depth) (spec B11): the light reaching a crossing at depth d + 1 is
+//! the sum, over the crossings at depth d that lead to it, of R_turn times theirs. That is the
+//! sum over every path of at most d_max crossings (cycles included, no U-turns), which the
+//! explicit enumeration in the tests checks.
+
+use super::interface::Turn;
+use super::{Face, Samples, Shape};
+use glam::Vec3;
+use nalgebra::DMatrix;
+use std::collections::HashMap;
+
+/// Where light can go: from `block` out through `face` into `to` (entering it through the
+/// opposite face).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Crossing {
+    pub block: usize,
+    pub face: Face,
+    pub to: usize,
+}
+
+/// A level of unit blocks on a grid in the x-z plane (a 2D maze, spec C): block i stands at
+/// `cells[i]` = (x, z); faces between neighbouring blocks are open, all others closed.
+#[derive(Clone, Debug)]
+pub struct Level {
+    pub cells: Vec<(i32, i32)>,
+    at: HashMap<(i32, i32), usize>,
+}
+
+/// The side faces, with the grid step they lead to.
+const SIDES: [(Face, (i32, i32)); 4] = [
+    (Face { axis: 0, positive: false }, (-1, 0)),
+    (Face { axis: 0, positive: true }, (1, 0)),
+    (Face { axis: 2, positive: false }, (0, -1)),
+    (Face { axis: 2, positive: true }, (0, 1)),
+];
+
+impl Level {
+    /// The level of these cells; refused when a cell repeats.
+    pub fn new(cells: Vec<(i32, i32)>) -> Result<Level, String> {
+        let mut at = HashMap::new();
+        for (i, cell) in cells.iter().enumerate() {
+            if let Some(j) = at.insert(*cell, i) {
+                return Err(format!("blocks {j} and {i} both stand at cell {cell:?}; give each cell one block"));
+            }
+        }
+        Ok(Level { cells, at })
+    }
+
+    /// The block next to `block` through `face`, if any.
+    pub fn neighbour(&self, block: usize, face: Face) -> Option<usize> {
+        let (dx, dz) = SIDES.iter().find(|(f, _)| *f == face)?.1;
+        let (x, z) = self.cells[block];
+        self.at.get(&(x + dx, z + dz)).copied()
+    }
+
+    /// Block `block`'s shape: open where a neighbour is.
+    pub fn shape(&self, block: usize) -> Shape {
+        let open: Vec<Face> = SIDES.iter().map(|(f, _)| *f).filter(|f| self.neighbour(block, *f).is_some()).collect();
+        Shape::with_open(&open).expect("side faces only")
+    }
+
+    /// The crossings out of `block`.
+    pub fn crossings(&self, block: usize) -> Vec<Crossing> {
+        SIDES.iter().filter_map(|(face, _)| self.neighbour(block, *face).map(|to| Crossing { block, face: *face, to })).collect()
+    }
+
+    /// Where light entering `crossing.to` goes on after `turn`, if that face is open.
+    pub fn turn(&self, crossing: Crossing, turn: Turn) -> Option<Crossing> {
+        let entry = opposite(crossing.face);
+        let out = super::interface::target(entry, turn);
+        self.neighbour(crossing.to, out).map(|to| Crossing { block: crossing.to, face: out, to })
+    }
+}
+
+impl Level {
+    /// Block `block`'s face `face` as a face of its dictionary shape: (the shape's index in
+    /// `Shape::dictionary`, the face before the block's turn).
+    pub fn dictionary_face(&self, block: usize, face: Face) -> (usize, Face) {
+        let (index, quarter_turns) = self.shape(block).canonical();
+        (index, face.turned(4 - quarter_turns % 4))
+    }
+
+    /// For each sample of the canonical receiver (`receiver`: open at -z, entered there), the
+    /// sample of block `block` entered through `entry` it lands on when turned to it (spec B9:
+    /// rows on the block's other openings have none).
+    pub fn receiver_rows(&self, receiver: &Samples, block: usize, entry: Face) -> Vec<Option<usize>> {
+        let quarter_turns = (0..4).find(|&q| Face { axis: 2, positive: false }.turned(q) == entry).expect("a side face");
+        let own = Samples::new(self.shape(block), receiver.grid);
+        (0..receiver.len())
+            .map(|i| {
+                let (face, p, _) = receiver.sample(i);
+                let (turned, at) = (face.turned(quarter_turns), turn_point(p, quarter_turns));
+                let slot = own.faces.iter().position(|f| *f == turned)?;
+                let uv = turned.uv(at) * own.grid as f32;
+                let (x, y) = ((uv.x as usize).min(own.grid - 1), (uv.y as usize).min(own.grid - 1));
+                Some(slot * own.grid * own.grid + y * own.grid + x)
+            })
+            .collect()
+    }
+}
+
+/// A point of the unit cube turned about its vertical axis as `Face::turned` turns faces.
+pub fn turn_point(p: Vec3, quarter_turns: u32) -> Vec3 {
+    let mut q = p - Vec3::splat(0.5);
+    for _ in 0..quarter_turns % 4 {
+        q = Vec3::new(q.z, q.y, -q.x);
+    }
+    q + Vec3::splat(0.5)
+}
+
+/// The same face on the other side: the face of the next block that a face leads into.
+pub fn opposite(face: Face) -> Face {
+    Face { axis: face.axis, positive: !face.positive }
+}
+
+/// The light of one source block at every crossing it reaches within `d_max` crossings: for
+/// each crossing, the sum over paths of the product of R_b->rlf (`from`) and the turns' R
+/// (k_rlf x k_self). `from(crossing)` gives R_b->rlf for the source's own openings.
+pub fn traverse(
+    level: &Level,
+    source: usize,
+    d_max: usize,
+    from: impl Fn(Crossing) -> DMatrix<f64>,
+    turn: impl Fn(Turn) -> DMatrix<f64>,
+) -> HashMap<Crossing, DMatrix<f64>> {
+    let turns = [Turn::Ahead, Turn::Left, Turn::Right].map(|t| (t, turn(t)));
+    let mut frontier: HashMap<Crossing, DMatrix<f64>> = level.crossings(source).into_iter().map(|c| (c, from(c))).collect();
+    let mut reached = frontier.clone();
+    for _ in 1..d_max {
+        let mut next: HashMap<Crossing, DMatrix<f64>> = HashMap::new();
+        // A fixed order of crossings, so the sums do not depend on the map's iteration order.
+        let mut order: Vec<&Crossing> = frontier.keys().collect();
+        order.sort_by_key(|c| (c.block, c.face.index(), c.to));
+        for crossing in order {
+            for (t, r) in &turns {
+                if let Some(on) = level.turn(*crossing, *t) {
+                    let carried = r * &frontier[crossing];
+                    next.entry(on).and_modify(|m| *m += &carried).or_insert(carried);
+                }
+            }
+        }
+        let mut order: Vec<(&Crossing, &DMatrix<f64>)> = next.iter().collect();
+        order.sort_by_key(|(c, _)| (c.block, c.face.index(), c.to));
+        for (crossing, light) in order {
+            reached.entry(*crossing).and_modify(|m| *m += light).or_insert_with(|| light.clone());
+        }
+        frontier = next;
+    }
+    reached
+}
