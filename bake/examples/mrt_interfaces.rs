@@ -12,7 +12,8 @@ mod oracle;
 
 use glam::Vec3;
 use relume_bake::mrt::block::{self, BlockOperators};
-use relume_bake::mrt::interface::{self, InterfaceSettings, Turn};
+use relume_bake::mrt::interface::{self, InterfaceSettings};
+use relume_bake::mrt::level::Turn;
 use relume_bake::mrt::{BlockSettings, Face, Shape};
 use std::time::Instant;
 

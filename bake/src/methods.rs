@@ -4,5 +4,10 @@
 
 use crate::settings::SceneBlock;
 
-pub const SCENE_BLOCKS: [SceneBlock; 4] =
-    [crate::obscurance::SCENE_BLOCK, crate::light_path_maps::SCENE_BLOCK, crate::fiv::SCENE_BLOCK, crate::light_cloud::SCENE_BLOCK];
+pub const SCENE_BLOCKS: [SceneBlock; 5] = [
+    crate::obscurance::SCENE_BLOCK,
+    crate::light_path_maps::SCENE_BLOCK,
+    crate::fiv::SCENE_BLOCK,
+    crate::light_cloud::SCENE_BLOCK,
+    crate::mrt::SCENE_BLOCK,
+];

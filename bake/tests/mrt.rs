@@ -229,7 +229,8 @@ fn relative(estimate: &DVector<f64>, truth: &DVector<f64>) -> f64 {
 
 #[test]
 fn light_crossing_one_interface_and_a_corridor_matches_brute_force_at_every_lightfield_rank() {
-    use relume_bake::mrt::interface::{self, InterfaceSettings, Turn};
+    use relume_bake::mrt::interface::{self, InterfaceSettings};
+    use relume_bake::mrt::level::Turn;
     let blocks = blocks_and_source();
     let source = blocks.last().unwrap();
     let l_d = block::direct_irradiance(source.shape, &source.samples, Vec3::new(0.45, 0.6, 0.4), 0.05);
@@ -264,7 +265,7 @@ fn enumerate(
     light: &nalgebra::DMatrix<f64>,
     depth: usize,
     d_max: usize,
-    turns: &[(relume_bake::mrt::interface::Turn, nalgebra::DMatrix<f64>)],
+    turns: &[(relume_bake::mrt::level::Turn, nalgebra::DMatrix<f64>)],
     reached: &mut std::collections::HashMap<relume_bake::mrt::level::Crossing, nalgebra::DMatrix<f64>>,
 ) {
     *reached.entry(crossing).or_insert_with(|| nalgebra::DMatrix::zeros(light.nrows(), light.ncols())) += light;
@@ -280,7 +281,7 @@ fn enumerate(
 
 #[test]
 fn the_traversal_equals_explicit_path_enumeration_on_a_maze_with_a_cycle() {
-    use relume_bake::mrt::interface::Turn;
+    use relume_bake::mrt::level::Turn;
     use relume_bake::mrt::level::{traverse, Level};
     // A 3 x 3 ring around a solid centre (a cycle), with a spur.
     let cells = vec![(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2), (0, 1), (3, 1)];

@@ -12,6 +12,7 @@
 //! the receiver come through the feedback.
 
 use super::block::{exit, gather_rows, BlockOperators};
+use super::level::{target, Turn};
 use super::svd;
 use super::{Face, Samples, Shape};
 use crate::sampling::concentric_disk;
@@ -137,28 +138,8 @@ fn disk_to_square(p: Vec2) -> Vec2 {
     Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5)
 }
 
-/// The three ways on from an interface across an empty block.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Turn {
-    Ahead,
-    Left,
-    Right,
-}
-
 /// The canonical receiving interface: light enters through -z travelling +z.
 const ENTRY: Face = Face { axis: 2, positive: false };
-
-/// The face of a block entered through `entry` that light leaves through after `turn`.
-pub(crate) fn target(entry: Face, turn: Turn) -> Face {
-    let n = entry.inward();
-    let right = Vec3::Y.cross(n);
-    let out = match turn {
-        Turn::Ahead => n,
-        Turn::Right => right,
-        Turn::Left => -right,
-    };
-    Face::ALL.into_iter().find(|f| outward(*f).abs_diff_eq(out, 1e-6)).expect("a side face")
-}
 
 /// The interface operators of a dictionary (§5.1).
 pub struct Interfaces {

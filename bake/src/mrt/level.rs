@@ -6,9 +6,9 @@
 //! sum over every path of at most d_max crossings (cycles included, no U-turns), which the
 //! explicit enumeration in the tests checks.
 
-use super::interface::Turn;
 use super::{Face, Samples, Shape};
 use glam::Vec3;
+#[cfg(feature = "baking")]
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 
@@ -70,7 +70,7 @@ impl Level {
     /// Where light entering `crossing.to` goes on after `turn`, if that face is open.
     pub fn turn(&self, crossing: Crossing, turn: Turn) -> Option<Crossing> {
         let entry = opposite(crossing.face);
-        let out = super::interface::target(entry, turn);
+        let out = target(entry, turn);
         self.neighbour(crossing.to, out).map(|to| Crossing { block: crossing.to, face: out, to })
     }
 }
@@ -111,11 +111,32 @@ pub fn turn_point(p: Vec3, quarter_turns: u32) -> Vec3 {
     q + Vec3::splat(0.5)
 }
 
+/// The three ways on from an interface across an empty block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Turn {
+    Ahead,
+    Left,
+    Right,
+}
+
+/// The face of a block entered through `entry` that light leaves through after `turn`.
+pub fn target(entry: Face, turn: Turn) -> Face {
+    let n = entry.inward();
+    let right = Vec3::Y.cross(n);
+    let out = match turn {
+        Turn::Ahead => n,
+        Turn::Right => right,
+        Turn::Left => -right,
+    };
+    Face::ALL.into_iter().find(|f| (-f.inward()).abs_diff_eq(out, 1e-6)).expect("a side face")
+}
+
 /// The same face on the other side: the face of the next block that a face leads into.
 pub fn opposite(face: Face) -> Face {
     Face { axis: face.axis, positive: !face.positive }
 }
 
+#[cfg(feature = "baking")]
 /// The light of one source block at every crossing it reaches within `d_max` crossings: for
 /// each crossing, the sum over paths of the product of R_b->rlf (`from`) and the turns' R
 /// (k_rlf x k_self). `from(crossing)` gives R_b->rlf for the source's own openings.

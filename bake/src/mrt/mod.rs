@@ -13,8 +13,10 @@ pub mod block;
 pub mod dictionary;
 #[cfg(feature = "baking")]
 pub mod interface;
-#[cfg(feature = "baking")]
 pub mod level;
+pub mod proxy;
+
+pub use proxy::SCENE_BLOCK;
 #[cfg(feature = "baking")]
 mod svd;
 #[cfg(feature = "baking")]
