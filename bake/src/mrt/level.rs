@@ -88,18 +88,31 @@ impl Level {
     /// rows on the block's other openings have none).
     pub fn receiver_rows(&self, receiver: &Samples, block: usize, entry: Face) -> Vec<Option<usize>> {
         let quarter_turns = (0..4).find(|&q| Face { axis: 2, positive: false }.turned(q) == entry).expect("a side face");
-        let own = Samples::new(self.shape(block), receiver.grid);
-        (0..receiver.len())
-            .map(|i| {
-                let (face, p, _) = receiver.sample(i);
-                let (turned, at) = (face.turned(quarter_turns), turn_point(p, quarter_turns));
-                let slot = own.faces.iter().position(|f| *f == turned)?;
-                let uv = turned.uv(at) * own.grid as f32;
-                let (x, y) = ((uv.x as usize).min(own.grid - 1), (uv.y as usize).min(own.grid - 1));
-                Some(slot * own.grid * own.grid + y * own.grid + x)
-            })
-            .collect()
+        turned_rows(receiver, quarter_turns, &Samples::new(self.shape(block), receiver.grid))
     }
+
+    /// For each sample of block `block`'s dictionary shape (`dictionary`, its samples), the
+    /// block's own sample it stands for.
+    pub fn own_rows(&self, dictionary: &Samples, block: usize) -> Vec<usize> {
+        let (_, quarter_turns) = self.shape(block).canonical();
+        let rows = turned_rows(dictionary, quarter_turns, &Samples::new(self.shape(block), dictionary.grid));
+        rows.into_iter().map(|r| r.expect("a turned dictionary shape has the block's faces")).collect()
+    }
+}
+
+/// For each sample of `from`, the sample of `to` it lands on after `quarter_turns` about +y
+/// (None on a face `to` lacks).
+fn turned_rows(from: &Samples, quarter_turns: u32, to: &Samples) -> Vec<Option<usize>> {
+    (0..from.len())
+        .map(|i| {
+            let (face, p, _) = from.sample(i);
+            let (turned, at) = (face.turned(quarter_turns), turn_point(p, quarter_turns));
+            let slot = to.faces.iter().position(|f| *f == turned)?;
+            let uv = turned.uv(at) * to.grid as f32;
+            let (x, y) = ((uv.x as usize).min(to.grid - 1), (uv.y as usize).min(to.grid - 1));
+            Some(slot * to.grid * to.grid + y * to.grid + x)
+        })
+        .collect()
 }
 
 /// A point of the unit cube turned about its vertical axis as `Face::turned` turns faces.

@@ -5,12 +5,16 @@
 //! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
 //! and the implicit lighting L_imp; the interface operators between blocks (§5.1: the reduced
 //! lightfield basis, R_b->rlf, the three turns, U_r and T_rlf->r); a level's blocks on a grid
-//! and the traversal behind T_b->r (§6.3); and the dictionary's section (the blocks' operators
-//! so far). The scene's block proxy, the padded atlas and the run time come next.
+//! and the traversal behind T_b->r (§6.3); the scene's block proxy (`extras.relume.mrt`); a
+//! CPU evaluator of the run time's transfer (§7.3 steps 2-5); and the dictionary's section (the
+//! blocks' operators so far). The geometry's mapping, the padded atlas and the GPU passes come
+//! next.
 
 #[cfg(feature = "baking")]
 pub mod block;
 pub mod dictionary;
+#[cfg(feature = "baking")]
+pub mod evaluate;
 #[cfg(feature = "baking")]
 pub mod interface;
 pub mod level;
