@@ -48,6 +48,15 @@ fn the_gather_of_a_block_with_an_open_face_loses_exactly_the_form_factor_of_the_
     assert!(rms <= 0.01, "F 1 against 1 - the opening's form factor: RMS {rms:.4}");
 }
 
+/// A closed cube's samples, F and prior at the tests' settings.
+fn closed_cube_parts() -> (Samples, nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>) {
+    let (shape, base) = (Shape::closed(), settings());
+    let samples = Samples::new(shape, base.samples_per_face);
+    let f = block::gather(shape, &samples, base.gather_rays, base.seed);
+    let l_d = block::prior(shape, &samples, base.prior_grid, base.light_radius);
+    (samples, f, l_d)
+}
+
 fn closed_cube() -> BlockOperators {
     block::build(Shape::closed(), &settings())
 }
@@ -73,11 +82,8 @@ fn a_closed_cube_under_uniform_direct_light_reconstructs_uniform_indirect_light_
 
 #[test]
 fn held_out_lights_converge_to_the_brute_force_bounce_as_modes_grow() {
-    let shape = Shape::closed();
-    let base = settings();
-    let samples = Samples::new(shape, base.samples_per_face);
-    let f = block::gather(shape, &samples, base.gather_rays, base.seed);
-    let l_d = block::prior(shape, &samples, base.prior_grid, base.light_radius);
+    let (shape, base) = (Shape::closed(), settings());
+    let (samples, f, l_d) = closed_cube_parts();
     let mut errors = Vec::new();
     for modes in [4, 8, 12, 16, 32] {
         let ops = block::reduce(shape, samples.clone(), &f, &l_d, &BlockSettings { modes, ..base.clone() });
@@ -125,11 +131,8 @@ fn the_operators_are_the_same_bytes_at_any_thread_count() {
 
 #[test]
 fn enrichment_fixes_the_per_face_constants_that_the_raw_prior_misses() {
-    let shape = Shape::closed();
-    let base = settings();
-    let samples = Samples::new(shape, base.samples_per_face);
-    let f = block::gather(shape, &samples, base.gather_rays, base.seed);
-    let l_d = block::prior(shape, &samples, base.prior_grid, base.light_radius);
+    let (shape, base) = (Shape::closed(), settings());
+    let (samples, f, l_d) = closed_cube_parts();
     let uniform_error = |enrich| {
         let ops = block::reduce(shape, samples.clone(), &f, &l_d, &BlockSettings { enrich, ..base.clone() });
         ops.indirect(&DVector::from_element(samples.len(), 1.0)).iter().map(|v| (v - 1.0).abs()).fold(0.0, f64::max)
@@ -145,11 +148,8 @@ fn enrichment_fixes_the_per_face_constants_that_the_raw_prior_misses() {
 /// against the red light there, RMS over its samples.
 #[test]
 fn enrichment_stops_red_faces_bouncing_green_onto_the_white_face_as_in_fig_13() {
-    let shape = Shape::closed();
-    let base = settings();
-    let samples = Samples::new(shape, base.samples_per_face);
-    let f = block::gather(shape, &samples, base.gather_rays, base.seed);
-    let l_d = block::prior(shape, &samples, base.prior_grid, base.light_radius);
+    let (shape, base) = (Shape::closed(), settings());
+    let (samples, f, l_d) = closed_cube_parts();
     let white = Face::ALL[2];
     let on_white: Vec<usize> = (0..samples.len()).filter(|&i| samples.sample(i).0 == white).collect();
     let irradiance = block::direct_irradiance(shape, &samples, Vec3::new(0.5, 0.6, 0.45), base.light_radius);
@@ -343,9 +343,10 @@ fn light_turning_a_corner_of_a_level_matches_a_brute_force_walk() {
             }
         }
     }
-    let source_samples = Samples::new(level.shape(0), own.samples.grid);
-    let l_d = block::direct_irradiance(level.shape(0), &source_samples, light, 0.05);
-    let truth = oracle::walk(&cells, 0, &source_samples, &l_d, 2, &target, 4096);
+    let samples: Vec<Samples> = (0..cells.len()).map(|i| Samples::new(level.shape(i), own.samples.grid)).collect();
+    let mut l_d: Vec<DVector<f64>> = samples.iter().map(|s| DVector::zeros(s.len())).collect();
+    l_d[0] = block::direct_irradiance(level.shape(0), &samples[0], light, 0.05);
+    let truth = oracle::bounce(&cells, &samples, &l_d, 4096).swap_remove(2);
     let error = relative(&estimate, &truth);
     eprintln!("round the corner: relative error {error:.4} (truth RMS {:.4})", truth.norm() / (truth.len() as f64).sqrt());
     // Bar from the first measurement (0.133). The receiver's turn is what this checks (turned

@@ -9,7 +9,9 @@ use crate::device::Device;
 use crate::swapchain::Swapchain;
 use anyhow::Result;
 use ash::vk;
-use relume_renderer::vk::{Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, ImageState, Readback};
+use relume_renderer::vk::{
+    barrier_between, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, ImageDesc, ImageRef, ImageState, Readback,
+};
 use relume_renderer::{CallerImage, Renderer};
 use std::sync::Arc;
 
@@ -235,15 +237,5 @@ fn undefined() -> ImageState {
 }
 
 fn barrier(rec: &CommandRecorder, image: vk::Image, from: ImageState, to: ImageState) {
-    rec.image_barrier(
-        vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(from.stage)
-            .src_access_mask(from.access)
-            .dst_stage_mask(to.stage)
-            .dst_access_mask(to.access)
-            .old_layout(from.layout)
-            .new_layout(to.layout)
-            .image(image)
-            .subresource_range(COLOR),
-    );
+    barrier_between(rec, ImageRef { raw: image, range: COLOR }, from, to);
 }

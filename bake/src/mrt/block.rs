@@ -230,13 +230,5 @@ fn enriched(p: &DMatrix<f64>, s: &[f64], u_b: &DMatrix<f64>, samples: &Samples, 
         let norm = m.norm();
         m / norm
     };
-    let blocks = [unit(ps), unit(c), unit(u_b.clone())];
-    let columns: usize = blocks.iter().map(|b| b.ncols()).sum();
-    let mut joined = DMatrix::zeros(samples.len(), columns);
-    let mut at = 0;
-    for b in &blocks {
-        joined.columns_mut(at, b.ncols()).copy_from(b);
-        at += b.ncols();
-    }
-    leading(&svd::thin(&joined), k)
+    leading(&svd::thin(&svd::side_by_side(&[unit(ps), unit(c), unit(u_b.clone())])), k)
 }

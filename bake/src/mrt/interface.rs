@@ -177,14 +177,7 @@ pub fn build(blocks: &[BlockOperators], settings: &InterfaceSettings) -> Interfa
     let slots: Vec<(usize, Face)> =
         blocks.iter().enumerate().flat_map(|(b, ops)| ops.shape.open_faces().into_iter().map(move |f| (b, f))).collect();
     let lightfields: Vec<DMatrix<f64>> = slots.iter().map(|&(b, face)| leaving(&blocks[b], face, cells, settings.supersamples)).collect();
-    let columns: usize = lightfields.iter().map(|h| h.ncols()).sum();
-    let mut joined = DMatrix::zeros(cells.len(), columns);
-    let mut at = 0;
-    for h in &lightfields {
-        joined.columns_mut(at, h.ncols()).copy_from(h);
-        at += h.ncols();
-    }
-    let h_svd = svd::thin(&joined);
+    let h_svd = svd::thin(&svd::side_by_side(&lightfields));
     let k = settings.lightfield_modes.min(h_svd.sigma.len());
     let basis = h_svd.u.columns(0, k).into_owned();
     let sigma = h_svd.sigma[..k].to_vec();

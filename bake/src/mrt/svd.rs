@@ -28,6 +28,18 @@ pub fn thin(a: &DMatrix<f64>) -> Svd {
     Svd { u, sigma, v }
 }
 
+/// The matrices (of one row count) side by side.
+pub fn side_by_side(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
+    let rows = blocks.first().map_or(0, |b| b.nrows());
+    let mut joined = DMatrix::zeros(rows, blocks.iter().map(|b| b.ncols()).sum());
+    let mut at = 0;
+    for b in blocks {
+        joined.columns_mut(at, b.ncols()).copy_from(b);
+        at += b.ncols();
+    }
+    joined
+}
+
 /// The number of leading singular values that hold `fraction` of the energy (the sum of
 /// their squares), as the paper's Table 2 counts.
 pub fn modes_for_energy(sigma: &[f64], fraction: f64) -> usize {

@@ -22,95 +22,19 @@ pub fn leave(origin: Vec3, d: Vec3) -> (usize, bool, Vec3) {
 }
 
 /// Brute-force one bounce into the canonical receiver (the unit cube open at -z) from a row of
-/// `empty` blocks and then `source` behind it along -z: for each receiver sample, the mean over
-/// cosine rays of the source's direct light where a ray lands on it (bilinear on its samples),
-/// 0 where it lands on a wall of an empty block.
+/// `empty` blocks and then `source` behind it along -z: `bounce` on that column of blocks with
+/// the source's direct light alone.
 pub fn brute_force(receiver: &Samples, source: &BlockOperators, l_d: &DVector<f64>, empty: usize, rays: u32) -> DVector<f64> {
-    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
-    DVector::from_iterator(
-        receiver.len(),
-        (0..receiver.len()).map(|i| {
-            let (_, origin, normal) = receiver.sample(i);
-            let (t, b) = orthonormal_basis(normal);
-            let mut sum = 0.0;
-            for r in 0..rays {
-                let u = PathSampler::new(7, i as u32, r).sobol4(0);
-                let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
-                let d = t * local.x + b * local.y + normal * local.z;
-                let (mut axis, mut positive, mut point) = leave(origin, d);
-                for _ in 0..empty {
-                    if (axis, positive) != (2, false) {
-                        break;
-                    }
-                    (axis, positive, point) = leave(Vec3::new(point.x, point.y, 1.0), d);
-                }
-                if (axis, positive) != (2, false) {
-                    continue;
-                }
-                let (axis, positive, point) = leave(Vec3::new(point.x, point.y, 1.0), d);
-                let face = Face { axis, positive };
-                if let Some(slot) = source.samples.faces.iter().position(|f| *f == face) {
-                    sum += source.samples.bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[*j]).sum::<f64>();
-                }
-            }
-            sum / rays as f64
-        }),
-    )
-}
-
-/// Brute-force one bounce from block `source` (its direct light `l_d` on its own samples
-/// `source_samples`) onto block `receiver`'s samples, walking rays through the level of
-/// `cells`: a ray leaves a block into the neighbour across the face, or lands on the wall (the
-/// source's direct light there, 0 in any other block).
-pub fn walk(
-    cells: &[(i32, i32)],
-    source: usize,
-    source_samples: &Samples,
-    l_d: &DVector<f64>,
-    receiver: usize,
-    samples: &Samples,
-    rays: u32,
-) -> DVector<f64> {
-    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
-    DVector::from_iterator(
-        samples.len(),
-        (0..samples.len()).map(|i| {
-            let (_, origin, normal) = samples.sample(i);
-            let (t, b) = orthonormal_basis(normal);
-            let mut sum = 0.0;
-            for r in 0..rays {
-                let u = PathSampler::new(7, i as u32, r).sobol4(0);
-                let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
-                let d = t * local.x + b * local.y + normal * local.z;
-                let (mut block, mut p) = (receiver, origin);
-                for _ in 0..32 {
-                    let (axis, positive, point) = leave(p, d);
-                    let (x, z) = cells[block];
-                    let step = if positive { 1 } else { -1 };
-                    let next = match axis {
-                        0 => cells.iter().position(|c| *c == (x + step, z)),
-                        2 => cells.iter().position(|c| *c == (x, z + step)),
-                        _ => None,
-                    };
-                    match next {
-                        Some(n) => {
-                            (block, p) = (n, point);
-                            p[axis] = if positive { 0.0 } else { 1.0 };
-                        }
-                        None => {
-                            if block == source {
-                                let face = Face { axis, positive };
-                                let slot = source_samples.faces.iter().position(|f| *f == face).expect("a wall");
-                                sum += source_samples.bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[*j]).sum::<f64>();
-                            }
-                            break;
-                        }
-                    }
-                }
-            }
-            sum / rays as f64
-        }),
-    )
+    let cells: Vec<(i32, i32)> = (0..empty as i32 + 2).map(|z| (0, z)).collect();
+    let mut samples = vec![source.samples.clone()];
+    for _ in 0..empty {
+        let open = [Face { axis: 2, positive: false }, Face { axis: 2, positive: true }];
+        samples.push(Samples::new(relume_bake::mrt::Shape::with_open(&open).expect("side faces"), receiver.grid));
+    }
+    samples.push(receiver.clone());
+    let mut lights: Vec<DVector<f64>> = samples.iter().map(|s| DVector::zeros(s.len())).collect();
+    lights[0] = l_d.clone();
+    bounce(&cells, &samples, &lights, rays).pop().expect("the receiver")
 }
 
 /// Where a ray from `origin` in block `block` of the level of `cells` lands: the block and the

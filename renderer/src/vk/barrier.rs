@@ -209,6 +209,13 @@ impl Tracker {
 /// `next`; returns the state it is left in. For images no tracker knows (a caller's).
 pub fn transition(rec: &CommandRecorder, image: ImageRef, from: ImageState, next: Access) -> ImageState {
     let to = next.state();
+    barrier_between(rec, image, from, to);
+    to
+}
+
+/// Records the barrier that takes `image` from one state to another, for uses relume's
+/// `Access` does not name (a caller's blit, presentation).
+pub fn barrier_between(rec: &CommandRecorder, image: ImageRef, from: ImageState, to: ImageState) {
     let barrier = vk::ImageMemoryBarrier2::default()
         .src_stage_mask(from.stage)
         .src_access_mask(from.access)
@@ -219,5 +226,4 @@ pub fn transition(rec: &CommandRecorder, image: ImageRef, from: ImageState, next
         .image(image.raw)
         .subresource_range(image.range);
     rec.image_barrier(barrier);
-    to
 }

@@ -14,7 +14,7 @@ mod readback;
 mod sync;
 
 pub use ash::vk;
-pub use barrier::{transition, Access, BufferRef, ImageRef, ImageState, Tracker, Use};
+pub use barrier::{barrier_between, transition, Access, BufferRef, ImageRef, ImageState, Tracker, Use};
 pub use buffer::Buffer;
 pub use context::{CommandRecorder, Context, ContextOptions};
 pub use descriptor::{Binding, DescriptorSet};
