@@ -1,7 +1,7 @@
-//! Transfer between blocks (Loos et al. 2011, §5.1) against brute force, for
-//! docs/BENCHMARKS.md: a source block open at +z lit by one light, the canonical receiver
-//! next door and one corridor block further; the relative error of U_r T_rlf->r R b against a
-//! brute-force bounce, by what the operators keep.
+//! Transfer between blocks (Loos et al. 2011, §5.1 and §6.3) against brute force, for
+//! docs/BENCHMARKS.md: a column of blocks along +z with one light in the first; the relative
+//! error of the level's transfer onto the last block (next door, and one corridor block
+//! further) against a brute-force walk, by what the operators keep.
 //!
 //!     cargo run --release -p relume-bake --example mrt_interfaces
 
@@ -11,10 +11,12 @@
 mod oracle;
 
 use glam::Vec3;
+use nalgebra::DVector;
 use relume_bake::mrt::block::{self, BlockOperators};
+use relume_bake::mrt::evaluate::LevelTransfer;
 use relume_bake::mrt::interface::{self, InterfaceSettings};
-use relume_bake::mrt::level::Turn;
-use relume_bake::mrt::{BlockSettings, Face, Shape};
+use relume_bake::mrt::level::Level;
+use relume_bake::mrt::{BlockSettings, Samples, Shape};
 use std::time::Instant;
 
 fn main() {
@@ -31,34 +33,46 @@ fn main() {
     ];
     for (k_self, settings) in rows {
         let clock = Instant::now();
-        let blocks = blocks(k_self);
-        let ops = interface::build(&blocks, &settings);
+        let dictionary: Vec<BlockOperators> = Shape::dictionary()
+            .iter()
+            .map(|&shape| block::build(shape, &BlockSettings { gather_rays: 4096, modes: k_self, ..BlockSettings::default() }))
+            .collect();
+        let ops = interface::build(&dictionary, &settings);
         let built = clock.elapsed().as_secs_f64();
-        let source = blocks.last().expect("the source");
-        let l_d = block::direct_irradiance(source.shape, &source.samples, Vec3::new(0.45, 0.6, 0.4), 0.05);
-        let b = &source.t_d_b * &l_d;
-        let c = ops.from_block(blocks.len() - 1, Face::ALL[5]).expect("the source's opening") * &b;
-        let relative = |estimate: &nalgebra::DVector<f64>, truth: &nalgebra::DVector<f64>| (estimate - truth).norm() / truth.norm();
-        let next_door = oracle::brute_force(&ops.receiver, source, &l_d, 0, 4096);
-        let corridor = oracle::brute_force(&ops.receiver, source, &l_d, 1, 4096);
-        let projected = oracle::brute_force(&ops.receiver, source, &(&source.l_imp * &b), 0, 4096);
+        let errors = [2, 3].map(|length| column_error(&dictionary, &ops, length));
         println!(
             "| {k_self} | {}^2 x {}^2 | {} | {} | {:.4} | {:.4} | {:.4} | {built:.1} s |",
             settings.positions,
             settings.directions,
             settings.lightfield_modes,
             settings.response_modes,
-            relative(&ops.response(&c), &next_door),
-            relative(&ops.response(&(ops.turn(Turn::Ahead) * &c)), &corridor),
-            relative(&projected, &next_door),
+            errors[0].0,
+            errors[1].0,
+            errors[0].1
         );
     }
 }
 
-/// The dictionary's shapes and the source (open at +z), at 4,096 gather rays.
-fn blocks(modes: usize) -> Vec<BlockOperators> {
-    let settings = BlockSettings { gather_rays: 4096, modes, ..BlockSettings::default() };
-    let mut shapes: Vec<Shape> = Shape::dictionary().to_vec();
-    shapes.push(Shape::with_open(&[Face::ALL[5]]).expect("a side face"));
-    shapes.iter().map(|&shape| block::build(shape, &settings)).collect()
+/// The relative error on the last of `length` blocks in a column, lit in the first; and the
+/// error a perfect transfer would still have from the source's own reduction: the brute-force
+/// bounce of L_imp b (the direct light as b keeps it) against that of l_d.
+fn column_error(dictionary: &[BlockOperators], ops: &interface::Interfaces, length: i32) -> (f64, f64) {
+    let cells: Vec<(i32, i32)> = (0..length).map(|z| (0, z)).collect();
+    let level = Level::new(cells.clone()).expect("distinct cells");
+    let transfer = LevelTransfer::new(&level, dictionary, ops, 8).expect("the dictionary in order");
+    let samples: Vec<Samples> = (0..cells.len()).map(|i| Samples::new(level.shape(i), 16)).collect();
+    let mut l_d: Vec<DVector<f64>> = samples.iter().map(|s| DVector::zeros(s.len())).collect();
+    l_d[0] = block::direct_irradiance(level.shape(0), &samples[0], Vec3::new(0.45, 0.6, 0.4), 0.05);
+    let estimate = transfer.indirect(dictionary, ops, &l_d).expect("the level's sizes");
+    let truth = oracle::bounce(&cells, &samples, &l_d, 4096);
+    let last = cells.len() - 1;
+    let relative = |a: &DVector<f64>, b: &DVector<f64>| (a - b).norm() / b.norm();
+    let (index, _) = level.shape(0).canonical();
+    let rows = level.own_rows(&dictionary[index].samples, 0);
+    let on_shape = DVector::from_iterator(rows.len(), rows.iter().map(|&r| l_d[0][r]));
+    let kept = &dictionary[index].l_imp * (&dictionary[index].t_d_b * on_shape);
+    let mut projected = l_d.clone();
+    rows.iter().zip(kept.iter()).for_each(|(&r, v)| projected[0][r] = *v);
+    let through = oracle::bounce(&cells, &samples, &projected, 4096);
+    (relative(&estimate[last], &truth[last]), relative(&through[last], &truth[last]))
 }

@@ -1,7 +1,10 @@
-//! Modular radiance transfer's block operators (§4, App. A) against what they must be: the
+//! Modular radiance transfer against what it must be. The block operators (§4, App. A): the
 //! gather against analytic form factors, the reduction's identities, a closed cube's uniform
 //! light, held-out lights against the brute-force one-bounce operator as modes grow, the
-//! paper's Table 2, and the same bytes at any thread count.
+//! paper's Table 2 and Fig. 13, feedback, the same bytes at any thread count, the dictionary's
+//! section. Between blocks (§5.1, §6.3, §7.3): next door and down a corridor, round a corner,
+//! a maze, each against a brute-force walk through the level; the traversal against explicit
+//! path enumeration.
 
 use glam::Vec3;
 use nalgebra::DVector;
@@ -11,7 +14,6 @@ use relume_bake::testing::scattered_points;
 
 #[path = "common/mrt_oracle.rs"]
 mod oracle;
-use oracle::brute_force;
 
 /// The paper's settings but fewer gather rays, for test time (the noise stays below the bars).
 fn settings() -> BlockSettings {
@@ -216,45 +218,48 @@ fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The dictionary's shapes and a source block open at +z (the receiver's neighbour behind it).
-fn blocks_and_source() -> Vec<BlockOperators> {
-    let mut shapes: Vec<Shape> = Shape::dictionary().to_vec();
-    shapes.push(Shape::with_open(&[Face::ALL[5]]).unwrap());
-    shapes.iter().map(|&shape| block::build(shape, &settings())).collect()
-}
-
 fn relative(estimate: &DVector<f64>, truth: &DVector<f64>) -> f64 {
     (estimate - truth).norm() / truth.norm()
 }
 
+/// The 2D dictionary's six shapes' operators, in order.
+fn dictionary() -> Vec<BlockOperators> {
+    Shape::dictionary().iter().map(|&shape| block::build(shape, &settings())).collect()
+}
+
+/// A light in the first block of a column along +z reaching the last one, next door and one
+/// corridor block further: the level's transfer (the source a turned dictionary shape, not in
+/// the lightfield basis's input as itself) against a brute-force walk, by lightfield rank.
 #[test]
 fn light_crossing_one_interface_and_a_corridor_matches_brute_force_at_every_lightfield_rank() {
+    use relume_bake::mrt::evaluate::LevelTransfer;
     use relume_bake::mrt::interface::{self, InterfaceSettings};
-    use relume_bake::mrt::level::Turn;
-    let blocks = blocks_and_source();
-    let source = blocks.last().unwrap();
-    let l_d = block::direct_irradiance(source.shape, &source.samples, Vec3::new(0.45, 0.6, 0.4), 0.05);
-    let b = &source.t_d_b * &l_d;
+    use relume_bake::mrt::level::Level;
+    let dictionary = dictionary();
     let base = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 4096, ..InterfaceSettings::default() };
-    let mut next_door = Vec::new();
-    let mut corridor = 0.0;
+    let mut errors = Vec::new();
     for modes in [8, 16, 32, 128] {
-        let ops = interface::build(&blocks, &InterfaceSettings { lightfield_modes: modes, ..base.clone() });
-        let c = ops.from_block(blocks.len() - 1, Face::ALL[5]).expect("the source's opening") * &b;
-        let truth = brute_force(&ops.receiver, source, &l_d, 0, 4096);
-        next_door.push((modes, relative(&ops.response(&c), &truth)));
-        if modes == 128 {
-            let truth = brute_force(&ops.receiver, source, &l_d, 1, 4096);
-            corridor = relative(&ops.response(&(ops.turn(Turn::Ahead) * &c)), &truth);
+        let ops = interface::build(&dictionary, &InterfaceSettings { lightfield_modes: modes, ..base.clone() });
+        let mut row = Vec::new();
+        for length in [2, 3] {
+            let cells: Vec<(i32, i32)> = (0..length).map(|z| (0, z)).collect();
+            let level = Level::new(cells.clone()).unwrap();
+            let transfer = LevelTransfer::new(&level, &dictionary, &ops, 8).unwrap();
+            let samples: Vec<Samples> = (0..cells.len()).map(|i| Samples::new(level.shape(i), 16)).collect();
+            let mut l_d: Vec<DVector<f64>> = samples.iter().map(|s| DVector::zeros(s.len())).collect();
+            l_d[0] = block::direct_irradiance(level.shape(0), &samples[0], Vec3::new(0.45, 0.6, 0.4), 0.05);
+            let estimate = transfer.indirect(&dictionary, &ops, &l_d).unwrap();
+            let truth = oracle::bounce(&cells, &samples, &l_d, 4096);
+            row.push(relative(&estimate[cells.len() - 1], &truth[cells.len() - 1]));
         }
+        errors.push((modes, row[0], row[1]));
     }
-    eprintln!("next door, relative error by k_rlf: {next_door:?}; a corridor block further: {corridor:.4}");
-    // Flat in k_rlf (measured 0.076-0.078): the lightfield basis is not what limits this case;
-    // the block's own k_self is (docs/BENCHMARKS.md, example mrt_interfaces).
-    assert!(next_door.iter().all(|e| e.1 <= 0.15), "{next_door:?}");
-    let spread = next_door.iter().map(|e| e.1).fold(0.0, f64::max) - next_door.iter().map(|e| e.1).fold(1.0, f64::min);
-    assert!(spread <= 0.01, "{next_door:?}");
-    assert!(corridor <= 0.20, "{corridor:.4}");
+    eprintln!("(k_rlf, next door, corridor): {errors:?}");
+    // Bars: the spec's 0.15 next door and 0.20 down a corridor; flat in k_rlf (the source's
+    // k_self and the lightfield's resolution limit it: docs/BENCHMARKS.md).
+    assert!(errors.iter().all(|e| e.1 <= 0.15 && e.2 <= 0.20), "{errors:?}");
+    let spread = errors.iter().map(|e| e.1).fold(0.0, f64::max) - errors.iter().map(|e| e.1).fold(1.0, f64::min);
+    assert!(spread <= 0.02, "{errors:?}");
 }
 
 /// Every path of at most `d_max` crossings from `crossing` on (cycles included, no U-turns),
@@ -318,7 +323,7 @@ fn light_turning_a_corner_of_a_level_matches_a_brute_force_walk() {
     use relume_bake::mrt::level::{traverse, turn_point, Level};
     let cells = vec![(0, 0), (0, 1), (1, 1)];
     let level = Level::new(cells.clone()).unwrap();
-    let dictionary: Vec<BlockOperators> = Shape::dictionary().iter().map(|&shape| block::build(shape, &settings())).collect();
+    let dictionary = dictionary();
     let base = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 4096, ..InterfaceSettings::default() };
     let ops = interface::build(&dictionary, &base);
     let light = Vec3::new(0.45, 0.6, 0.4);
@@ -366,10 +371,10 @@ fn a_maze_s_indirect_light_beats_the_best_constant_against_a_brute_force_bounce(
     // A ring of eight around a solid centre, and a spur.
     let cells = vec![(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2), (0, 1), (3, 1)];
     let level = Level::new(cells.clone()).unwrap();
-    let dictionary: Vec<BlockOperators> = Shape::dictionary().iter().map(|&shape| block::build(shape, &settings())).collect();
+    let dictionary = dictionary();
     let base = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 4096, ..InterfaceSettings::default() };
     let ops = interface::build(&dictionary, &base);
-    let transfer = LevelTransfer::new(&level, &dictionary, &ops, 8);
+    let transfer = LevelTransfer::new(&level, &dictionary, &ops, 8).unwrap();
     let grid = dictionary[0].samples.grid;
     let samples: Vec<Samples> = (0..cells.len()).map(|i| Samples::new(level.shape(i), grid)).collect();
     let light = Vec3::new(0.4, 0.6, 0.45);
@@ -392,7 +397,7 @@ fn a_maze_s_indirect_light_beats_the_best_constant_against_a_brute_force_bounce(
             )
         })
         .collect();
-    let estimate = transfer.indirect(&dictionary, &ops, &l_d);
+    let estimate = transfer.indirect(&dictionary, &ops, &l_d).unwrap();
     let truth = oracle::bounce(&cells, &samples, &l_d, 2048);
     let per_block: Vec<f64> = estimate.iter().zip(&truth).map(|(e, t)| relative(e, t)).collect();
     // Everywhere, and in the blocks the light reaches only through openings (the interfaces'

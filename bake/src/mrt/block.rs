@@ -26,9 +26,9 @@ pub struct BlockOperators {
     pub t_d_b: DMatrix<f64>,
     /// L_imp (n x k): the implicit lighting, F L_imp = U_b (§4.1).
     pub l_imp: DMatrix<f64>,
-    /// Sigma_m, every singular value of M = F P S.
+    /// Sigma_m: the singular values of M = F P S (those above the rank cut).
     pub m_sigma: Vec<f64>,
-    /// Sigma_d, every singular value of the (unenriched) prior L_d.
+    /// Sigma_d: the singular values of the (unenriched) prior L_d (above the rank cut).
     pub prior_sigma: Vec<f64>,
 }
 

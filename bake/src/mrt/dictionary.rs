@@ -73,18 +73,22 @@ pub fn read(artifact: &Artifact, wanted: &BlockSettings) -> Result<Dictionary, A
             return Err(fail(&path, problem, "make the dictionary again with the parameters the level asks for"));
         }
     }
+    let dictionary = Shape::dictionary();
     let count = r.u32("the shape count")? as usize;
-    if count > 64 {
-        return Err(fail(&path, format!("{count} shapes: more than any dictionary holds"), REBAKE));
+    if count != dictionary.len() {
+        return Err(fail(&path, format!("{count} shapes where the 2D dictionary has {}", dictionary.len()), REBAKE));
     }
     let mut blocks = Vec::with_capacity(count);
-    for _ in 0..count {
+    for expected in dictionary {
         let shape = Shape::from_open_mask(r.u32("a shape's open faces")?).map_err(|e| fail(&path, e, REBAKE))?;
         let (samples, modes) = (r.u32("a shape's sample count")? as usize, r.u32("a shape's mode count")? as usize);
-        let size = samples
-            .checked_mul(modes)
-            .filter(|s| *s <= 1 << 28)
-            .ok_or_else(|| fail(&path, "a shape's operators are impossibly large", REBAKE))?;
+        let own = super::Samples::new(shape, wanted.samples_per_face).len();
+        if shape != expected || samples != own || modes == 0 || modes > wanted.modes.min(samples) {
+            let most = wanted.modes.min(own);
+            let problem = format!("a shape ({shape:?}, {samples} samples, {modes} modes) is not the dictionary's next ({expected:?}, {own} samples, 1..={most} modes)");
+            return Err(fail(&path, problem, REBAKE));
+        }
+        let size = samples * modes;
         let (u_b, t_d_b, l_imp) = (r.f32s(size, "U_b")?, r.f32s(size, "T_d->b")?, r.f32s(size, "L_imp")?);
         if [&u_b, &t_d_b, &l_imp].iter().any(|m| m.iter().any(|v| !v.is_finite())) {
             return Err(fail(&path, "an operator holds a value that is not finite", REBAKE));

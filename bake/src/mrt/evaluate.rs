@@ -6,7 +6,7 @@
 use super::block::BlockOperators;
 use super::interface::Interfaces;
 use super::level::{opposite, traverse, Level};
-use super::Face;
+use super::{Face, Shape};
 use nalgebra::{DMatrix, DVector};
 
 /// Light arriving at one block through one opening: from which sources, by which matrix
@@ -29,18 +29,23 @@ pub struct LevelTransfer {
 }
 
 impl LevelTransfer {
-    /// T_b->r by traversal to `d_max` crossings from every block (§6.3).
-    pub fn new(level: &Level, dictionary: &[BlockOperators], interfaces: &Interfaces, d_max: usize) -> LevelTransfer {
+    /// T_b->r by traversal to `d_max` crossings from every block (§6.3); `dictionary` must be
+    /// `Shape::dictionary`'s shapes' operators in that order, and `interfaces` built from them.
+    pub fn new(level: &Level, dictionary: &[BlockOperators], interfaces: &Interfaces, d_max: usize) -> Result<LevelTransfer, String> {
+        let shapes: Vec<Shape> = dictionary.iter().map(|d| d.shape).collect();
+        if shapes != Shape::dictionary() {
+            return Err(format!("the level's operators need the 2D dictionary's six shapes in order, not {shapes:?}"));
+        }
         let grid = dictionary[0].samples.grid;
-        let blocks: Vec<(usize, Vec<usize>)> = (0..level.cells.len())
+        let blocks: Vec<(usize, Vec<usize>)> = (0..level.cells().len())
             .map(|i| {
                 let index = level.shape(i).canonical().0;
                 (index, level.own_rows(&dictionary[index].samples, i))
             })
             .collect();
-        let sizes = (0..level.cells.len()).map(|i| super::Samples::new(level.shape(i), grid).len()).collect();
+        let sizes = (0..level.cells().len()).map(|i| super::Samples::new(level.shape(i), grid).len()).collect();
         let mut receivers: Vec<Receiver> = Vec::new();
-        for source in 0..level.cells.len() {
+        for source in 0..level.cells().len() {
             let from = |c: super::level::Crossing| {
                 let (index, face) = level.dictionary_face(c.block, c.face);
                 interfaces.from_block(index, face).expect("the dictionary's interfaces include every shape's openings").clone()
@@ -62,12 +67,21 @@ impl LevelTransfer {
                 }
             }
         }
-        LevelTransfer { blocks, receivers, sizes }
+        Ok(LevelTransfer { blocks, receivers, sizes })
     }
 
     /// The indirect light of every block (its own samples) for its direct light `l_d` (its
     /// own samples): U_b b plus every arriving U_r r.
-    pub fn indirect(&self, dictionary: &[BlockOperators], interfaces: &Interfaces, l_d: &[DVector<f64>]) -> Vec<DVector<f64>> {
+    pub fn indirect(
+        &self,
+        dictionary: &[BlockOperators],
+        interfaces: &Interfaces,
+        l_d: &[DVector<f64>],
+    ) -> Result<Vec<DVector<f64>>, String> {
+        let given: Vec<usize> = l_d.iter().map(|l| l.len()).collect();
+        if given != self.sizes {
+            return Err(format!("direct light for blocks of {given:?} samples; the level's blocks have {:?}", self.sizes));
+        }
         let mut out: Vec<DVector<f64>> = self.sizes.iter().map(|&n| DVector::zeros(n)).collect();
         let b: Vec<DVector<f64>> = self
             .blocks
@@ -91,6 +105,6 @@ impl LevelTransfer {
                 }
             }
         }
-        out
+        Ok(out)
     }
 }

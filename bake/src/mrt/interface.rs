@@ -83,7 +83,7 @@ impl Frame {
     }
 }
 
-/// The face light leaves a block through when it travels out of it through `face`.
+/// The direction light travels when it leaves a block through `face`.
 fn outward(face: Face) -> Vec3 {
     -face.inward()
 }
@@ -286,12 +286,21 @@ mod tests {
 
     #[test]
     fn frames_agree_across_a_shared_face_and_turns_reach_the_right_faces() {
-        // Light leaving a block through +z enters the next through its -z in the same frame.
-        let leaving = Frame::new(Face::ALL[5], outward(Face::ALL[5]));
-        let entering = Frame::new(ENTRY, ENTRY.inward());
+        // Light leaving a block through a side face f enters the next block (one step along f's
+        // outward normal) through the opposite face in the same frame: the same world point and
+        // direction for the same local ones.
         let (p, d) = (Vec2::new(0.3, 0.8), Vec3::new(0.2, -0.1, 0.97).normalize());
-        assert!(leaving.local_point(leaving.point(p)).abs_diff_eq(entering.local_point(entering.point(p)), 1e-6));
-        assert!(leaving.direction(d).abs_diff_eq(entering.direction(d), 1e-6));
+        for f in [Face::ALL[0], Face::ALL[1], Face::ALL[4], Face::ALL[5]] {
+            let step = outward(f);
+            let other = Face { axis: f.axis, positive: !f.positive };
+            let (leaving, entering) = (Frame::new(f, outward(f)), Frame::new(other, other.inward()));
+            assert!(leaving.point(p).abs_diff_eq(entering.point(p) + step, 1e-6), "{f:?}");
+            assert!(leaving.direction(d).abs_diff_eq(entering.direction(d), 1e-6), "{f:?}");
+            // Turning a block turns its frames with it.
+            let turned = Frame::new(f.turned(1), outward(f.turned(1)));
+            let turn = |v: Vec3| Vec3::new(v.z, v.y, -v.x);
+            assert!(turned.direction(d).abs_diff_eq(turn(leaving.direction(d)), 1e-6), "{f:?}");
+        }
         assert_eq!(target(ENTRY, Turn::Ahead), Face::ALL[5]);
         assert_eq!(target(ENTRY, Turn::Right).axis, 0);
         assert_ne!(target(ENTRY, Turn::Left), target(ENTRY, Turn::Right));

@@ -25,9 +25,12 @@ pub struct Crossing {
 /// `cells[i]` = (x, z); faces between neighbouring blocks are open, all others closed.
 #[derive(Clone, Debug)]
 pub struct Level {
-    pub cells: Vec<(i32, i32)>,
+    cells: Vec<(i32, i32)>,
     at: HashMap<(i32, i32), usize>,
 }
+
+/// The farthest a cell may lie from the origin along x or z.
+const MAX_CELL: i32 = 1 << 20;
 
 /// The side faces, with the grid step they lead to.
 const SIDES: [(Face, (i32, i32)); 4] = [
@@ -38,15 +41,23 @@ const SIDES: [(Face, (i32, i32)); 4] = [
 ];
 
 impl Level {
-    /// The level of these cells; refused when a cell repeats.
+    /// The level of these cells; refused when a cell repeats or lies past 2^20.
     pub fn new(cells: Vec<(i32, i32)>) -> Result<Level, String> {
         let mut at = HashMap::new();
         for (i, cell) in cells.iter().enumerate() {
+            if cell.0.abs() > MAX_CELL || cell.1.abs() > MAX_CELL {
+                return Err(format!("block {i} stands at cell {cell:?}, past {MAX_CELL} cells from the origin"));
+            }
             if let Some(j) = at.insert(*cell, i) {
                 return Err(format!("blocks {j} and {i} both stand at cell {cell:?}; give each cell one block"));
             }
         }
         Ok(Level { cells, at })
+    }
+
+    /// Each block's cell (x, z).
+    pub fn cells(&self) -> &[(i32, i32)] {
+        &self.cells
     }
 
     /// The block next to `block` through `face`, if any.
@@ -124,7 +135,10 @@ pub fn turn_point(p: Vec3, quarter_turns: u32) -> Vec3 {
     q + Vec3::splat(0.5)
 }
 
-/// The three ways on from an interface across an empty block.
+/// The three ways on from an interface across an empty block. Left and right are spec B10's
+/// frame's (right = up x the travel): in glTF's right-handed frame with +y up that is the
+/// traveller's own left, so `Right` turns to the traveller's left. Both sides of every
+/// operator use `target`, so only the names differ from the paper's R_left and R_right.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Turn {
     Ahead,
@@ -152,7 +166,8 @@ pub fn opposite(face: Face) -> Face {
 #[cfg(feature = "baking")]
 /// The light of one source block at every crossing it reaches within `d_max` crossings: for
 /// each crossing, the sum over paths of the product of R_b->rlf (`from`) and the turns' R
-/// (k_rlf x k_self). `from(crossing)` gives R_b->rlf for the source's own openings.
+/// (k_rlf x k_self). `from(crossing)` gives R_b->rlf for the source's own openings. With
+/// `d_max` 0 nothing is reached.
 pub fn traverse(
     level: &Level,
     source: usize,
@@ -161,6 +176,9 @@ pub fn traverse(
     turn: impl Fn(Turn) -> DMatrix<f64>,
 ) -> HashMap<Crossing, DMatrix<f64>> {
     let turns = [Turn::Ahead, Turn::Left, Turn::Right].map(|t| (t, turn(t)));
+    if d_max == 0 {
+        return HashMap::new();
+    }
     let mut frontier: HashMap<Crossing, DMatrix<f64>> = level.crossings(source).into_iter().map(|c| (c, from(c))).collect();
     let mut reached = frontier.clone();
     for _ in 1..d_max {

@@ -274,6 +274,21 @@ mod tests {
     }
 
     #[test]
+    fn bilinear_reads_reproduce_a_linear_function_between_texel_centres() {
+        let samples = Samples::new(Shape::closed(), 5);
+        let value = |i: usize| {
+            let (face, p, _) = samples.sample(i);
+            let uv = face.uv(p);
+            1.0 + 2.0 * uv.x - 3.0 * uv.y
+        };
+        for k in 0..50 {
+            let uv = Vec2::new(0.1 + 0.8 * ((k * 7) % 50) as f32 / 50.0, 0.1 + 0.8 * k as f32 / 50.0);
+            let read: f32 = samples.bilinear(2, uv).iter().map(|(j, w)| w * value(*j)).sum();
+            assert!((read - (1.0 + 2.0 * uv.x - 3.0 * uv.y)).abs() < 1e-5, "{uv}: {read}");
+        }
+    }
+
+    #[test]
     fn every_side_face_shape_is_a_dictionary_shape_turned() {
         let sides = [Face::ALL[0], Face::ALL[1], Face::ALL[4], Face::ALL[5]];
         for mask in 0..16u32 {

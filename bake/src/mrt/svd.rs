@@ -4,7 +4,8 @@
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
-/// Singular values below this share of the largest are rank deficiency, not signal.
+/// Eigenvalues of the Gram matrix (squared singular values) below this share of the largest
+/// are rank deficiency, not signal: singular values below 1e-5 of the largest are dropped.
 const RANK_TOLERANCE: f64 = 1e-10;
 
 /// The thin SVD of A (rows x cols, cols <= rows): U (rows x r), sigma (r, descending) and V

@@ -1,9 +1,11 @@
-//! The tests' own brute-force one bounce across block openings, independent of the MRT
-//! operators (shared by bake/tests/mrt.rs and the mrt_interfaces example).
+//! The tests' own brute-force one bounce across block openings (shared by bake/tests/mrt.rs
+//! and the mrt_interfaces example). Independent of the operators in what matters most: the
+//! walk through the level, the turning of blocks and the visibility; it shares the block's
+//! sample layout and bilinear reads (`Samples`, tested on their own), and its ray-box exit is
+//! written anew.
 
 use glam::Vec3;
 use nalgebra::DVector;
-use relume_bake::mrt::block::BlockOperators;
 use relume_bake::mrt::{Face, Samples};
 
 /// Where a ray from inside (or on) the unit cube leaves it: the face's axis, its side and the
@@ -19,22 +21,6 @@ pub fn leave(origin: Vec3, d: Vec3) -> (usize, bool, Vec3) {
         }
     }
     (best.1, best.2, (origin + d * best.0).clamp(Vec3::ZERO, Vec3::ONE))
-}
-
-/// Brute-force one bounce into the canonical receiver (the unit cube open at -z) from a row of
-/// `empty` blocks and then `source` behind it along -z: `bounce` on that column of blocks with
-/// the source's direct light alone.
-pub fn brute_force(receiver: &Samples, source: &BlockOperators, l_d: &DVector<f64>, empty: usize, rays: u32) -> DVector<f64> {
-    let cells: Vec<(i32, i32)> = (0..empty as i32 + 2).map(|z| (0, z)).collect();
-    let mut samples = vec![source.samples.clone()];
-    for _ in 0..empty {
-        let open = [Face { axis: 2, positive: false }, Face { axis: 2, positive: true }];
-        samples.push(Samples::new(relume_bake::mrt::Shape::with_open(&open).expect("side faces"), receiver.grid));
-    }
-    samples.push(receiver.clone());
-    let mut lights: Vec<DVector<f64>> = samples.iter().map(|s| DVector::zeros(s.len())).collect();
-    lights[0] = l_d.clone();
-    bounce(&cells, &samples, &lights, rays).pop().expect("the receiver")
 }
 
 /// Where a ray from `origin` in block `block` of the level of `cells` lands: the block and the
