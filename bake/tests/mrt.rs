@@ -200,7 +200,7 @@ fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
     use relume_bake::mrt::dictionary::{self, Dictionary};
     let small =
         BlockSettings { samples_per_face: 4, gather_rays: 64, prior_grid: 3, prior_modes: 12, modes: 6, ..BlockSettings::default() };
-    let blocks = Shape::dictionary()[..2].iter().map(|&shape| block::build(shape, &small).data()).collect();
+    let blocks = Shape::dictionary().iter().map(|&shape| block::build(shape, &small).data()).collect();
     let made = Dictionary { settings: small.clone(), blocks };
     let dir = std::env::temp_dir().join(format!("relume-mrt-dictionary-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -213,8 +213,17 @@ fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
     assert_eq!(back.blocks, made.blocks);
     let other = dictionary::read(&artifact, &BlockSettings { modes: 8, ..small.clone() }).unwrap_err().to_string();
     assert!(other.contains("mrt-dictionary.bin") && other.contains("modes 6, not the 8"), "{other}");
-    let radius = dictionary::read(&artifact, &BlockSettings { light_radius: 0.1, ..small }).unwrap_err().to_string();
+    let radius = dictionary::read(&artifact, &BlockSettings { light_radius: 0.1, ..small.clone() }).unwrap_err().to_string();
     assert!(radius.contains("light-radius 0.05, not the 0.1"), "{radius}");
+    // A dictionary short of shapes, or with a shape out of order, is refused.
+    for blocks in [made.blocks[..2].to_vec(), [&made.blocks[1..], &made.blocks[..1]].concat()] {
+        let sections = vec![dictionary::section(&Dictionary { settings: small.clone(), blocks }, serde_json::json!({}))];
+        BakeOutput { method: "mrt-dictionary", scene: None, parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+            .write(&dir)
+            .expect("written");
+        let error = dictionary::read(&Artifact::read(&dir).expect("read"), &small).unwrap_err().to_string();
+        assert!(error.contains("2 shapes where") || error.contains("is not the dictionary's next"), "{error}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
