@@ -7,7 +7,8 @@
 //!
 //! Layers: `device` and `swapchain` hold the viewer's own unsafe Vulkan (as an engine's
 //! backend would); `presenter` records and submits a window frame; `overlay` is egui;
-//! `camera`, `script` and `truth` are plain Rust; `app` is the event loop that ties them.
+//! `camera`, `script` and `truth` are plain Rust; `app` is the event loop that ties them (its
+//! input and its script's steps in files of their own).
 
 mod alloc;
 mod app;
