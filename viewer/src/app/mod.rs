@@ -126,6 +126,9 @@ struct App {
     truth_samples: u32,
     /// The reference shown, its texture, and the live frame's NRMSE against it.
     shown_truth: Option<ui::Truth>,
+    /// The live frame's radiance as last read, kept to be refilled (made again only for a new
+    /// size), so that comparing with a reference allocates nothing per frame.
+    live: HdrImage,
     frames: u64,
     /// When a scripted light change happened, until the frame that shows it has finished.
     latency_from: Option<Instant>,
@@ -171,6 +174,7 @@ impl App {
             truth: None,
             truth_samples: 0,
             shown_truth: None,
+            live: HdrImage::new(0, 0),
             frames: 0,
             drawn: false,
             latency_from: None,
@@ -352,12 +356,14 @@ impl App {
         let gpu = self.gpu.as_ref().expect("drawn with a device");
         let floats = gpu.radiance.floats()?;
         let (w, h) = (gpu.swapchain.extent.width, gpu.swapchain.extent.height);
-        let mut live = HdrImage::new(w, h);
-        for (p, rgba) in live.pixels.iter_mut().zip(floats.chunks_exact(4)) {
+        if (self.live.width, self.live.height) != (w, h) {
+            self.live = HdrImage::new(w, h);
+        }
+        for (p, rgba) in self.live.pixels.iter_mut().zip(floats.chunks_exact(4)) {
             *p = Vec3::new(rgba[0], rgba[1], rgba[2]);
         }
         if let Some(shown) = self.shown_truth.as_mut() {
-            let nrmse = relume_bake::metrics::compare(&live, &shown.image).ok().map(|e| e.nrmse);
+            let nrmse = relume_bake::metrics::compare(&self.live, &shown.image).ok().map(|e| e.nrmse);
             self.dirty |= nrmse != shown.live_nrmse;
             shown.live_nrmse = nrmse;
         }
