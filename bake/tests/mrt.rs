@@ -198,30 +198,42 @@ fn feedback_converges_to_the_geometric_series_in_a_closed_cube() {
 fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
     use relume_bake::artifact::{Artifact, BakeOutput};
     use relume_bake::mrt::dictionary::{self, Dictionary};
+    use relume_bake::mrt::InterfaceSettings;
     let small =
         BlockSettings { samples_per_face: 4, gather_rays: 64, prior_grid: 3, prior_modes: 12, modes: 6, ..BlockSettings::default() };
-    let blocks = Shape::dictionary().iter().map(|&shape| block::build(shape, &small).data()).collect();
-    let made = Dictionary { settings: small.clone(), blocks };
+    let lightfield = InterfaceSettings {
+        positions: 3,
+        directions: 4,
+        supersamples: 1,
+        lightfield_modes: 8,
+        response_modes: 6,
+        gather_rays: 64,
+        seed: 0,
+    };
+    let made = Dictionary::build(&small, &lightfield, |_| {});
     let dir = std::env::temp_dir().join(format!("relume-mrt-dictionary-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let sections = vec![dictionary::section(&made, serde_json::json!({}))];
-    BakeOutput { method: "mrt-dictionary", scene: None, parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
-        .write(&dir)
-        .expect("written");
-    let artifact = Artifact::read(&dir).expect("read");
-    let back = dictionary::read(&artifact, &small).expect("the same parameters");
-    assert_eq!(back.blocks, made.blocks);
-    let other = dictionary::read(&artifact, &BlockSettings { modes: 8, ..small.clone() }).unwrap_err().to_string();
+    let write = |dictionary: &Dictionary| {
+        let sections = vec![dictionary::section(dictionary, serde_json::json!({}))];
+        BakeOutput { method: "mrt", scene: None, parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+            .write(&dir)
+            .expect("written");
+        Artifact::read(&dir).expect("read")
+    };
+    let artifact = write(&made);
+    let (back, checksum) = dictionary::read(&artifact, Some((&small, &lightfield))).expect("the same parameters");
+    assert_eq!((back.blocks, back.interfaces), (made.blocks.clone(), made.interfaces.clone()));
+    assert_eq!(checksum.len(), relume_bake::artifact::checksum(b"").len());
+    let (any, _) = dictionary::read(&artifact, None).expect("any parameters");
+    assert_eq!(any.settings.modes, 6);
+    let other = dictionary::read(&artifact, Some((&BlockSettings { modes: 8, ..small.clone() }, &lightfield))).unwrap_err().to_string();
     assert!(other.contains("mrt-dictionary.bin") && other.contains("modes 6, not the 8"), "{other}");
-    let radius = dictionary::read(&artifact, &BlockSettings { light_radius: 0.1, ..small.clone() }).unwrap_err().to_string();
+    let radius = BlockSettings { light_radius: 0.1, ..small.clone() };
+    let radius = dictionary::read(&artifact, Some((&radius, &lightfield))).unwrap_err().to_string();
     assert!(radius.contains("light-radius 0.05, not the 0.1"), "{radius}");
     // A dictionary short of shapes, or with a shape out of order, is refused.
     for blocks in [made.blocks[..2].to_vec(), [&made.blocks[1..], &made.blocks[..1]].concat()] {
-        let sections = vec![dictionary::section(&Dictionary { settings: small.clone(), blocks }, serde_json::json!({}))];
-        BakeOutput { method: "mrt-dictionary", scene: None, parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
-            .write(&dir)
-            .expect("written");
-        let error = dictionary::read(&Artifact::read(&dir).expect("read"), &small).unwrap_err().to_string();
+        let artifact = write(&Dictionary { blocks, ..made.clone() });
+        let error = dictionary::read(&artifact, None).unwrap_err().to_string();
         assert!(error.contains("2 shapes where") || error.contains("is not the dictionary's next"), "{error}");
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -5,7 +5,7 @@
 //! 0: manifest.json; 1: atlas.bin; 2: obscurance.exr after a u16 width and height of the atlas;
 //! 3: light-path-maps.bin after a u16 width and height; 4: fiv_environment.bin;
 //! 5: fiv_environment.bin and fiv_occluder_0.bin; 6: light-cloud.bin (for cornell-cloud);
-//! 7: mrt-dictionary.bin (keyed to nothing, read for a small dictionary's parameters).
+//! 7: mrt-dictionary.bin (keyed to nothing, read with whatever parameters it holds).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -98,9 +98,7 @@ fn read(which: u8, data: &[u8]) -> Option<()> {
         }
         7 => {
             let sections = vec![(mrt::dictionary::SECTION.into(), Key::Nothing, "mrt-dictionary.bin".into(), data.to_vec())];
-            let small =
-                mrt::BlockSettings { samples_per_face: 4, gather_rays: 64, prior_grid: 3, prior_modes: 12, modes: 6, ..Default::default() };
-            let _ = mrt::dictionary::read(&artifact(cornell(), sections, mrt::dictionary::SECTION_VERSION)?, &small);
+            let _ = mrt::dictionary::read(&artifact(cornell(), sections, mrt::dictionary::SECTION_VERSION)?, None);
         }
         _ => {
             let (environment, table) = two_files(data)?;

@@ -34,27 +34,10 @@ layout(push_constant) uniform EntryIrradiancePush {
 
 #include "vsm_visibility.glsl"
 
-const float PI = 3.14159265358979;
+#include "direct_irradiance.glsl"
 
 void main() {
     uint e = gl_GlobalInvocationID.x;
     if (e >= pc.entry_count) return;
-    vec3 p = entries[e].position.xyz;
-    vec3 n = entries[e].normal.xyz;
-    vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < frame.light_count; ++i) {
-        vec3 to_light;
-        vec3 incident = incident_light(lights[i], p, to_light);
-        float cos_e = max(dot(n, to_light), 0.0);
-        if (cos_e <= 0.0) continue;
-        float widening = 1.0;
-        if (uint(lights[i].position_kind.w) != LIGHT_DIRECTIONAL) {
-            float distance = length(lights[i].position_kind.xyz - p);
-            float d2 = distance * distance;
-            widening = d2 / (d2 + pc.light_area / PI);
-        }
-        sum += incident * widening * cos_e
-               * visibility(lights[i], p, frame.shadows, frame.min_variance, frame.bleeding_reduction);
-    }
-    irradiance[e] = vec4(sum, 0.0);
+    irradiance[e] = vec4(direct_irradiance(entries[e].position.xyz, entries[e].normal.xyz, pc.light_area), 0.0);
 }

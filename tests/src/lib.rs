@@ -1,6 +1,7 @@
 //! Shared helpers of relume's cross-crate tests: shipped scenes, validated headless renderers
 //! and their refusals, techniques from test data, the reference's direct layer at pixel
-//! centres, failure images, and synthetic light path maps (`synthetic_light_path_maps`).
+//! centres, failure images, synthetic light path maps (`synthetic_light_path_maps`), and a quick
+//! MRT level.
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::Atlas;
@@ -8,6 +9,11 @@ use relume_bake::bvh::{Hit, SceneBvh};
 use relume_bake::gltf_load;
 use relume_bake::image::{write_exr_layers, write_png_rgb8, write_png_tonemapped, Image};
 use relume_bake::metrics;
+use relume_bake::mrt::baker::bake_level;
+use relume_bake::mrt::dictionary::Dictionary;
+use relume_bake::mrt::level_data::LevelData;
+use relume_bake::mrt::map::Mapped;
+use relume_bake::mrt::{BlockSettings, InterfaceSettings};
 use relume_bake::outputs::Outputs;
 use relume_bake::reference::{render_reference, ReferenceSettings};
 use relume_bake::scene::Scene;
@@ -200,4 +206,19 @@ pub fn light_cloud_by_defaults(
     use relume_bake::light_cloud as lc;
     let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
     lc::compress(&lc::reduce(scene, bvh, gathered, reduction).expect("reduce").cloud, 32, lc::Vectors::Each(8)).expect("compress")
+}
+
+/// A level of modular radiance transfer baked quickly: a small dictionary (8 x 8 samples a
+/// face, 1,024 rays; a coarse lightfield) and `scene`'s level to d_max 8; and the scene with
+/// the light map's uv1.
+pub fn mrt_quick_bake(scene: &Scene) -> (Dictionary, Mapped, LevelData, Scene) {
+    let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
+    let lightfield = InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
+    let dictionary = Dictionary::build(&block, &lightfield, |_| {});
+    let (mapped, level) = bake_level(scene, &dictionary, 8).expect("the level bakes");
+    let mut applied = scene.clone();
+    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&mapped.meshes) {
+        *mesh = atlas_mesh.apply(mesh);
+    }
+    (dictionary, mapped, level, applied)
 }

@@ -6,6 +6,7 @@
 use super::block::BlockOperators;
 use super::interface::Interfaces;
 use super::level::{opposite, traverse, Level};
+use super::level_data::{LevelBlock, LevelData, LevelReceiver, NONE};
 use super::{Face, Shape};
 use nalgebra::{DMatrix, DVector};
 
@@ -106,5 +107,36 @@ impl LevelTransfer {
             }
         }
         Ok(out)
+    }
+}
+
+impl LevelTransfer {
+    /// The tables the run time takes (`LevelData`): level samples numbered block by block, so
+    /// `samples` (the mapped scene's, in that order) fit; made with the dictionary of `checksum`.
+    pub fn level_data(&self, checksum: String, samples: &super::map::Mapped) -> LevelData {
+        let offsets: Vec<u32> = self.sizes.iter().scan(0u32, |at, &n| Some(std::mem::replace(at, *at + n as u32))).collect();
+        let blocks = self
+            .blocks
+            .iter()
+            .zip(&offsets)
+            .map(|((shape, rows), &first)| LevelBlock { shape: *shape as u32, rows: rows.iter().map(|&r| first + r as u32).collect() })
+            .collect();
+        let receivers = self
+            .receivers
+            .iter()
+            .map(|r| LevelReceiver {
+                block: r.block as u32,
+                rows: r.rows.iter().map(|row| row.map_or(NONE, |j| offsets[r.block] + j as u32)).collect(),
+                sources: r.sources.iter().map(|(s, m)| (*s as u32, m.iter().map(|&v| v as f32).collect())).collect(),
+            })
+            .collect();
+        LevelData {
+            dictionary: checksum,
+            blocks,
+            receivers,
+            samples: samples.samples.clone(),
+            copies: samples.copies.clone(),
+            layout: samples.layout,
+        }
     }
 }

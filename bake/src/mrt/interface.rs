@@ -14,41 +14,13 @@
 use super::block::{exit, gather_rows, BlockOperators};
 use super::level::{target, Turn};
 use super::svd;
-use super::{Face, Samples, Shape};
+pub use super::InterfaceSettings;
+use super::{Face, Samples};
 use crate::sampling::concentric_disk;
 use glam::{Vec2, Vec3};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
-
-/// The lightfield's resolution (spec A2: 12^2 positions, 24^2 directions, 5^2 supersamples).
-#[derive(Clone, Debug)]
-pub struct InterfaceSettings {
-    pub positions: usize,
-    pub directions: usize,
-    pub supersamples: usize,
-    /// k_rlf: reduced lightfield modes: 128.
-    pub lightfield_modes: usize,
-    /// k_r: response modes: 32.
-    pub response_modes: usize,
-    /// Gather rays per receiving sample for the response G.
-    pub gather_rays: u32,
-    pub seed: u64,
-}
-
-impl Default for InterfaceSettings {
-    fn default() -> Self {
-        InterfaceSettings {
-            positions: 12,
-            directions: 24,
-            supersamples: 5,
-            lightfield_modes: 128,
-            response_modes: 32,
-            gather_rays: 16_384,
-            seed: 0,
-        }
-    }
-}
 
 /// Where a face of the unit cube stands for light travelling along `n` through it.
 #[derive(Clone, Copy, Debug)]
@@ -185,8 +157,7 @@ pub fn build(blocks: &[BlockOperators], settings: &InterfaceSettings) -> Interfa
     let from_blocks = slots.iter().zip(&lightfields).map(|(slot, h)| (*slot, project(h))).collect();
     let h_rlf = &basis * DMatrix::from_diagonal(&DVector::from_column_slice(&sigma));
     let turns = [Turn::Ahead, Turn::Left, Turn::Right].map(|turn| (turn, project(&propagate(&h_rlf, cells, turn, settings.supersamples))));
-    let receiver_shape = Shape::with_open(&[ENTRY]).expect("a side face");
-    let receiver = Samples::new(receiver_shape, blocks.first().map_or(16, |b| b.samples.grid));
+    let receiver = super::dictionary::receiver(blocks.first().map_or(16, |b| b.samples.grid));
     let g = respond(&receiver, &h_rlf, cells, settings);
     let g_svd = svd::thin(&g);
     let k_r = settings.response_modes.min(g_svd.sigma.len());

@@ -11,6 +11,8 @@
 //! next.
 
 #[cfg(feature = "baking")]
+pub mod baker;
+#[cfg(feature = "baking")]
 pub mod block;
 pub mod dictionary;
 #[cfg(feature = "baking")]
@@ -18,6 +20,8 @@ pub mod evaluate;
 #[cfg(feature = "baking")]
 pub mod interface;
 pub mod level;
+pub mod level_data;
+pub mod map;
 pub mod proxy;
 
 pub use proxy::SCENE_BLOCK;
@@ -58,7 +62,7 @@ impl Face {
     }
 
     /// The face's other two axes, in increasing order: its (u, v).
-    fn tangents(self) -> (usize, usize) {
+    pub fn tangents(self) -> (usize, usize) {
         match self.axis {
             0 => (1, 2),
             1 => (0, 2),
@@ -206,6 +210,35 @@ impl Default for BlockSettings {
             enrich: true,
             seed: 0,
             threads: None,
+        }
+    }
+}
+
+/// The lightfield's resolution (spec A2: 12^2 positions, 24^2 directions, 5^2 supersamples).
+#[derive(Clone, Debug)]
+pub struct InterfaceSettings {
+    pub positions: usize,
+    pub directions: usize,
+    pub supersamples: usize,
+    /// k_rlf: reduced lightfield modes: 128.
+    pub lightfield_modes: usize,
+    /// k_r: response modes: 32.
+    pub response_modes: usize,
+    /// Gather rays per receiving sample for the response G.
+    pub gather_rays: u32,
+    pub seed: u64,
+}
+
+impl Default for InterfaceSettings {
+    fn default() -> Self {
+        InterfaceSettings {
+            positions: 12,
+            directions: 24,
+            supersamples: 5,
+            lightfield_modes: 128,
+            response_modes: 32,
+            gather_rays: 16_384,
+            seed: 0,
         }
     }
 }

@@ -3,4 +3,5 @@
 pub mod fiv;
 pub mod light_cloud;
 pub mod light_path_maps;
+pub mod mrt;
 pub mod obscurance;

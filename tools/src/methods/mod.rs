@@ -8,6 +8,7 @@ mod direct;
 mod fiv;
 mod light_cloud;
 mod light_path_maps;
+mod mrt;
 mod obscurance;
 pub(crate) mod params;
 
@@ -22,13 +23,14 @@ use serde_json::{json, Value};
 use std::time::Instant;
 
 /// Every method, in the order reports list them.
-pub(crate) const METHODS: [&dyn Method; 6] = [
+pub(crate) const METHODS: [&dyn Method; 7] = [
     &direct::Direct,
     &constant::Constant,
     &obscurance::Obscurance,
     &light_path_maps::LightPathMaps,
     &fiv::Fiv,
     &light_cloud::LightCloudMethod,
+    &mrt::MrtMethod,
 ];
 
 /// What `relume render` renders without a bake.
@@ -237,7 +239,7 @@ mod tests {
             let (default_ambient, _) = frame_ambient(method.ambient(&room), None, None);
             match method.name() {
                 // Models no ambient light: direct light alone, the environment's, or all indirect light.
-                "direct" | "fiv" | "light-cloud" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
+                "direct" | "fiv" | "light-cloud" | "mrt" => assert_eq!((ambient, beta, default_ambient), (Vec3::ZERO, 0.0, Vec3::ZERO)),
                 "constant" | "obscurance" => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::splat(0.25))),
                 _ => assert_eq!((ambient, beta, default_ambient), (Vec3::splat(2.0), 0.5, Vec3::ZERO)),
             }

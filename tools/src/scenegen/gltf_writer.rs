@@ -29,6 +29,8 @@ pub(super) struct Builder {
     /// `extras.relume.fiv.occluders`: the nodes that occlude.
     occluders: Vec<String>,
     light_cloud: Option<Value>,
+    /// `extras.relume.mrt`: the block proxy.
+    mrt: Option<Value>,
     bin: Vec<u8>,
     buffer_views: Vec<Value>,
     accessors: Vec<Value>,
@@ -52,6 +54,7 @@ impl Builder {
             environment: None,
             occluders: Vec::new(),
             light_cloud: None,
+            mrt: None,
             bin: Vec::new(),
             buffer_views: Vec::new(),
             accessors: Vec::new(),
@@ -226,6 +229,12 @@ impl Builder {
         self.light_cloud = Some(json!({ "grid": { "box": [vec_json(min), vec_json(max)], "counts": counts } }));
     }
 
+    /// Declares the blocks of modular radiance transfer (`extras.relume.mrt.grid`): cubes of
+    /// side `cell` from the origin, `rows` of '.' blocks and '#' solid cells.
+    pub(super) fn mrt_grid(&mut self, cell: f64, rows: &[&str]) {
+        self.mrt = Some(json!({ "grid": { "origin": [0, 0, 0], "cell": [num(cell), num(cell), num(cell)], "rows": rows } }));
+    }
+
     /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.
     pub(super) fn environment(&mut self, image: &str, intensity: f64) {
         self.environment = Some((image.to_string(), intensity));
@@ -347,6 +356,9 @@ impl Builder {
         }
         if let Some(cloud) = &self.light_cloud {
             block["light_cloud"] = cloud.clone();
+        }
+        if let Some(mrt) = &self.mrt {
+            block["mrt"] = mrt.clone();
         }
         block
     }

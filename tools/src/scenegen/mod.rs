@@ -37,6 +37,9 @@
 //!   above the maze): 8 x 8 corridors, walls open to the sky, welded grids.
 //! - `glossy-enclosure`: that paper's glossy scene (its Bunny): a lumpy blob with a Phong lobe
 //!   of exponent 12 in a closed room between a red and a blue wall, 64 cloud lights.
+//! - `mrt-cube`, `mrt-corridor`, `mrt-maze`: levels of 2 m blocks for modular radiance
+//!   transfer (002 Table 3): one closed block, five in a row, and 11 in two rows of four
+//!   joined at the ends and the middle (a cycle); one point light, one red wall.
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -50,6 +53,7 @@
 //! order, every JSON number is an f32 written in its shortest round-trip form, and the `.bin`
 //! holds little-endian f32 and u32 data.
 
+mod blocks;
 mod geometry;
 mod glossy;
 mod gltf_writer;
@@ -72,7 +76,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 18] = [
+pub const SCENE_NAMES: [&str; 21] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -91,6 +95,9 @@ pub const SCENE_NAMES: [&str; 18] = [
     "cornell-window",
     "maze",
     "glossy-enclosure",
+    "mrt-cube",
+    "mrt-corridor",
+    "mrt-maze",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -152,6 +159,9 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "cornell-cloud" => cornell_cloud(),
         "cornell-window" => cornell_window(),
         "maze" => maze::maze(),
+        "mrt-cube" => blocks::cube(),
+        "mrt-corridor" => blocks::corridor(),
+        "mrt-maze" => blocks::maze(),
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),

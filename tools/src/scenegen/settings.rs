@@ -79,3 +79,7 @@ pub(super) const MAZE_SETTINGS: Settings = Settings {
 /// The glossy enclosure: as the maze, texels 4 cm.
 pub(super) const GLOSSY_SETTINGS: Settings =
     Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 24.0, tau: 0.1, l_max: 0.4, light_region: None, light_area: 0.0 };
+
+/// Levels of 2 m blocks: no ambient light (MRT models all indirect light), texels 12.5 cm.
+pub(super) const BLOCKS_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 8.0, tau: 0.5, l_max: 1.5, light_region: None, light_area: 0.0 };

@@ -1,0 +1,273 @@
+//! A level as the run time takes it (§6.3, §7.3), section `mrt-level` (keyed to the scene):
+//! every block's dictionary shape and rows, the receivers with T_b->r's matrices per source
+//! block, the level's samples (where each stands, its albedo, its texel of the light map) and
+//! the padded atlas's copy records; plus [`LevelData::indirect`], the CPU evaluator of §7.3
+//! steps 1-6 on exactly these tables: the oracle of the GPU passes.
+//!
+//! A level sample is a block's own sample: blocks in order, each block's samples as
+//! `Samples::new(its shape, grid)` orders them.
+
+use super::dictionary::Dictionary;
+use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
+use crate::binary::{Reader, Writer};
+use crate::scene::Scene;
+use glam::Vec3;
+
+pub const SECTION: &str = "mrt-level";
+pub const SECTION_VERSION: u32 = 1;
+const BIN: &str = "mrt-level.bin";
+const MAGIC: &[u8; 8] = b"RLMRTL01";
+
+/// A receiver row on one of the block's openings: no sample.
+pub const NONE: u32 = u32::MAX;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelBlock {
+    /// Its shape's index in the dictionary.
+    pub shape: u32,
+    /// For each of the dictionary shape's samples, the level sample it stands for.
+    pub rows: Vec<u32>,
+}
+
+/// Light arriving at one block through one opening (§6.3).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelReceiver {
+    pub block: u32,
+    /// For each canonical receiver sample, the level sample it lands on (or [`NONE`]).
+    pub rows: Vec<u32>,
+    /// (source block, T_rlf->r times the paths' turns times R_b->rlf: k_r x the source
+    /// shape's k, column-major).
+    pub sources: Vec<(u32, Vec<f32>)>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelSample {
+    /// World position and unit normal (into the block).
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// The diffuse albedo of the surface mapped there (0: no surface).
+    pub albedo: Vec3,
+    /// Its texel of the light map (an index in atlas texel order).
+    pub texel: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelData {
+    /// The checksum of the dictionary file the level was made with.
+    pub dictionary: String,
+    pub blocks: Vec<LevelBlock>,
+    pub receivers: Vec<LevelReceiver>,
+    pub samples: Vec<LevelSample>,
+    /// The padded atlas (§6-7): (written texel, the sample texel it copies).
+    pub copies: Vec<[u32; 2]>,
+    pub layout: PageLayout,
+}
+
+impl LevelData {
+    /// §7.3 step 2 (eq. 3): each block's coefficients b = T_d->b l for the radiosity `light`
+    /// (rho E) at every level sample; rgb, the block's shape's k each. Sums in f64, in the
+    /// tables' order.
+    pub fn coefficients(&self, dictionary: &Dictionary, light: &[Vec3]) -> Vec<Vec<Vec3>> {
+        self.blocks
+            .iter()
+            .map(|block| {
+                let ops = &dictionary.blocks[block.shape as usize];
+                let (n, k) = (ops.samples, ops.modes);
+                (0..k).map(|m| sum3((0..n).map(|j| (ops.t_d_b[j * k + m], light[block.rows[j] as usize])))).collect()
+            })
+            .collect()
+    }
+
+    /// §7.3 step 4 (§6.3): each receiver's r = sum over its sources of T_b->r b (k_r each).
+    pub fn received(&self, dictionary: &Dictionary, b: &[Vec<Vec3>]) -> Vec<Vec<Vec3>> {
+        let k_r = dictionary.interfaces.response_modes;
+        self.receivers
+            .iter()
+            .map(|receiver| {
+                (0..k_r)
+                    .map(|m| {
+                        let terms = receiver.sources.iter().flat_map(|(source, matrix)| {
+                            let b = &b[*source as usize];
+                            (0..b.len()).map(move |j| (matrix[j * k_r + m], b[j]))
+                        });
+                        sum3(terms)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// §7.3 steps 3 and 5: each level sample's indirect irradiance, U_b b of its block plus
+    /// U_r r of every receiver landing on it.
+    pub fn response(&self, dictionary: &Dictionary, b: &[Vec<Vec3>], r: &[Vec<Vec3>]) -> Vec<Vec3> {
+        let mut out = vec![Vec3::ZERO; self.samples.len()];
+        for (block, b) in self.blocks.iter().zip(b) {
+            let n = dictionary.blocks[block.shape as usize].samples;
+            let u_b = &dictionary.blocks[block.shape as usize].u_b;
+            for (row, &sample) in block.rows.iter().enumerate() {
+                out[sample as usize] += sum3(b.iter().enumerate().map(|(m, b)| (u_b[m * n + row], *b)));
+            }
+        }
+        let i = &dictionary.interfaces;
+        let n_r = i.u_r.len() / i.response_modes;
+        for (receiver, r) in self.receivers.iter().zip(r) {
+            for (row, &sample) in receiver.rows.iter().enumerate().filter(|(_, s)| **s != NONE) {
+                out[sample as usize] += sum3(r.iter().enumerate().map(|(m, r)| (i.u_r[m * n_r + row], *r)));
+            }
+        }
+        out
+    }
+
+    /// One bounce (§7.3 steps 2-5): the indirect irradiance at every level sample for the
+    /// radiosity `light` (rho E) there.
+    pub fn bounce(&self, dictionary: &Dictionary, light: &[Vec3]) -> Vec<Vec3> {
+        let b = self.coefficients(dictionary, light);
+        let r = self.received(dictionary, &b);
+        self.response(dictionary, &b, &r)
+    }
+
+    /// The indirect irradiance at every level sample for the direct irradiance `direct`
+    /// there, with `bounces` bounces fed back (§7.3's feedback, iterated within the frame).
+    pub fn indirect(&self, dictionary: &Dictionary, direct: &[Vec3], bounces: usize) -> Vec<Vec3> {
+        let albedo = |e: &[Vec3]| -> Vec<Vec3> { e.iter().zip(&self.samples).map(|(e, s)| *e * s.albedo).collect() };
+        let mut light = albedo(direct);
+        let mut total = vec![Vec3::ZERO; self.samples.len()];
+        for _ in 0..bounces {
+            let e = self.bounce(dictionary, &light);
+            total.iter_mut().zip(&e).for_each(|(t, e)| *t += *e);
+            light = albedo(&e);
+        }
+        total
+    }
+}
+
+/// The sum of `weight * value`, in f64.
+fn sum3(terms: impl Iterator<Item = (f32, Vec3)>) -> Vec3 {
+    let sum = terms.fold([0.0f64; 3], |mut s, (w, v)| {
+        (0..3).for_each(|c| s[c] += w as f64 * v[c] as f64);
+        s
+    });
+    Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32)
+}
+
+pub fn section(level: &LevelData, summary: serde_json::Value) -> Section {
+    let mut w = Writer::new(MAGIC);
+    let checksum = level.dictionary.as_bytes();
+    w.u32s(&[checksum.len() as u32]);
+    w.u32s(&checksum.iter().map(|&c| c as u32).collect::<Vec<_>>());
+    w.u32s(&[level.layout.width, level.layout.height, level.layout.pages]);
+    w.u32s(&[level.blocks.len() as u32, level.receivers.len() as u32, level.samples.len() as u32, level.copies.len() as u32]);
+    for block in &level.blocks {
+        w.u32s(&[block.shape, block.rows.len() as u32]);
+        w.u32s(&block.rows);
+    }
+    for receiver in &level.receivers {
+        w.u32s(&[receiver.block, receiver.rows.len() as u32, receiver.sources.len() as u32]);
+        w.u32s(&receiver.rows);
+        for (source, matrix) in &receiver.sources {
+            w.u32s(&[*source]);
+            w.f32s(matrix);
+        }
+    }
+    for s in &level.samples {
+        w.f32s(&[s.position.to_array(), s.normal.to_array(), s.albedo.to_array()].concat());
+        w.u32s(&[s.texel]);
+    }
+    w.u32s(&level.copies.iter().flatten().copied().collect::<Vec<_>>());
+    Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(BIN.into(), w.bytes)] }
+}
+
+/// The level of `artifact` for `scene`, checked against `dictionary` (read with its
+/// `checksum`): refused when made with another dictionary, or when a table is out of range.
+pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksum: &str) -> Result<LevelData, ArtifactError> {
+    let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
+    let (bin, path) = data.file(BIN)?;
+    let mut r = Reader::new(&bin, &path, MAGIC, "MRT level")?;
+    let length = r.u32("the dictionary checksum's length")? as usize;
+    if length > 64 {
+        return Err(fail(&path, format!("a dictionary checksum of {length} characters"), REBAKE));
+    }
+    let named: String = r.u32s(length, "the dictionary checksum")?.into_iter().map(|c| char::from_u32(c).unwrap_or('?')).collect();
+    if named != checksum {
+        let problem = format!("the level was made with the dictionary {named}, not the artifact's {checksum}");
+        return Err(fail(&path, problem, "bake the level again with this dictionary (relume bake SCENE --method mrt)"));
+    }
+    let bad = |what: String| fail(&path, what, REBAKE);
+    let [width, height, pages] = [r.u32("the atlas width")?, r.u32("the atlas height")?, r.u32("the atlas pages")?];
+    let layout = PageLayout { width, height, pages };
+    if width == 0 || height == 0 || pages != 1 || width > 16384 || height > 16384 {
+        return Err(bad(format!("an impossible light map of {width} x {height} x {pages}")));
+    }
+    let counts = r.u32s(4, "the table sizes")?;
+    let (block_count, receiver_count, sample_count, copy_count) =
+        (counts[0] as usize, counts[1] as usize, counts[2] as usize, counts[3] as usize);
+    if sample_count > layout.texel_count() || copy_count > layout.texel_count() || receiver_count > 4 * block_count {
+        return Err(bad(format!(
+            "{sample_count} samples, {copy_count} copies and {receiver_count} receivers for {block_count} blocks on {} texels",
+            layout.texel_count()
+        )));
+    }
+    let in_range = |v: &[u32], end: usize, none: bool| v.iter().all(|&x| (x as usize) < end || (none && x == NONE));
+    let mut blocks = Vec::with_capacity(block_count.min(1 << 16));
+    for b in 0..block_count {
+        let (shape, n) = (r.u32("a block's shape")? as usize, r.u32("a block's row count")? as usize);
+        let ops = dictionary.blocks.get(shape).ok_or_else(|| bad(format!("block {b} has shape {shape}; the dictionary has 6")))?;
+        if n != ops.samples {
+            return Err(bad(format!("block {b} has {n} rows; its shape has {} samples", ops.samples)));
+        }
+        let rows = r.u32s(n, "a block's rows")?;
+        if !in_range(&rows, sample_count, false) {
+            return Err(bad(format!("block {b} names a sample past the level's {sample_count}")));
+        }
+        blocks.push(LevelBlock { shape: shape as u32, rows });
+    }
+    let interfaces = &dictionary.interfaces;
+    let n_r = interfaces.u_r.len() / interfaces.response_modes;
+    let mut receivers = Vec::with_capacity(receiver_count);
+    for i in 0..receiver_count {
+        let (block, rows, sources) =
+            (r.u32("a receiver's block")?, r.u32("a receiver's row count")? as usize, r.u32("a receiver's source count")? as usize);
+        if block as usize >= block_count || rows != n_r || sources > block_count {
+            return Err(bad(format!(
+                "receiver {i}: block {block}, {rows} rows, {sources} sources (the level has {block_count} blocks, a receiver {n_r} rows)"
+            )));
+        }
+        let rows = r.u32s(rows, "a receiver's rows")?;
+        if !in_range(&rows, sample_count, true) {
+            return Err(bad(format!("receiver {i} names a sample past the level's {sample_count}")));
+        }
+        let mut from = Vec::with_capacity(sources);
+        for _ in 0..sources {
+            let source = r.u32("a source block")? as usize;
+            let shape = blocks.get(source).ok_or_else(|| bad(format!("receiver {i} names source block {source} of {block_count}")))?.shape;
+            let matrix = r.f32s(interfaces.response_modes * dictionary.blocks[shape as usize].modes, "a source's transfer")?;
+            if matrix.iter().any(|v| !v.is_finite()) {
+                return Err(bad(format!("receiver {i}'s transfer holds a value that is not finite")));
+            }
+            from.push((source as u32, matrix));
+        }
+        receivers.push(LevelReceiver { block, rows, sources: from });
+    }
+    let mut samples = Vec::with_capacity(sample_count);
+    for s in 0..sample_count {
+        let f = r.f32s(9, "a sample")?;
+        let texel = r.u32("a sample's texel")?;
+        let sample = LevelSample {
+            position: Vec3::from_slice(&f[0..3]),
+            normal: Vec3::from_slice(&f[3..6]),
+            albedo: Vec3::from_slice(&f[6..9]),
+            texel,
+        };
+        if !f.iter().all(|v| v.is_finite()) || texel as usize >= layout.texel_count() {
+            return Err(bad(format!("sample {s} is not finite or names a texel past the light map's {}", layout.texel_count())));
+        }
+        samples.push(sample);
+    }
+    let flat = r.u32s(2 * copy_count, "the copy records")?;
+    if !in_range(&flat, layout.texel_count(), false) {
+        return Err(bad(format!("a copy record names a texel past the light map's {}", layout.texel_count())));
+    }
+    r.finish("the copy records")?;
+    let copies = flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+    Ok(LevelData { dictionary: named, blocks, receivers, samples, copies, layout })
+}

@@ -1,0 +1,118 @@
+//! The level's and the dictionary's tables as the passes read them (the layouts mod.rs lists),
+//! flattened on the CPU once, at creation.
+
+use super::MrtPush;
+use glam::{UVec2, UVec4, Vec4};
+use relume_bake::mrt::dictionary::Dictionary;
+use relume_bake::mrt::level_data::{LevelData, NONE};
+
+pub(super) struct Tables {
+    pub samples: Vec<Vec4>,
+    pub shapes: Vec<UVec4>,
+    pub operators: Vec<f32>,
+    pub blocks: Vec<UVec2>,
+    pub rows: Vec<u32>,
+    pub receivers: Vec<UVec2>,
+    pub sources: Vec<UVec2>,
+    pub matrices: Vec<f32>,
+    pub sample_rows: Vec<UVec4>,
+    pub texel_samples: Vec<u32>,
+    pub copies: Vec<UVec2>,
+    pub push: MrtPush,
+}
+
+/// `values`, or one zero when there are none (a buffer cannot be empty).
+fn non_empty<T: Default>(mut values: Vec<T>) -> Vec<T> {
+    if values.is_empty() {
+        values.push(T::default());
+    }
+    values
+}
+
+impl Tables {
+    pub fn new(dictionary: &Dictionary, level: &LevelData) -> Result<Tables, String> {
+        let mut operators = Vec::new();
+        let mut shapes = Vec::new();
+        for block in &dictionary.blocks {
+            let t_d_b = operators.len() as u32;
+            operators.extend_from_slice(&block.t_d_b);
+            let u_b = operators.len() as u32;
+            operators.extend_from_slice(&block.u_b);
+            shapes.push(UVec4::new(block.samples as u32, block.modes as u32, t_d_b, u_b));
+        }
+        let u_r = operators.len() as u32;
+        operators.extend_from_slice(&dictionary.interfaces.u_r);
+        let k_max = dictionary.blocks.iter().map(|b| b.modes as u32).max().unwrap_or(1);
+        let (k_r, n_r) =
+            (dictionary.interfaces.response_modes as u32, (dictionary.interfaces.u_r.len() / dictionary.interfaces.response_modes) as u32);
+        let sample_count = level.samples.len();
+        // Per sample: (block, row), then up to four (receiver, row).
+        let mut sample_rows = vec![[UVec4::ZERO, UVec4::splat(NONE), UVec4::ZERO]; sample_count];
+        let mut blocks = Vec::with_capacity(level.blocks.len());
+        let mut rows = Vec::new();
+        for (b, block) in level.blocks.iter().enumerate() {
+            blocks.push(UVec2::new(block.shape, rows.len() as u32));
+            for (row, &s) in block.rows.iter().enumerate() {
+                sample_rows[s as usize][0] = UVec4::new(b as u32, row as u32, 0, 0);
+            }
+            rows.extend_from_slice(&block.rows);
+        }
+        let (mut receivers, mut sources, mut matrices) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, receiver) in level.receivers.iter().enumerate() {
+            receivers.push(UVec2::new(sources.len() as u32, receiver.sources.len() as u32));
+            for (source, matrix) in &receiver.sources {
+                sources.push(UVec2::new(*source, matrices.len() as u32));
+                matrices.extend_from_slice(matrix);
+            }
+            for (row, &s) in receiver.rows.iter().enumerate().filter(|(_, s)| **s != NONE) {
+                let at = &mut sample_rows[s as usize];
+                let slot =
+                    (0..4).find(|&k| at[1][k] == NONE).ok_or_else(|| format!("sample {s} is reached through more than four openings"))?;
+                at[1][slot] = i as u32;
+                at[2][slot] = row as u32;
+            }
+        }
+        let mut texel_samples = vec![NONE; level.layout.texel_count()];
+        for (s, sample) in level.samples.iter().enumerate() {
+            texel_samples[sample.texel as usize] = s as u32;
+        }
+        let samples = level.samples.iter().flat_map(|s| [s.position.extend(1.0), s.normal.extend(0.0), s.albedo.extend(0.0)]).collect();
+        let push = MrtPush {
+            sample_count: sample_count as u32,
+            block_count: level.blocks.len() as u32,
+            k_max,
+            receiver_count: level.receivers.len() as u32,
+            k_r,
+            n_r,
+            texel_count: texel_samples.len() as u32,
+            copy_count: level.copies.len() as u32,
+            width: level.layout.width,
+            first_bounce: 1,
+            u_r,
+        };
+        Ok(Tables {
+            samples: non_empty(samples),
+            shapes,
+            operators,
+            blocks: non_empty(blocks),
+            rows: non_empty(rows),
+            receivers: non_empty(receivers),
+            sources: non_empty(sources),
+            matrices: non_empty(matrices),
+            sample_rows: non_empty(sample_rows.into_iter().flatten().collect()),
+            texel_samples,
+            copies: non_empty(level.copies.iter().map(|c| UVec2::from(*c)).collect()),
+            push,
+        })
+    }
+
+    /// Refuses tables a storage buffer of `limit` bytes cannot span, and indices past u32.
+    pub fn check(&self, limit: u64) -> Result<(), String> {
+        for (name, bytes) in [("operators", self.operators.len() * 4), ("matrices (T_b->r)", self.matrices.len() * 4)] {
+            if bytes as u64 > limit {
+                return Err(format!("the {name} take {bytes} bytes, more than the {limit} bytes one storage buffer may span; use fewer blocks, a smaller d-max or fewer modes"));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,205 @@
+//! A level of modular radiance transfer on the CPU (no GPU): the stored tables evaluate as the
+//! level's transfer does (the CPU oracle of the GPU passes is right); the padded atlas: every
+//! bilinear read of every mapped triangle reads a written texel, a seam between connected
+//! blocks reads the same from both sides, a crease clamps to its own edge; refusals of
+//! geometry off the blocks and of a level made with another dictionary.
+
+use glam::{Vec2, Vec3, Vec4};
+use nalgebra::DVector;
+use relume_bake::artifact::{Artifact, BakeOutput};
+use relume_bake::mrt::dictionary::{self, Dictionary};
+use relume_bake::mrt::evaluate::LevelTransfer;
+use relume_bake::mrt::level_data;
+use relume_bake::mrt::map::Mapped;
+use relume_bake::mrt::proxy::Proxy;
+use relume_bake::mrt::{Face, Samples};
+use relume_tests::*;
+
+#[test]
+fn the_stored_tables_evaluate_as_the_level_transfer() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, mapped, level, _) = mrt_quick_bake(&scene);
+    let proxy = Proxy::of(&scene).unwrap();
+    let blocks = proxy.level();
+    let (operators, interfaces) = dictionary.operators();
+    let transfer = LevelTransfer::new(&blocks, &operators, &interfaces, 8).unwrap();
+    // A grey light falling off from one corner: every block lit, unevenly.
+    let light: Vec<f32> = mapped.samples.iter().map(|s| 1.0 / (1.0 + s.position.length_squared())).collect();
+    let mut at = 0;
+    let per_block: Vec<DVector<f64>> = (0..blocks.cells().len())
+        .map(|b| {
+            let n = Samples::new(blocks.shape(b), dictionary.settings.samples_per_face).len();
+            at += n;
+            DVector::from_iterator(n, light[at - n..at].iter().map(|&v| v as f64))
+        })
+        .collect();
+    let expected: Vec<f64> =
+        transfer.indirect(&operators, &interfaces, &per_block).unwrap().iter().flat_map(|v| v.iter().copied()).collect();
+    let got = level.bounce(&dictionary, &light.iter().map(|&v| Vec3::splat(v)).collect::<Vec<_>>());
+    let scale = expected.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = got.iter().zip(&expected).map(|(g, e)| (g.x as f64 - e).abs().max((g.z as f64 - e).abs())).fold(0.0, f64::max) / scale;
+    assert!(scale > 0.0 && worst < 1e-5, "the tables' bounce against LevelTransfer: worst {worst:e} of the largest value");
+    assert_eq!(level.receivers.len(), 26, "11 blocks with 13 openings between them: 26 receivers");
+}
+
+/// The light map after the padding, on the CPU: each sample texel `value(position)`, each
+/// copy record's texel its source's, alpha 1 written, 0 not.
+fn padded(mapped: &Mapped, value: impl Fn(Vec3) -> f32) -> Vec<Vec4> {
+    let mut texels = vec![Vec4::ZERO; mapped.layout.texel_count()];
+    for s in &mapped.samples {
+        texels[s.texel as usize] = Vec4::new(value(s.position), 0.0, 0.0, 1.0);
+    }
+    for [to, from] in &mapped.copies {
+        texels[*to as usize] = texels[*from as usize];
+    }
+    texels
+}
+
+/// The lighting pass's bilinear read at uv1 (clamped to the page), and the texels it reads.
+fn read(texels: &[Vec4], width: u32, height: u32, uv: Vec2) -> (f32, [usize; 4]) {
+    let p = uv * Vec2::new(width as f32, height as f32) - 0.5;
+    let (x0, y0) = (p.x.floor(), p.y.floor());
+    let (fx, fy) = (p.x - x0, p.y - y0);
+    let at = |x: f32, y: f32| (y.clamp(0.0, height as f32 - 1.0) as usize) * width as usize + x.clamp(0.0, width as f32 - 1.0) as usize;
+    let idx = [at(x0, y0), at(x0 + 1.0, y0), at(x0, y0 + 1.0), at(x0 + 1.0, y0 + 1.0)];
+    let w = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
+    (idx.iter().zip(w).map(|(i, w)| texels[*i].x * w).sum(), idx)
+}
+
+#[test]
+fn every_bilinear_read_of_every_mapped_triangle_reads_a_written_texel() {
+    let scene = load_scene("mrt-maze");
+    let (_, mapped, level, applied) = mrt_quick_bake(&scene);
+    let texels = padded(&mapped, |p| p.x);
+    let (w, h) = (level.layout.width, level.layout.height);
+    let mut reads = 0;
+    for mesh in &applied.meshes {
+        let uv1 = mesh.uv1.as_ref().expect("mapped");
+        for tri in mesh.indices.chunks_exact(3) {
+            let corners = [0, 1, 2].map(|k| uv1[tri[k] as usize]);
+            // The corners, the edges' midpoints and the centroid.
+            let points = [
+                corners[0],
+                corners[1],
+                corners[2],
+                (corners[0] + corners[1]) / 2.0,
+                (corners[1] + corners[2]) / 2.0,
+                (corners[0] + corners[2]) / 2.0,
+                (corners[0] + corners[1] + corners[2]) / 3.0,
+            ];
+            for p in points {
+                let (value, texels_read) = read(&texels, w, h, p);
+                assert!(value.is_finite() && texels_read.iter().all(|&t| texels[t].w == 1.0), "a read at {p} touches an unwritten texel");
+                reads += 1;
+            }
+        }
+    }
+    assert!(reads > 100, "{reads} reads");
+}
+
+#[test]
+fn a_seam_reads_the_same_from_both_sides_and_a_crease_clamps_to_its_own_edge() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, mapped, level, _) = mrt_quick_bake(&scene);
+    // A value that differs across every texel, so a wrong copy cannot hide.
+    let texels = padded(&mapped, |p| (3.1 * p.x).sin() + (1.7 * p.z).cos() + 0.3 * p.y);
+    let (w, h) = (level.layout.width, level.layout.height);
+    let blocks = Proxy::of(&scene).unwrap().level();
+    let floor = Face { axis: 1, positive: false };
+    let read_at = |block: usize, face: Face, uv: Vec2| read(&texels, w, h, mapped.tiles.uv1_of(block, face, uv).expect("a present face")).0;
+    let (mut seams, mut creases) = (0, 0);
+    for b in 0..blocks.cells().len() {
+        // Seams: the floor across each opening (x and z).
+        for axis in [0, 2] {
+            let Some(n) = blocks.neighbour(b, Face { axis, positive: true }) else { continue };
+            // Along the seam up to half a texel from its ends: a seam ending at a concave
+            // corner (a wall on one side) cannot read the same from both sides there, because
+            // the corner texel would have to be both tiles' clamped wall edge (map.rs).
+            let half = 0.5 / dictionary.settings.samples_per_face as f32;
+            for k in 0..=20 {
+                let t = half + (1.0 - 2.0 * half) * k as f32 / 20.0;
+                // The floor's (u, v) are (x, z): the far edge here is the near edge there.
+                let (here, there) = if axis == 0 { (Vec2::new(1.0, t), Vec2::new(0.0, t)) } else { (Vec2::new(t, 1.0), Vec2::new(t, 0.0)) };
+                let (a, c) = (read_at(b, floor, here), read_at(n, floor, there));
+                assert!((a - c).abs() < 1e-5, "block {b} to {n}: {a} against {c} at {here}");
+                seams += 1;
+            }
+        }
+        // Creases: every face of the block read within half a texel of a closed edge equals
+        // the bilinear read of its own samples only (clamped at their outer centres).
+        let own = Samples::new(blocks.shape(b), dictionary.settings.samples_per_face);
+        let first: usize = (0..b).map(|a| Samples::new(blocks.shape(a), own.grid).len()).sum();
+        for (slot, &face) in own.faces.iter().enumerate() {
+            for k in 0..=10 {
+                let t = k as f32 / 10.0;
+                for uv in [Vec2::new(t, 0.0), Vec2::new(t, 1.0), Vec2::new(0.0, t), Vec2::new(1.0, t)] {
+                    if crosses_a_seam(&blocks, b, face, uv) {
+                        continue;
+                    }
+                    let expected: f32 =
+                        own.bilinear(slot, uv).iter().map(|(j, wt)| wt * texels[mapped.samples[first + j].texel as usize].x).sum();
+                    let got = read_at(b, face, uv);
+                    assert!((got - expected).abs() < 1e-5, "block {b} face {face:?} at {uv}: {got} against its own edge's {expected}");
+                    creases += 1;
+                }
+            }
+        }
+    }
+    assert!(seams >= 13 * 21 && creases > 500, "{seams} seam reads, {creases} crease reads");
+}
+
+/// Whether (u, v) on the edge of `face` of `block` lies on an edge shared with a connected
+/// block's same face (a seam).
+fn crosses_a_seam(blocks: &relume_bake::mrt::level::Level, block: usize, face: Face, uv: Vec2) -> bool {
+    let (a, b) = face.tangents();
+    [(a, uv.x), (b, uv.y)].into_iter().any(|(axis, t)| {
+        let edge = if t <= 0.0 {
+            Some(false)
+        } else if t >= 1.0 {
+            Some(true)
+        } else {
+            None
+        };
+        edge.is_some_and(|positive| blocks.neighbour(block, Face { axis, positive }).is_some_and(|n| !blocks.shape(n).is_open(face)))
+    })
+}
+
+#[test]
+fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
+    let mut scene = load_scene("mrt-cube");
+    // The floor moved a block's side along x: it stands in no block.
+    for p in &mut scene.meshes[0].positions {
+        p.x += 2.0;
+    }
+    let (dictionary, ..) = mrt_quick_bake(&load_scene("mrt-cube"));
+    let error = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).err().expect("refused");
+    says(&error, &["mesh \"Floor\" triangle 0", "in no block", "extras.relume.mrt.grid"]);
+    // A floor triangle across two blocks' faces.
+    let mut scene = load_scene("mrt-corridor");
+    let floor = scene.meshes.iter_mut().find(|m| m.name == "Floor").unwrap();
+    floor.positions[0].x -= 1.5;
+    let error = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).err().expect("refused");
+    says(&error, &["mesh \"Floor\" triangle", "reaches past the face", "split the geometry"]);
+    // A level read with a dictionary other than the one it was made with.
+    let scene = load_scene("mrt-cube");
+    let (_, _, level, _) = mrt_quick_bake(&scene);
+    let other = Dictionary {
+        blocks: {
+            let mut b = dictionary.blocks.clone();
+            b[0].u_b[0] += 1.0;
+            b
+        },
+        ..dictionary.clone()
+    };
+    let dir = std::env::temp_dir().join(format!("relume-mrt-level-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let sections = vec![dictionary::section(&other, serde_json::json!({})), level_data::section(&level, serde_json::json!({}))];
+    BakeOutput { method: "mrt", scene: Some(&scene), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+        .write(&dir)
+        .unwrap();
+    let artifact = Artifact::read(&dir).unwrap();
+    let (read, checksum) = dictionary::read(&artifact, None).unwrap();
+    let error = level_data::read(&artifact, &scene, &read, &checksum).unwrap_err().to_string();
+    says(&error, &["mrt-level.bin", "made with the dictionary", "bake the level again"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

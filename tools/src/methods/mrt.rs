@@ -1,0 +1,192 @@
+//! Modular radiance transfer (Loos et al. 2011, 002): indirect light of moving lights in a
+//! level of blocks (the scene's `extras.relume.mrt` grid) from a dictionary of six block shapes
+//! made for every scene; at run time the nine passes of §7.3 (light volume aside) relight a
+//! padded light map on the blocks' faces.
+
+use super::params::{Default, Param, Values};
+use super::{Bake, Loaded, Method, Stages};
+use anyhow::Result;
+use glam::Vec3;
+use relume_bake::artifact::Artifact;
+use relume_bake::atlas::AtlasSection;
+use relume_bake::mrt::baker::bake_level;
+use relume_bake::mrt::dictionary::{self, Dictionary};
+use relume_bake::mrt::level_data::{self, LevelData};
+use relume_bake::mrt::proxy::Proxy;
+use relume_bake::mrt::{BlockSettings, InterfaceSettings};
+use relume_bake::scene::Scene;
+use relume_bake::work::WorkOptions;
+use relume_renderer::techniques::mrt::{MrtData, MAX_BOUNCES};
+use relume_renderer::MakeTechnique;
+use serde_json::json;
+
+const SAMPLES_PER_FACE: Param =
+    Param::count("samples-per-face", "samples (light-map texels) a block face side (002 §7.1: 16)", 2, 64, Default::Value("16"));
+const GATHER_RAYS: Param = Param::count(
+    "gather-rays",
+    "rays per sample gathering a block's one-bounce operator F (002: 16,384)",
+    16,
+    1 << 20,
+    Default::Value("16384"),
+);
+const MODES: Param = Param::count("modes", "k_self: a block's indirect modes (002 Table 2: 32)", 1, 512, Default::Value("32"));
+const PRIOR_MODES: Param = Param::count("prior-modes", "k_d: the light prior's modes (002 §4: 64)", 1, 1024, Default::Value("64"));
+const NO_ENRICH: Param = Param::flag("no-enrich", "leave the prior without App. A's enrichment (002 Fig. 13's failure)");
+const LIGHTFIELD_MODES: Param =
+    Param::count("lightfield-modes", "k_rlf: the interface lightfield's modes (002 §5.1: 128)", 1, 1024, Default::Value("128"));
+const RESPONSE_MODES: Param =
+    Param::count("response-modes", "k_r: a receiver's response modes (002 §5.1: 32)", 1, 512, Default::Value("32"));
+const LIGHTFIELD: Param = Param::count(
+    "lightfield",
+    "an interface lightfield's position cells a side; direction cells are 1.5 times as many (002: 12, with 24; docs/BENCHMARKS.md: 8 costs 0.01 in error)",
+    2,
+    32,
+    Default::Value("8"),
+);
+const D_MAX: Param =
+    Param::count("d-max", "the most interfaces light crosses between blocks (002 §6.3's traversal depth)", 1, 64, Default::Value("8"));
+const BOUNCES: Param = Param::count(
+    "bounces",
+    "bounces each frame iterates (§7.3's feedback within the frame; 1 is the paper's per-frame work)",
+    1,
+    MAX_BOUNCES as u64,
+    Default::Value("3"),
+)
+.at_render();
+
+const PARAMS: [&Param; 10] =
+    [&SAMPLES_PER_FACE, &GATHER_RAYS, &MODES, &PRIOR_MODES, &NO_ENRICH, &LIGHTFIELD_MODES, &RESPONSE_MODES, &LIGHTFIELD, &D_MAX, &BOUNCES];
+
+/// The dictionary's parameters from `values` (the interface's gather: a quarter of the block's
+/// rays, 2^2 supersamples: docs/BENCHMARKS.md, "Between blocks").
+fn settings(values: &Values, work: &WorkOptions) -> (BlockSettings, InterfaceSettings) {
+    let gather_rays = values.count(&GATHER_RAYS) as u32;
+    let block = BlockSettings {
+        samples_per_face: values.count(&SAMPLES_PER_FACE) as usize,
+        gather_rays,
+        prior_modes: values.count(&PRIOR_MODES) as usize,
+        modes: values.count(&MODES) as usize,
+        enrich: !values.given(&NO_ENRICH),
+        seed: work.seed,
+        threads: work.threads,
+        ..BlockSettings::default()
+    };
+    let positions = values.count(&LIGHTFIELD) as usize;
+    let interface = InterfaceSettings {
+        positions,
+        directions: positions * 3 / 2,
+        supersamples: 2,
+        lightfield_modes: values.count(&LIGHTFIELD_MODES) as usize,
+        response_modes: values.count(&RESPONSE_MODES) as usize,
+        gather_rays: (gather_rays / 4).max(16),
+        seed: work.seed,
+    };
+    (block, interface)
+}
+
+pub(crate) struct MrtMethod;
+
+/// A bake read for a scene.
+struct Baked {
+    scene: Scene,
+    dictionary: Dictionary,
+    level: LevelData,
+    bounces: u32,
+}
+
+impl Loaded for Baked {
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
+        vec![Box::new(MrtData { dictionary: &self.dictionary, level: &self.level, bounces: self.bounces })]
+    }
+}
+
+impl Method for MrtMethod {
+    fn name(&self) -> &'static str {
+        "mrt"
+    }
+
+    fn description(&self) -> &'static str {
+        "indirect light of moving lights in a level of blocks from a dictionary of block shapes (Loos et al. 2011)"
+    }
+
+    fn params(&self) -> Vec<&'static Param> {
+        PARAMS.to_vec()
+    }
+
+    fn bakes(&self) -> bool {
+        true
+    }
+
+    /// A scene that declares its blocks, without an environment.
+    fn suits(&self, scene: &Scene) -> bool {
+        scene.environment.is_none() && Proxy::of(scene).is_ok()
+    }
+
+    /// It models all indirect light: an ambient term would count it twice.
+    fn ambient(&self, _: &Scene) -> Option<(Vec3, f32)> {
+        None
+    }
+
+    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
+        let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
+        Proxy::of(scene).map_err(at)?;
+        let (block, interface) = settings(values, &work);
+        eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
+        let dictionary = stages.timed("dictionary", || Dictionary::build(&block, &interface, |stage| eprintln!("mrt:   {stage}")));
+        let d_max = values.count(&D_MAX) as usize;
+        let (mapped, level_data) = stages.timed("level", || bake_level(scene, &dictionary, d_max)).map_err(at)?;
+        let matrices: usize = level_data.receivers.iter().flat_map(|r| r.sources.iter().map(|s| s.1.len())).sum();
+        let facts = json!({
+            "blocks": level_data.blocks.len(),
+            "receivers": level_data.receivers.len(),
+            "samples": level_data.samples.len(),
+            "transfer_values": matrices,
+        });
+        let summary = format!(
+            "{} blocks, {} receivers, {} samples on a {} x {} light map; T_b->r {:.2} MiB; dictionary k_self {} k_rlf {} k_r {}\n",
+            level_data.blocks.len(),
+            level_data.receivers.len(),
+            level_data.samples.len(),
+            mapped.layout.width,
+            mapped.layout.height,
+            matrices as f64 * 4.0 / (1 << 20) as f64,
+            block.modes,
+            dictionary.interfaces.lightfield_modes,
+            dictionary.interfaces.response_modes
+        );
+        let atlas = AtlasSection { meshes: mapped.meshes.clone(), layout: mapped.layout, texels: mapped.texels.clone() };
+        Ok(Bake {
+            sections: vec![
+                atlas.section(json!({ "width": mapped.layout.width, "height": mapped.layout.height })),
+                dictionary::section(&dictionary, json!({ "shapes": dictionary.blocks.len() })),
+                level_data::section(&level_data, facts.clone()),
+            ],
+            parameters: json!({
+                "samples_per_face": block.samples_per_face,
+                "gather_rays": block.gather_rays,
+                "modes": block.modes,
+                "prior_modes": block.prior_modes,
+                "enrich": block.enrich,
+                "lightfield": interface.positions,
+                "lightfield_modes": interface.lightfield_modes,
+                "response_modes": interface.response_modes,
+                "d_max": d_max,
+                "seed": work.seed,
+            }),
+            stats: facts,
+            summary,
+        })
+    }
+
+    fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
+        let artifact = artifact.ok_or_else(|| anyhow::anyhow!("mrt renders from a bake: give --bake"))?;
+        let (dictionary, checksum) = dictionary::read(artifact, None)?;
+        let (_, applied) = super::atlas::read(artifact, scene)?;
+        let level = level_data::read(artifact, scene, &dictionary, &checksum)?;
+        Ok(Box::new(Baked { scene: applied, dictionary, level, bounces: values.count(&BOUNCES) as u32 }))
+    }
+}
