@@ -1,0 +1,65 @@
+//! Modular radiance transfer end to end on `mrt-maze` (11 blocks, a cycle) with validation
+//! on: the quick level (tests/src/lib.rs) rendered by the Vulkan renderer as its light moves
+//! through the maze, relit every frame without a re-bake. Each frame's indirect part (the frame
+//! less the direct-only frame) is compared with the reference path tracer's `indirect` layer
+//! at the same light, and with the best constant ambient light (the constant method's, its
+//! ambient fitted to that reference by least squares).
+
+use glam::Vec3;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::image::Image;
+use relume_bake::reference::{render_reference, ReferenceSettings};
+use relume_bake::scene::Scene;
+use relume_renderer::techniques::mrt::MrtData;
+use relume_renderer::RenderSettings;
+use relume_tests::*;
+
+const WIDTH: u32 = 96;
+const HEIGHT: u32 = 64;
+
+fn reference_indirect(scene: &Scene) -> Image {
+    let settings = ReferenceSettings { samples_per_pixel: 512, width: WIDTH, height: HEIGHT, ..ReferenceSettings::default() };
+    render_reference(scene, &SceneBvh::new(scene), &settings).indirect
+}
+
+/// NRMSE of `shape` scaled by the least-squares factor against `reference`.
+fn best_scaled(name: &str, shape: &Image, reference: &Image) -> f64 {
+    let dot = |a: &Image, b: &Image| a.pixels.iter().zip(&b.pixels).map(|(x, y)| x.dot(*y) as f64).sum::<f64>();
+    let s = (dot(shape, reference) / dot(shape, shape)) as f32;
+    let scaled = Image { width: shape.width, height: shape.height, pixels: shape.pixels.iter().map(|p| *p * s).collect() };
+    nrmse_with_artifacts(name, &scaled, reference)
+}
+
+#[test]
+fn indirect_light_along_a_light_path_through_the_maze_follows_the_reference_and_beats_constant_ambient() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
+    let ctx = validated_context();
+    let settings = RenderSettings { width: WIDTH, height: HEIGHT, ..RenderSettings::default() };
+    let data = MrtData { dictionary: &dictionary, level: &level, bounces: 3 };
+    let mut with_mrt = new_renderer(&ctx, &applied, &settings, &[&data]);
+    let mut direct = new_renderer(&ctx, &applied, &settings, &[]);
+    let mut ambient = new_renderer(&ctx, &applied, &RenderSettings { ambient: Vec3::ONE, beta: 0.0, ..settings.clone() }, &[]);
+    // Through the first row of blocks, round into the third (cells of 2 m).
+    let path = [Vec3::new(1.0, 1.4, 1.0), Vec3::new(3.0, 1.2, 0.8), Vec3::new(5.0, 1.4, 1.2), Vec3::new(7.0, 1.4, 3.0), Vec3::new(5.0, 1.0, 5.0)];
+    let (mut errors, mut constants) = (Vec::new(), Vec::new());
+    for (k, position) in path.into_iter().enumerate() {
+        let mut moved = applied.clone();
+        moved.lights[0].position = position;
+        for renderer in [&mut with_mrt, &mut direct, &mut ambient] {
+            renderer.set_lights(&moved.lights).unwrap();
+        }
+        let only_direct = render(&mut direct);
+        let image = difference(&render(&mut with_mrt), &only_direct);
+        let constant = difference(&render(&mut ambient), &only_direct);
+        let reference = reference_indirect(&moved);
+        errors.push(nrmse_with_artifacts(&format!("mrt_maze_path_{k}"), &image, &reference));
+        constants.push(best_scaled(&format!("mrt_maze_path_constant_{k}"), &constant, &reference));
+    }
+    eprintln!("mrt-maze indirect NRMSE along the light path: MRT {errors:.3?}, best constant {constants:.3?}");
+    drop((with_mrt, direct, ambient));
+    assert_clean(ctx);
+    for (k, (e, c)) in errors.iter().zip(&constants).enumerate() {
+        assert!(e < c, "frame {k}: MRT {e:.3} is not below the best constant ambient's {c:.3}");
+    }
+}
