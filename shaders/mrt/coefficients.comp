@@ -1,5 +1,5 @@
 #version 450
-// §7.3 step 2 (eq. 3): each block's coefficients b = T_d->b l on its dictionary shape's
+// §7.3 step 2 (eq. 3): each block's coefficients b0 = T_d->b l_d on its dictionary shape's
 // samples (the block's own, turned). One invocation per (block, mode).
 #extension GL_GOOGLE_include_directive : require
 
@@ -12,7 +12,7 @@ layout(std430, set = 0, binding = 1) readonly buffer Operators { float operators
 layout(std430, set = 0, binding = 2) readonly buffer Blocks { uvec2 blocks[]; };   // shape, first row
 layout(std430, set = 0, binding = 3) readonly buffer Rows { uint rows[]; };        // level sample per row
 layout(std430, set = 0, binding = 4) readonly buffer Light_ { vec4 light[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer B { vec4 b[]; };             // block * k_max + mode
+layout(std430, set = 0, binding = 5) writeonly buffer B0 { vec4 b0[]; };           // block * k_max + mode
 
 void main() {
     uint id = gl_GlobalInvocationID.x;
@@ -27,5 +27,5 @@ void main() {
             sum += operators[shape.t_d_b + j * shape.k + m] * light[rows[first + j]].rgb;
         }
     }
-    b[id] = vec4(sum, 0.0);
+    b0[id] = vec4(sum, 0.0);
 }

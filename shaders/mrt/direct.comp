@@ -1,8 +1,7 @@
 #version 450
 // §7.3 step 1: the direct light at every level sample (a block face's sample point in the
 // world), shadowed through the variance shadow maps as the lighting pass shadows pixels, and
-// the radiosity l_d = rho E_d the transfer starts from; E_d kept for the CPU oracle. Zeroes
-// the indirect sum.
+// the radiosity l_d = rho E_d the transfer starts from; E_d kept for the CPU oracle.
 #extension GL_GOOGLE_include_directive : require
 #include "lights.glsl"
 
@@ -19,10 +18,9 @@ layout(std430, set = 0, binding = 1) readonly buffer Layers { ShadowLayer layers
 layout(set = 0, binding = 2) uniform sampler2DArray shadow_moments;
 layout(std430, set = 0, binding = 3) readonly buffer Samples { Sample samples[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer Light_ { vec4 light[]; };      // rgb rho E
-layout(std430, set = 0, binding = 5) writeonly buffer Indirect { vec4 indirect[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer Direct { vec4 direct[]; };     // rgb E_d
+layout(std430, set = 0, binding = 5) writeonly buffer Direct { vec4 direct[]; };     // rgb E_d
 
-#define FRAME_BINDING 7
+#define FRAME_BINDING 6
 #include "frame.glsl"
 #include "mrt/push.glsl"
 #include "vsm_visibility.glsl"
@@ -33,6 +31,5 @@ void main() {
     if (s >= pc.sample_count) return;
     vec3 e = direct_irradiance(samples[s].position.xyz, samples[s].normal.xyz, 0.0);
     light[s] = vec4(samples[s].albedo.rgb * e, 0.0);
-    indirect[s] = vec4(0.0);
     direct[s] = vec4(e, 0.0);
 }

@@ -9,7 +9,7 @@ layout(push_constant) uniform MrtPush {
     uint texel_count;     // of the light map
     uint copy_count;      // copy records of the padded atlas
     uint width;           // of the light map, texels
-    uint first_bounce;    // 1: the response pass starts the sum instead of adding to it
+    uint feedback;        // 1: every bounce (the solved feedback); 0: the first only
     uint u_r;             // where U_r (n_r x k_r) starts in the operator buffer
 } pc;
 

@@ -1,7 +1,6 @@
 #version 450
-// §7.3 steps 3 and 5: each level sample's indirect irradiance of this bounce, its own block's
-// U_b b plus U_r r of every receiver (at most one per opening) that lands on it; added to the
-// frame's indirect sum, and times rho the light of the next bounce (§7.3's feedback).
+// §7.3 steps 3 and 5: each level sample's indirect irradiance, its own block's U_b b plus
+// U_r r of every receiver (at most one per opening) that lands on it.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
@@ -14,21 +13,13 @@ struct SampleRows {
     uvec4 rows;         // the sample's row of each receiver
 };
 
-struct Sample {
-    vec4 position;
-    vec4 normal;
-    vec4 albedo;
-};
-
 layout(std430, set = 0, binding = 0) readonly buffer Shapes { Shape shapes[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Operators { float operators[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Blocks { uvec2 blocks[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Rows_ { SampleRows sample_rows[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Samples { Sample samples[]; };
-layout(std430, set = 0, binding = 5) readonly buffer B { vec4 b[]; };
-layout(std430, set = 0, binding = 6) readonly buffer R { vec4 r[]; };
-layout(std430, set = 0, binding = 7) writeonly buffer Light_ { vec4 light[]; };
-layout(std430, set = 0, binding = 8) buffer Indirect { vec4 indirect[]; };
+layout(std430, set = 0, binding = 4) readonly buffer B { vec4 b[]; };
+layout(std430, set = 0, binding = 5) readonly buffer R { vec4 r[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer Indirect { vec4 indirect[]; };
 
 void main() {
     uint s = gl_GlobalInvocationID.x;
@@ -47,6 +38,5 @@ void main() {
             e += operators[pc.u_r + m * pc.n_r + at.rows[i]] * r[receiver * pc.k_r + m].rgb;
         }
     }
-    light[s] = vec4(samples[s].albedo.rgb * e, 0.0);
-    indirect[s] = vec4((pc.first_bounce == 1u ? vec3(0.0) : indirect[s].rgb) + e, 0.0);
+    indirect[s] = vec4(e, 0.0);
 }

@@ -14,11 +14,12 @@ use relume_renderer::techniques::mrt::MrtData;
 use relume_renderer::RenderSettings;
 use relume_tests::*;
 
-const WIDTH: u32 = 96;
-const HEIGHT: u32 = 64;
+const WIDTH: u32 = 64;
+const HEIGHT: u32 = 48;
 
 fn reference_indirect(scene: &Scene) -> Image {
-    let settings = ReferenceSettings { samples_per_pixel: 512, width: WIDTH, height: HEIGHT, ..ReferenceSettings::default() };
+    let settings =
+        ReferenceSettings { samples_per_pixel: 2048, width: WIDTH, height: HEIGHT, pixel_centres: true, ..ReferenceSettings::default() };
     render_reference(scene, &SceneBvh::new(scene), &settings).indirect
 }
 
@@ -36,12 +37,12 @@ fn indirect_light_along_a_light_path_through_the_maze_follows_the_reference_and_
     let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
     let ctx = validated_context();
     let settings = RenderSettings { width: WIDTH, height: HEIGHT, ..RenderSettings::default() };
-    let data = MrtData { dictionary: &dictionary, level: &level, bounces: 3 };
+    let data = MrtData { dictionary: &dictionary, level: &level, feedback: true };
     let mut with_mrt = new_renderer(&ctx, &applied, &settings, &[&data]);
     let mut direct = new_renderer(&ctx, &applied, &settings, &[]);
     let mut ambient = new_renderer(&ctx, &applied, &RenderSettings { ambient: Vec3::ONE, beta: 0.0, ..settings.clone() }, &[]);
-    // Through the first row of blocks, round into the third (cells of 2 m).
-    let path = [Vec3::new(1.0, 1.4, 1.0), Vec3::new(3.0, 1.2, 0.8), Vec3::new(5.0, 1.4, 1.2), Vec3::new(7.0, 1.4, 3.0), Vec3::new(5.0, 1.0, 5.0)];
+    // Along the first row of blocks and round into the third (cells of 2 m).
+    let path = [Vec3::new(1.0, 1.4, 1.0), Vec3::new(5.0, 1.4, 1.2), Vec3::new(7.0, 1.4, 3.0)];
     let (mut errors, mut constants) = (Vec::new(), Vec::new());
     for (k, position) in path.into_iter().enumerate() {
         let mut moved = applied.clone();
@@ -59,7 +60,9 @@ fn indirect_light_along_a_light_path_through_the_maze_follows_the_reference_and_
     eprintln!("mrt-maze indirect NRMSE along the light path: MRT {errors:.3?}, best constant {constants:.3?}");
     drop((with_mrt, direct, ambient));
     assert_clean(ctx);
+    // Bars from the first honest measurement (0.091, 0.056, 0.057 against the best constant's
+    // 0.814, 0.425, 0.330; the reference alone is about 0.05 from a converged one).
     for (k, (e, c)) in errors.iter().zip(&constants).enumerate() {
-        assert!(e < c, "frame {k}: MRT {e:.3} is not below the best constant ambient's {c:.3}");
+        assert!(*e < 0.12 && *e < c / 3.0, "frame {k}: MRT {e:.3}, the best constant ambient {c:.3}");
     }
 }

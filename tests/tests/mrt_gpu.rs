@@ -1,11 +1,10 @@
 //! Modular radiance transfer's passes on the GPU against the CPU evaluator of the same tables
 //! (`LevelData`), on `mrt-maze` with validation on: the direct light the GPU found at every
-//! level sample is fed to the CPU, and b, r (one bounce), the summed indirect light (three
-//! bounces), the un-padded light map (its sample texels) and the padded one (every copy
-//! record) must agree; texels no sample or record writes hold 0.
+//! level sample is fed to the CPU, and b0, b, r, the indirect light, the un-padded light map
+//! (its sample texels) and the padded one (every copy record) must agree, with the feedback
+//! solved and off; texels no sample or record writes hold 0.
 
 use glam::{Vec3, Vec4};
-use relume_bake::mrt::dictionary::Dictionary;
 use relume_bake::mrt::level_data::LevelData;
 use relume_renderer::techniques::mrt::MrtData;
 use relume_renderer::{Headless, RenderSettings};
@@ -38,56 +37,38 @@ fn the_passes_equal_the_cpu_evaluator_for_b_r_the_indirect_light_and_both_atlase
     let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
     let ctx = validated_context();
     let settings = RenderSettings { width: 64, height: 48, ..RenderSettings::default() };
-    let once = MrtData { dictionary: &dictionary, level: &level, bounces: 1 };
-    let mut renderer = new_renderer(&ctx, &applied, &settings, &[&once]);
-    let (direct, indirect) = frame(&mut renderer);
-    assert!(direct.iter().filter(|e| e.max_element() > 0.0).count() > direct.len() / 20, "the light reaches the samples");
-    let b = level.coefficients(&dictionary, &light(&level, &direct));
-    let r = level.received(&dictionary, &b);
-    let k_max = dictionary.blocks.iter().map(|d| d.modes).max().unwrap();
-    let gpu_b = rgb(&read_vec4s(&mut renderer, "mrt.b").unwrap());
-    let (mut got, mut want) = (Vec::new(), Vec::new());
-    for (i, block) in b.iter().enumerate() {
-        got.extend_from_slice(&gpu_b[i * k_max..i * k_max + block.len()]);
-        want.extend_from_slice(block);
+    let k_max = relume_bake::mrt::level_data::k_max(&dictionary);
+    for feedback in [false, true] {
+        let data = MrtData { dictionary: &dictionary, level: &level, feedback };
+        let mut renderer = new_renderer(&ctx, &applied, &settings, &[&data]);
+        let (direct, indirect) = frame(&mut renderer);
+        assert!(direct.iter().filter(|e| e.max_element() > 0.0).count() > direct.len() / 20, "the light reaches the samples");
+        let b0 = level.coefficients(&dictionary, &light(&level, &direct));
+        let b = if feedback { level.fed_back(&dictionary, &b0) } else { b0.clone() };
+        let r = level.received(&dictionary, &b);
+        let per_block = |gpu: &[Vec3], cpu: &[Vec<Vec3>]| {
+            let got: Vec<Vec3> = cpu.iter().enumerate().flat_map(|(i, c)| gpu[i * k_max..i * k_max + c.len()].to_vec()).collect();
+            relative(&got, &cpu.concat())
+        };
+        let e_b0 = per_block(&rgb(&read_vec4s(&mut renderer, "mrt.b0").unwrap()), &b0);
+        let e_b = per_block(&rgb(&read_vec4s(&mut renderer, "mrt.b").unwrap()), &b);
+        let e_r = relative(&rgb(&read_vec4s(&mut renderer, "mrt.r").unwrap()), &r.concat());
+        let e_indirect = relative(&indirect, &level.indirect(&dictionary, &direct, feedback));
+        let map = read_vec4s(&mut renderer, "mrt.light_map").unwrap();
+        let unpadded: Vec<Vec3> = level.samples.iter().map(|s| map[s.texel as usize].truncate()).collect();
+        let e_unpadded = relative(&unpadded, &indirect);
+        let mut written = vec![false; map.len()];
+        level.samples.iter().for_each(|s| written[s.texel as usize] = true);
+        level.copies.iter().for_each(|c| written[c[0] as usize] = true);
+        let padded = level.copies.iter().all(|[to, from]| map[*to as usize] == map[*from as usize].truncate().extend(-1.0));
+        let rest_zero = map.iter().zip(&written).all(|(t, w)| *w || *t == Vec4::ZERO);
+        eprintln!(
+            "GPU against CPU, feedback {feedback}: b0 {e_b0:.2e}, b {e_b:.2e}, r {e_r:.2e}, indirect {e_indirect:.2e}, un-padded light map {e_unpadded:.2e}"
+        );
+        assert!(e_b0 < 1e-4 && e_b < 1e-4 && e_r < 1e-4 && e_indirect < 1e-4, "b0 {e_b0:e}, b {e_b:e}, r {e_r:e}, indirect {e_indirect:e}");
+        assert_eq!(e_unpadded, 0.0, "the light map's sample texels hold the indirect light");
+        assert!(padded && rest_zero, "every copy record copies its source (padded {padded}); the rest is 0 ({rest_zero})");
+        assert!(map.iter().all(|t| t.is_finite()));
     }
-    let e_b = relative(&got, &want);
-    let e_r = relative(&rgb(&read_vec4s(&mut renderer, "mrt.r").unwrap()), &r.concat());
-    let e_one = relative(&indirect, &level.response(&dictionary, &b, &r));
-    eprintln!("GPU against CPU, one bounce: b {e_b:.2e}, r {e_r:.2e}, indirect {e_one:.2e}");
-    assert!(e_b < 1e-4 && e_r < 1e-4 && e_one < 1e-4, "b {e_b:e}, r {e_r:e}, indirect {e_one:e}");
-    drop(renderer);
-
-    let thrice = MrtData { dictionary: &dictionary, level: &level, bounces: 3 };
-    let mut renderer = new_renderer(&ctx, &applied, &settings, &[&thrice]);
-    let (direct, indirect) = frame(&mut renderer);
-    let e_three = relative(&indirect, &level.indirect(&dictionary, &direct, 3));
-    let map = read_vec4s(&mut renderer, "mrt.light_map").unwrap();
-    let unpadded: Vec<Vec3> = level.samples.iter().map(|s| map[s.texel as usize].truncate()).collect();
-    let e_unpadded = relative(&unpadded, &indirect);
-    let written: Vec<bool> = {
-        let mut w = vec![false; map.len()];
-        level.samples.iter().for_each(|s| w[s.texel as usize] = true);
-        level.copies.iter().for_each(|c| w[c[0] as usize] = true);
-        w
-    };
-    let padded_ok = level.copies.iter().all(|[to, from]| map[*to as usize] == map[*from as usize].truncate().extend(-1.0));
-    let rest_zero = map.iter().zip(&written).all(|(t, w)| *w || *t == Vec4::ZERO);
-    eprintln!("GPU against CPU, three bounces: indirect {e_three:.2e}, un-padded light map {e_unpadded:.2e}");
-    assert!(e_three < 1e-4 && e_unpadded == 0.0, "indirect {e_three:e}, un-padded {e_unpadded:e}");
-    assert!(padded_ok && rest_zero, "every copy record copies its source (padded {padded_ok}); the rest is 0 ({rest_zero})");
-    assert!(map.iter().all(|t| t.is_finite()));
-    drop(renderer);
-    assert_clean(ctx);
-}
-
-#[test]
-fn bounces_outside_one_to_four_are_refused_by_name() {
-    let scene = load_scene("mrt-cube");
-    let (dictionary, _, level, applied): (Dictionary, _, LevelData, _) = mrt_quick_bake(&scene);
-    let ctx = validated_context();
-    let none = MrtData { dictionary: &dictionary, level: &level, bounces: 0 };
-    let error = refusal(try_new_renderer(&ctx, &applied, &RenderSettings::default(), &[&none]));
-    says(&error, &["mrt", "0 bounces", "1..=4"]);
     assert_clean(ctx);
 }

@@ -42,6 +42,33 @@ fn the_stored_tables_evaluate_as_the_level_transfer() {
     assert_eq!(level.receivers.len(), 26, "11 blocks with 13 openings between them: 26 receivers");
 }
 
+/// §7.3's feedback iterated bounce by bounce (b <- b0 + K b, as from frame to frame) converges
+/// to the solved fixed point the level stores.
+#[test]
+fn the_feedback_iterated_converges_to_the_solved_fixed_point() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, mapped, level, _) = mrt_quick_bake(&scene);
+    let direct: Vec<Vec3> = mapped.samples.iter().map(|s| Vec3::new(1.0, 0.5, 0.25) / (1.0 + s.position.length_squared())).collect();
+    let solved = level.indirect(&dictionary, &direct, true);
+    let mut total = vec![Vec3::ZERO; direct.len()];
+    let (mut changes, mut light) = (Vec::new(), direct.iter().zip(&level.samples).map(|(e, s)| *e * s.albedo).collect::<Vec<_>>());
+    for _ in 0..200 {
+        let e = level.bounce(&dictionary, &light);
+        total.iter_mut().zip(&e).for_each(|(t, e)| *t += *e);
+        changes.push(e.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max));
+        light = e.iter().zip(&level.samples).map(|(e, s)| *e * s.albedo).collect();
+    }
+    let scale = solved.iter().map(|v| v.max_element()).fold(0.0, f32::max);
+    let gap = solved.iter().zip(&total).map(|(s, t)| (*s - *t).abs().max_element()).fold(0.0, f32::max) / scale;
+    eprintln!(
+        "feedback: the last bounce's largest value {:.2e} of the total's {scale:.3}; iterated against solved {gap:.2e}",
+        changes[199]
+    );
+    assert!(changes[199] < 1e-3 * scale && gap < 1e-4, "bounce 200 adds {:e}; iterated and solved differ by {gap:e}", changes[199]);
+    let first = level.indirect(&dictionary, &direct, false);
+    assert!(solved.iter().zip(&first).all(|(s, f)| s.cmpge(*f - 1e-6).all()), "more bounces never take light away");
+}
+
 /// The light map after the padding, on the CPU: each sample texel `value(position)`, each
 /// copy record's texel its source's, alpha 1 written, 0 not.
 fn padded(mapped: &Mapped, value: impl Fn(Vec3) -> f32) -> Vec<Vec4> {

@@ -112,7 +112,8 @@ impl LevelTransfer {
 
 impl LevelTransfer {
     /// The tables the run time takes (`LevelData`): level samples numbered block by block, so
-    /// `samples` (the mapped scene's, in that order) fit; made with the dictionary of `checksum`.
+    /// `samples` (the mapped scene's, in that order) fit; made with the dictionary of `checksum`;
+    /// the feedback left empty (`baker::bake_level` solves it).
     pub fn level_data(&self, checksum: String, samples: &super::map::Mapped) -> LevelData {
         let offsets: Vec<u32> = self.sizes.iter().scan(0u32, |at, &n| Some(std::mem::replace(at, *at + n as u32))).collect();
         let blocks = self
@@ -137,6 +138,7 @@ impl LevelTransfer {
             samples: samples.samples.clone(),
             copies: samples.copies.clone(),
             layout: samples.layout,
+            feedback: Vec::new(),
         }
     }
 }

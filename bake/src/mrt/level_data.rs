@@ -60,6 +60,11 @@ pub struct LevelData {
     pub samples: Vec<LevelSample>,
     /// The padded atlas (§6-7): (written texel, the sample texel it copies).
     pub copies: Vec<[u32; 2]>,
+    /// (I - K)^-1 for red, green and blue (D x D each, column-major, D = blocks x k_max):
+    /// K takes coefficients b (a block's modes at block * k_max + mode) to those of the light
+    /// one bounce of them sends back, rho (U_b b + U_r T_b->r b); its fixed point is every
+    /// bounce of §7.3's feedback.
+    pub feedback: Vec<f32>,
     pub layout: PageLayout,
 }
 
@@ -126,19 +131,39 @@ impl LevelData {
         self.response(dictionary, &b, &r)
     }
 
-    /// The indirect irradiance at every level sample for the direct irradiance `direct`
-    /// there, with `bounces` bounces fed back (§7.3's feedback, iterated within the frame).
-    pub fn indirect(&self, dictionary: &Dictionary, direct: &[Vec3], bounces: usize) -> Vec<Vec3> {
-        let albedo = |e: &[Vec3]| -> Vec<Vec3> { e.iter().zip(&self.samples).map(|(e, s)| *e * s.albedo).collect() };
-        let mut light = albedo(direct);
-        let mut total = vec![Vec3::ZERO; self.samples.len()];
-        for _ in 0..bounces {
-            let e = self.bounce(dictionary, &light);
-            total.iter_mut().zip(&e).for_each(|(t, e)| *t += *e);
-            light = albedo(&e);
-        }
-        total
+    /// The coefficients with every bounce fed back (§7.3's feedback at its fixed point):
+    /// b = (I - K)^-1 b0 per colour channel, K the coefficients of the light one bounce of b
+    /// sends back (`feedback`).
+    pub fn fed_back(&self, dictionary: &Dictionary, b0: &[Vec<Vec3>]) -> Vec<Vec<Vec3>> {
+        let k_max = k_max(dictionary);
+        let d = self.blocks.len() * k_max;
+        let flat: Vec<Vec3> = b0.iter().flat_map(|b| (0..k_max).map(move |m| b.get(m).copied().unwrap_or(Vec3::ZERO))).collect();
+        let solved: Vec<Vec3> = (0..d)
+            .map(|i| {
+                let channel = |c: usize| {
+                    let m = &self.feedback[c * d * d..(c + 1) * d * d];
+                    (0..d).map(|j| m[j * d + i] as f64 * flat[j][c] as f64).sum::<f64>() as f32
+                };
+                Vec3::new(channel(0), channel(1), channel(2))
+            })
+            .collect();
+        b0.iter().enumerate().map(|(block, b)| solved[block * k_max..block * k_max + b.len()].to_vec()).collect()
     }
+
+    /// The indirect irradiance at every level sample for the direct irradiance `direct`
+    /// there (§7.3 steps 2-5): every bounce (`feedback`) or the first only.
+    pub fn indirect(&self, dictionary: &Dictionary, direct: &[Vec3], feedback: bool) -> Vec<Vec3> {
+        let light: Vec<Vec3> = direct.iter().zip(&self.samples).map(|(e, s)| *e * s.albedo).collect();
+        let b0 = self.coefficients(dictionary, &light);
+        let b = if feedback { self.fed_back(dictionary, &b0) } else { b0 };
+        let r = self.received(dictionary, &b);
+        self.response(dictionary, &b, &r)
+    }
+}
+
+/// The most modes of a dictionary shape: the stride of a level's coefficients per block.
+pub fn k_max(dictionary: &Dictionary) -> usize {
+    dictionary.blocks.iter().map(|b| b.modes).max().unwrap_or(1)
 }
 
 /// The sum of `weight * value`, in f64.
@@ -174,6 +199,7 @@ pub fn section(level: &LevelData, summary: serde_json::Value) -> Section {
         w.u32s(&[s.texel]);
     }
     w.u32s(&level.copies.iter().flatten().copied().collect::<Vec<_>>());
+    w.f32s(&level.feedback);
     Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(BIN.into(), w.bytes)] }
 }
 
@@ -267,7 +293,15 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
     if !in_range(&flat, layout.texel_count(), false) {
         return Err(bad(format!("a copy record names a texel past the light map's {}", layout.texel_count())));
     }
-    r.finish("the copy records")?;
+    let d = block_count * k_max(dictionary);
+    if d > 1 << 14 {
+        return Err(bad(format!("{block_count} blocks of {} modes: a feedback past 16384 coefficients", k_max(dictionary))));
+    }
+    let feedback = r.f32s(3 * d * d, "the feedback")?;
+    if feedback.iter().any(|v| !v.is_finite()) {
+        return Err(bad("the feedback holds a value that is not finite".into()));
+    }
+    r.finish("the feedback")?;
     let copies = flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-    Ok(LevelData { dictionary: named, blocks, receivers, samples, copies, layout })
+    Ok(LevelData { dictionary: named, blocks, receivers, samples, copies, layout, feedback })
 }

@@ -1,7 +1,7 @@
 //! Modular radiance transfer (Loos et al. 2011, 002): indirect light of moving lights in a
 //! level of blocks (the scene's `extras.relume.mrt` grid) from a dictionary of six block shapes
 //! made for every scene; at run time the nine passes of §7.3 (light volume aside) relight a
-//! padded light map on the blocks' faces.
+//! padded light map on the blocks' faces, every bounce fed back.
 
 use super::params::{Default, Param, Values};
 use super::{Bake, Loaded, Method, Stages};
@@ -16,7 +16,7 @@ use relume_bake::mrt::proxy::Proxy;
 use relume_bake::mrt::{BlockSettings, InterfaceSettings};
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
-use relume_renderer::techniques::mrt::{MrtData, MAX_BOUNCES};
+use relume_renderer::techniques::mrt::MrtData;
 use relume_renderer::MakeTechnique;
 use serde_json::json;
 
@@ -45,17 +45,16 @@ const LIGHTFIELD: Param = Param::count(
 );
 const D_MAX: Param =
     Param::count("d-max", "the most interfaces light crosses between blocks (002 §6.3's traversal depth)", 1, 64, Default::Value("8"));
-const BOUNCES: Param = Param::count(
-    "bounces",
-    "bounces each frame iterates (§7.3's feedback within the frame; 1 is the paper's per-frame work)",
-    1,
-    MAX_BOUNCES as u64,
-    Default::Value("3"),
+const FEEDBACK: Param = Param::choice(
+    "feedback",
+    "every bounce (solved: the fixed point of 002 §7.3's frame-to-frame feedback, at once) or the first only (off)",
+    &["solved", "off"],
+    Default::Value("solved"),
 )
 .at_render();
 
 const PARAMS: [&Param; 10] =
-    [&SAMPLES_PER_FACE, &GATHER_RAYS, &MODES, &PRIOR_MODES, &NO_ENRICH, &LIGHTFIELD_MODES, &RESPONSE_MODES, &LIGHTFIELD, &D_MAX, &BOUNCES];
+    [&SAMPLES_PER_FACE, &GATHER_RAYS, &MODES, &PRIOR_MODES, &NO_ENRICH, &LIGHTFIELD_MODES, &RESPONSE_MODES, &LIGHTFIELD, &D_MAX, &FEEDBACK];
 
 /// The dictionary's parameters from `values` (the interface's gather: a quarter of the block's
 /// rays, 2^2 supersamples: docs/BENCHMARKS.md, "Between blocks").
@@ -91,7 +90,7 @@ struct Baked {
     scene: Scene,
     dictionary: Dictionary,
     level: LevelData,
-    bounces: u32,
+    feedback: bool,
 }
 
 impl Loaded for Baked {
@@ -100,7 +99,7 @@ impl Loaded for Baked {
     }
 
     fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
-        vec![Box::new(MrtData { dictionary: &self.dictionary, level: &self.level, bounces: self.bounces })]
+        vec![Box::new(MrtData { dictionary: &self.dictionary, level: &self.level, feedback: self.feedback })]
     }
 }
 
@@ -187,6 +186,6 @@ impl Method for MrtMethod {
         let (dictionary, checksum) = dictionary::read(artifact, None)?;
         let (_, applied) = super::atlas::read(artifact, scene)?;
         let level = level_data::read(artifact, scene, &dictionary, &checksum)?;
-        Ok(Box::new(Baked { scene: applied, dictionary, level, bounces: values.count(&BOUNCES) as u32 }))
+        Ok(Box::new(Baked { scene: applied, dictionary, level, feedback: values.choice(&FEEDBACK) == "solved" }))
     }
 }

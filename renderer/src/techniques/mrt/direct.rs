@@ -2,7 +2,7 @@
 //!
 //! Reads: the scene's light and shadow-layer buffers and the frame's uniforms, the shadow
 //! moments (through the lighting pass's filter), the samples. Writes: `light` (rho E_d) and
-//! `indirect` (zeroed) and `direct` (E_d). Cost: one invocation per sample, a shadow-map fetch per light facing it.
+//! `direct` (E_d). Cost: one invocation per sample, a shadow-map fetch per light facing it.
 
 use super::{Buffers, Dispatch};
 use crate::passes::compute::Slot;
@@ -18,7 +18,6 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, shadow_sampler: &Sampler, 
         Slot::Sampled(shared.moments, shadow_sampler),
         Slot::Buffer(&buffers.samples, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.light, Access::ComputeStorageWrite),
-        Slot::Buffer(&buffers.indirect, Access::ComputeStorageWrite),
         Slot::Buffer(&buffers.direct, Access::ComputeStorageWrite),
         Slot::Uniform(&scene.frame),
     ];

@@ -1,26 +1,31 @@
 //! Modular radiance transfer (Loos et al. 2011, 002) at run time, §7.3: the dictionary's
-//! operators and the level's tables uploaded once, and every frame, lights moving:
-//! 1. `direct` (direct.rs): the shadowed direct light at every level sample, l = rho E_d;
-//! 2. per bounce (the feedback of §7.3, iterated within the frame so that a frame depends on
-//!    its lights alone): `coefficients` (b = T_d->b l per block), `transfer` (r = T_b->r b per
-//!    receiver), `response` (U_b b + U_r r per sample, summed; times rho the next bounce's l);
-//! 3. `light_map` (light_map.rs): the samples' indirect irradiance into their texels;
-//! 4. `padding` (padding.rs): the tiles' borders by the copy records (the padded atlas).
+//! operators and the level's tables uploaded once, and every frame, lights moving, seven
+//! passes, each in a file of its own:
+//! 1. `direct`: the shadowed direct light at every level sample, l_d = rho E_d;
+//! 2. `coefficients`: b0 = T_d->b l_d per block;
+//! 3. `feedback`: b = (I - K)^-1 b0, every bounce at once (the fixed point of §7.3's
+//!    frame-to-frame feedback, solved at bake time), or b = b0 with feedback off;
+//! 4. `transfer`: r = T_b->r b per receiver;
+//! 5. `response`: U_b b + U_r r per sample, the indirect irradiance;
+//! 6. `light_map`: the samples' indirect irradiance into their texels;
+//! 7. `padding`: the tiles' borders by the copy records (the padded atlas).
 //!
 //! It hands the lighting pass the light map as a texel irradiance term (the scene's uv1 are
 //! the level's light-map coordinates). `LevelData::indirect` (relume_bake) is the same on the
-//! CPU.
+//! CPU. A frame depends on its lights alone: no state is carried from frame to frame.
 //!
 //! Uploaded at creation (device-local, never written again): `samples` (S x 3 vec4: position,
 //! normal, albedo), `shapes` (6 x uvec4: n, k, where T_d->b and U_b start), `operators` (f32:
 //! each shape's T_d->b and U_b, then U_r), `blocks` (B x uvec2: shape, first row), `rows`
 //! (u32), `receivers` (R x uvec2: first source, count), `sources` (uvec2: block, first matrix
-//! value), `matrices` (f32), `sample_rows` (S x 3 uvec4), `texel_samples` (u32 per texel),
-//! `copies` (uvec2). Written every frame: `light`, `indirect`, `direct` (S x vec4), `b` (B k_max x vec4),
-//! `r` (R k_r x vec4), the `light_map` image.
+//! value), `matrices` (f32), `feedback` (3 x D x D f32, D = B k_max), `sample_rows` (S x 3
+//! uvec4), `texel_samples` (u32 per texel), `copies` (uvec2). Written every frame: `light`,
+//! `direct`, `indirect` (S x vec4), `b0`, `b` (D x vec4), `r` (R k_r x vec4), the `light_map`
+//! image.
 
 mod coefficients;
 mod direct;
+mod feedback;
 mod light_map;
 mod padding;
 mod response;
@@ -37,15 +42,12 @@ use relume_bake::mrt::dictionary::Dictionary;
 use relume_bake::mrt::level_data::LevelData;
 use tables::Tables;
 
-/// The most bounces a frame iterates.
-pub const MAX_BOUNCES: u32 = 4;
-
-/// What the technique is made from: a dictionary, a level made with it, and the bounces each
-/// frame iterates (1..=MAX_BOUNCES; 1 is the paper's per-frame work).
+/// What the technique is made from: a dictionary, a level made with it, and whether every
+/// bounce is fed back (the solved feedback) or the first only.
 pub struct MrtData<'d> {
     pub dictionary: &'d Dictionary,
     pub level: &'d LevelData,
-    pub bounces: u32,
+    pub feedback: bool,
 }
 
 /// The counts every pass reads (shaders/mrt/push.glsl's MrtPush).
@@ -61,7 +63,7 @@ struct MrtPush {
     texel_count: u32,
     copy_count: u32,
     width: u32,
-    first_bounce: u32,
+    feedback: u32,
     u_r: u32,
 }
 
@@ -92,12 +94,14 @@ struct Buffers {
     receivers: Buffer,
     sources: Buffer,
     matrices: Buffer,
+    feedback: Buffer,
     sample_rows: Buffer,
     texel_samples: Buffer,
     copies: Buffer,
     light: Buffer,
     indirect: Buffer,
     direct: Buffer,
+    b0: Buffer,
     b: Buffer,
     r: Buffer,
 }
@@ -107,61 +111,18 @@ pub struct Mrt {
     light_map: Image,
     direct: Dispatch,
     coefficients: Dispatch,
+    feedback: Dispatch,
     transfer: Dispatch,
     response: Dispatch,
     light_map_pass: Dispatch,
     padding: Dispatch,
     push: MrtPush,
-    bounces: u32,
     // Held so the sampler lives as long as the descriptor set that names it.
     _shadow_sampler: Sampler,
 }
 
-const PASSES: [&[&str]; MAX_BOUNCES as usize] = [
-    &["mrt.direct", "mrt.coefficients", "mrt.transfer", "mrt.response", "mrt.light_map", "mrt.padding"],
-    &[
-        "mrt.direct",
-        "mrt.coefficients",
-        "mrt.transfer",
-        "mrt.response",
-        "mrt.coefficients.2",
-        "mrt.transfer.2",
-        "mrt.response.2",
-        "mrt.light_map",
-        "mrt.padding",
-    ],
-    &[
-        "mrt.direct",
-        "mrt.coefficients",
-        "mrt.transfer",
-        "mrt.response",
-        "mrt.coefficients.2",
-        "mrt.transfer.2",
-        "mrt.response.2",
-        "mrt.coefficients.3",
-        "mrt.transfer.3",
-        "mrt.response.3",
-        "mrt.light_map",
-        "mrt.padding",
-    ],
-    &[
-        "mrt.direct",
-        "mrt.coefficients",
-        "mrt.transfer",
-        "mrt.response",
-        "mrt.coefficients.2",
-        "mrt.transfer.2",
-        "mrt.response.2",
-        "mrt.coefficients.3",
-        "mrt.transfer.3",
-        "mrt.response.3",
-        "mrt.coefficients.4",
-        "mrt.transfer.4",
-        "mrt.response.4",
-        "mrt.light_map",
-        "mrt.padding",
-    ],
-];
+const PASSES: [&str; 7] =
+    ["mrt.direct", "mrt.coefficients", "mrt.feedback", "mrt.transfer", "mrt.response", "mrt.light_map", "mrt.padding"];
 
 impl Technique for Mrt {
     fn name(&self) -> &'static str {
@@ -169,35 +130,25 @@ impl Technique for Mrt {
     }
 
     fn passes(&self) -> &'static [&'static str] {
-        PASSES[self.bounces as usize - 1]
+        &PASSES
     }
 
     fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        let last = self.passes().len() - 1;
-        match pass {
-            0 => self.direct.record(rec, tracker, &self.push),
-            p if p == last => self.padding.record(rec, tracker, &self.push),
-            p if p == last - 1 => self.light_map_pass.record(rec, tracker, &self.push),
-            p => match (p - 1) % 3 {
-                0 => self.coefficients.record(rec, tracker, &self.push),
-                1 => self.transfer.record(rec, tracker, &self.push),
-                _ => {
-                    let push = MrtPush { first_bounce: (p == 3) as u32, ..self.push };
-                    self.response.record(rec, tracker, &push)
-                }
-            },
-        }
+        let dispatch =
+            [&self.direct, &self.coefficients, &self.feedback, &self.transfer, &self.response, &self.light_map_pass, &self.padding];
+        dispatch[pass].record(rec, tracker, &self.push);
     }
 
     fn term(&self) -> Option<Term<'_>> {
         Some(Term::Irradiance { source: Source::Texel(&self.light_map), times_occlusion: false, occluded_direct: false })
     }
 
-    /// `b` (blocks x k_max vec4), `r` (receivers x k_r vec4) of the last bounce, `indirect`
-    /// and `direct` (samples x vec4, rgb the indirect and direct irradiance) and `light_map` (alpha 1 at sample texels,
+    /// `b0` and `b` (blocks x k_max vec4: before and after the feedback), `r` (receivers x
+    /// k_r vec4), `indirect` and `direct` (samples x vec4, rgb the indirect and direct irradiance) and `light_map` (alpha 1 at sample texels,
     /// -1 at padded ones, 0 elsewhere), as the last frame left them.
     fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
         vec![
+            ("b0", Resource::Buffer(&self.buffers.b0)),
             ("b", Resource::Buffer(&self.buffers.b)),
             ("r", Resource::Buffer(&self.buffers.r)),
             ("indirect", Resource::Buffer(&self.buffers.indirect)),
@@ -209,17 +160,14 @@ impl Technique for Mrt {
 
 impl MakeTechnique for MrtData<'_> {
     /// Checks the level against the dictionary and uploads both in one submission that is
-    /// waited for. Refused, by name: bounces outside 1..=MAX_BOUNCES, a level whose tables do
-    /// not fit the dictionary or a sample reached through more than four openings, and tables
-    /// larger than one storage buffer may span.
+    /// waited for. Refused, by name: a level whose tables do not fit the dictionary or a sample
+    /// reached through more than four openings, and tables larger than one storage buffer may
+    /// span.
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
         let ctx = shared.ctx;
-        if !(1..=MAX_BOUNCES).contains(&self.bounces) {
-            return Err(VkError::Invalid(format!("mrt: {} bounces; give 1..={MAX_BOUNCES}", self.bounces)));
-        }
         let t = Tables::new(self.dictionary, self.level).map_err(|e| VkError::Invalid(format!("mrt: {e}")))?;
         t.check(ctx.info.max_storage_buffer_range).map_err(|e| VkError::Invalid(format!("mrt: {e} on {}", ctx.info.name)))?;
-        let [samples, shapes, operators, blocks, rows, receivers, sources, matrices, sample_rows, texel_samples, copies] =
+        let [samples, shapes, operators, blocks, rows, receivers, sources, matrices, feedback, sample_rows, texel_samples, copies] =
             upload_buffers_blocking(
                 ctx,
                 [
@@ -231,6 +179,7 @@ impl MakeTechnique for MrtData<'_> {
                     ("mrt receivers", bytemuck::cast_slice(&t.receivers)),
                     ("mrt sources", bytemuck::cast_slice(&t.sources)),
                     ("mrt matrices", bytemuck::cast_slice(&t.matrices)),
+                    ("mrt feedback", bytemuck::cast_slice(&self.level.feedback)),
                     ("mrt sample rows", bytemuck::cast_slice(&t.sample_rows)),
                     ("mrt texel samples", bytemuck::cast_slice(&t.texel_samples)),
                     ("mrt copies", bytemuck::cast_slice(&t.copies)),
@@ -238,7 +187,7 @@ impl MakeTechnique for MrtData<'_> {
             )?;
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let vec4s = |name: &str, count: u32| Buffer::new(ctx, name, count.max(1) as u64 * 16, per_frame, MemoryLocation::GpuOnly);
-        let push = t.push;
+        let push = MrtPush { feedback: self.feedback as u32, ..t.push };
         let buffers = Buffers {
             samples,
             shapes,
@@ -248,12 +197,14 @@ impl MakeTechnique for MrtData<'_> {
             receivers,
             sources,
             matrices,
+            feedback,
             sample_rows,
             texel_samples,
             copies,
             light: vec4s("mrt light", push.sample_count)?,
             indirect: vec4s("mrt indirect", push.sample_count)?,
             direct: vec4s("mrt direct", push.sample_count)?,
+            b0: vec4s("mrt b0", push.block_count * push.k_max)?,
             b: vec4s("mrt b", push.block_count * push.k_max)?,
             r: vec4s("mrt r", push.receiver_count * push.k_r)?,
         };
@@ -275,6 +226,7 @@ impl MakeTechnique for MrtData<'_> {
         Ok(Box::new(Mrt {
             direct: direct::new(shared, &buffers, &shadow_sampler, push.sample_count)?,
             coefficients: coefficients::new(shared, &buffers, push.block_count * push.k_max)?,
+            feedback: feedback::new(shared, &buffers, push.block_count * push.k_max)?,
             transfer: transfer::new(shared, &buffers, push.receiver_count * push.k_r)?,
             response: response::new(shared, &buffers, push.sample_count)?,
             light_map_pass: light_map::new(shared, &buffers, &light_map, push.texel_count)?,
@@ -282,7 +234,6 @@ impl MakeTechnique for MrtData<'_> {
             buffers,
             light_map,
             push,
-            bounces: self.bounces,
             _shadow_sampler: shadow_sampler,
         }))
     }

@@ -1,10 +1,8 @@
 //! The samples' indirect light (compute), §7.3 steps 3 and 5: U_b b of the sample's block
-//! plus U_r r of each receiver landing on it, summed over the bounces, and rho times it the
-//! next bounce's light: shaders/mrt/response.comp.
+//! plus U_r r of each receiver landing on it: shaders/mrt/response.comp.
 //!
-//! Reads: `shapes`, `operators`, `blocks`, `sample_rows`, `samples`, `b`, `r`. Writes:
-//! `light`; reads and writes `indirect`. Cost: one invocation per sample, k + (receivers) k_r
-//! multiply-adds.
+//! Reads: `shapes`, `operators`, `blocks`, `sample_rows`, `b`, `r`. Writes: `indirect`. Cost:
+//! one invocation per sample, k + (receivers) k_r multiply-adds.
 
 use super::{Buffers, Dispatch};
 use crate::passes::compute::Slot;
@@ -18,11 +16,9 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, samples: u32) -> VkResult<
         Slot::Buffer(&buffers.operators, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.blocks, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.sample_rows, Access::ComputeStorageRead),
-        Slot::Buffer(&buffers.samples, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.b, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.r, Access::ComputeStorageRead),
-        Slot::Buffer(&buffers.light, Access::ComputeStorageWrite),
-        Slot::Buffer(&buffers.indirect, Access::ComputeStorageReadWrite),
+        Slot::Buffer(&buffers.indirect, Access::ComputeStorageWrite),
     ];
     Dispatch::new(shared, shaders::MRT_RESPONSE_COMP, samples, &slots)
 }

@@ -19,6 +19,7 @@ pub(super) struct Tables {
     pub texel_samples: Vec<u32>,
     pub copies: Vec<UVec2>,
     pub push: MrtPush,
+    feedback_bytes: usize,
 }
 
 /// `values`, or one zero when there are none (a buffer cannot be empty).
@@ -87,7 +88,7 @@ impl Tables {
             texel_count: texel_samples.len() as u32,
             copy_count: level.copies.len() as u32,
             width: level.layout.width,
-            first_bounce: 1,
+            feedback: 1,
             u_r,
         };
         Ok(Tables {
@@ -103,12 +104,15 @@ impl Tables {
             texel_samples,
             copies: non_empty(level.copies.iter().map(|c| UVec2::from(*c)).collect()),
             push,
+            feedback_bytes: level.feedback.len() * 4,
         })
     }
 
     /// Refuses tables a storage buffer of `limit` bytes cannot span, and indices past u32.
     pub fn check(&self, limit: u64) -> Result<(), String> {
-        for (name, bytes) in [("operators", self.operators.len() * 4), ("matrices (T_b->r)", self.matrices.len() * 4)] {
+        for (name, bytes) in
+            [("operators", self.operators.len() * 4), ("matrices (T_b->r)", self.matrices.len() * 4), ("feedback", self.feedback_bytes)]
+        {
             if bytes as u64 > limit {
                 return Err(format!("the {name} take {bytes} bytes, more than the {limit} bytes one storage buffer may span; use fewer blocks, a smaller d-max or fewer modes"));
             }
