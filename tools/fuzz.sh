@@ -29,7 +29,7 @@ for exr in scenes/envs/*.exr; do
 done
 for sweep in tools/sweeps/*.toml; do cp "$sweep" "$corpus/sweep/"; done
 
-echo "seeds: small bakes of cornell (obscurance, light path maps), fiv-blobs (fiv) and cornell-cloud (light-cloud), and a PNG"
+echo "seeds: small bakes of cornell (obscurance, light path maps), fiv-blobs (fiv), cornell-cloud (light-cloud) and mrt-cube (mrt), and a PNG"
 cargo build --release --locked -p relume-tools
 relume=target/release/relume
 work=$(mktemp -d)
@@ -38,6 +38,7 @@ trap 'rm -rf "$work"' EXIT
 "$relume" bake scenes/cornell.gltf --method light-path-maps --patches 2000 --rays 16 --entry-points 256 --clusters 4 --basis 2 --out "$work/lpm" >/dev/null
 "$relume" bake scenes/fiv-blobs.gltf --method fiv --grid 32x17x15 --difmap-width 16 --out "$work/fiv" >/dev/null
 "$relume" bake scenes/cornell-cloud.gltf --method light-cloud --samples 1 --clusters 4 --vectors 2 --out "$work/lc" >/dev/null
+"$relume" bake scenes/mrt-cube.gltf --method mrt --samples-per-face 4 --gather-rays 64 --modes 4 --prior-modes 8 --lightfield 2 --lightfield-modes 4 --response-modes 4 --out "$work/mrt" >/dev/null
 "$relume" reference scenes/cornell.gltf --width 16 --height 16 --spp 1 --out "$work/small.exr" >/dev/null
 { printf '\x01'; cat "$work/small.png"; } > "$corpus/image/small.png"
 python3 - "$work" "$corpus/artifact" <<'PY'
@@ -60,6 +61,9 @@ environment = read('fiv', 'fiv_environment.bin')
 seed('fiv-environment', 4, environment)
 seed('fiv-table', 5, struct.pack('<I', len(environment)) + environment + read('fiv', 'fiv_occluder_0.bin'))
 seed('light-cloud', 6, read('lc', 'light-cloud.bin'))
+dictionary = read('mrt', 'mrt-dictionary.bin')
+seed('mrt-dictionary', 7, dictionary)
+seed('mrt-level', 8, struct.pack('<I', len(dictionary)) + dictionary + read('mrt', 'mrt-level.bin'))
 PY
 
 for target in gltf artifact image sweep; do

@@ -5,7 +5,8 @@
 //! 0: manifest.json; 1: atlas.bin; 2: obscurance.exr after a u16 width and height of the atlas;
 //! 3: light-path-maps.bin after a u16 width and height; 4: fiv_environment.bin;
 //! 5: fiv_environment.bin and fiv_occluder_0.bin; 6: light-cloud.bin (for cornell-cloud);
-//! 7: mrt-dictionary.bin (keyed to nothing, read with whatever parameters it holds).
+//! 7: mrt-dictionary.bin (keyed to nothing, read with whatever parameters it holds);
+//! 8: mrt-dictionary.bin and mrt-level.bin (for mrt-cube), the level read with that dictionary.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -16,7 +17,7 @@ use serde_json::json;
 use std::sync::OnceLock;
 
 /// The committed scenes the sections are read for, each loaded once.
-const SCENES: [&str; 3] = ["cornell", "fiv-blobs", "cornell-cloud"];
+const SCENES: [&str; 4] = ["cornell", "fiv-blobs", "cornell-cloud", "mrt-cube"];
 
 fn loaded(which: usize) -> &'static Scene {
     static LOADED: [OnceLock<Scene>; SCENES.len()] = [const { OnceLock::new() }; SCENES.len()];
@@ -35,11 +36,20 @@ fn cornell_cloud() -> &'static Scene {
     loaded(2)
 }
 
+fn mrt_cube() -> &'static Scene {
+    loaded(3)
+}
+
 /// An artifact of `files` (one section each: name, key, file name, bytes) for `scene`, read.
 fn artifact(scene: &Scene, sections: Vec<(String, Key, String, Vec<u8>)>, version: u32) -> Option<Artifact> {
+    artifact_of(scene, sections.into_iter().map(|(name, key, file, bytes)| (name, key, file, bytes, version)).collect())
+}
+
+/// As [`artifact`], each section with its own version.
+fn artifact_of(scene: &Scene, sections: Vec<(String, Key, String, Vec<u8>, u32)>) -> Option<Artifact> {
     let sections = sections
         .into_iter()
-        .map(|(name, key, file, bytes)| Section { name, version, key, summary: json!({}), files: vec![(file, bytes)] })
+        .map(|(name, key, file, bytes, version)| Section { name, version, key, summary: json!({}), files: vec![(file, bytes)] })
         .collect();
     let dir = relume_fuzz::scratch().join("bake");
     let output = BakeOutput { method: "fuzz", scene: Some(scene), parameters: json!({}), sections, stats: json!({}) };
@@ -66,7 +76,7 @@ fn scene_section(name: &str, file: &str, bytes: &[u8]) -> (String, Key, String, 
 }
 
 fn read(which: u8, data: &[u8]) -> Option<()> {
-    match which % 8 {
+    match which % 9 {
         0 => {
             let dir = relume_fuzz::scratch().join("manifest");
             std::fs::create_dir_all(&dir).ok()?;
@@ -99,6 +109,16 @@ fn read(which: u8, data: &[u8]) -> Option<()> {
         7 => {
             let sections = vec![(mrt::dictionary::SECTION.into(), Key::Nothing, "mrt-dictionary.bin".into(), data.to_vec())];
             let _ = mrt::dictionary::read(&artifact(cornell(), sections, mrt::dictionary::SECTION_VERSION)?, None);
+        }
+        8 => {
+            let (dictionary, level) = two_files(data)?;
+            let sections = vec![
+                (mrt::dictionary::SECTION.into(), Key::Nothing, "mrt-dictionary.bin".into(), dictionary.to_vec(), mrt::dictionary::SECTION_VERSION),
+                (mrt::level_data::SECTION.into(), Key::Scene, "mrt-level.bin".into(), level.to_vec(), mrt::level_data::SECTION_VERSION),
+            ];
+            let artifact = artifact_of(mrt_cube(), sections)?;
+            let (read, checksum) = mrt::dictionary::read(&artifact, None).ok()?;
+            let _ = mrt::level_data::read(&artifact, mrt_cube(), &read, &checksum);
         }
         _ => {
             let (environment, table) = two_files(data)?;

@@ -230,3 +230,40 @@ fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
     says(&error, &["mrt-level.bin", "made with the dictionary", "bake the level again"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A level file cut short, naming a shape the dictionary lacks, or naming one sample twice is
+/// refused with the file and the item, never read.
+#[test]
+fn a_corrupt_level_is_refused_by_item() {
+    let scene = load_scene("mrt-cube");
+    let (dictionary, _, level, _) = mrt_quick_bake(&scene);
+    let dir = std::env::temp_dir().join(format!("relume-mrt-corrupt-{}", std::process::id()));
+    let good = level_data::section(&level, serde_json::json!({})).files[0].1.clone();
+    // Magic, the checksum's length and characters, the layout, the four counts: the first
+    // block's shape.
+    let shape_at = 8 + 4 + 4 * level.dictionary.len() + 12 + 16;
+    let mut other_shape = good.clone();
+    other_shape[shape_at..shape_at + 4].copy_from_slice(&9u32.to_le_bytes());
+    let mut twice = good.clone();
+    let first_row = shape_at + 8;
+    let second = twice[first_row + 4..first_row + 8].to_vec();
+    twice[first_row..first_row + 4].copy_from_slice(&second);
+    for (bytes, named) in [
+        (good[..good.len() - 7].to_vec(), "the feedback"),
+        (other_shape, "block 0 has shape 9; the dictionary has 6"),
+        (twice, "which another row names too"),
+    ] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut section = level_data::section(&level, serde_json::json!({}));
+        section.files[0].1 = bytes;
+        let sections = vec![dictionary::section(&dictionary, serde_json::json!({})), section];
+        BakeOutput { method: "mrt", scene: Some(&scene), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+            .write(&dir)
+            .unwrap();
+        let artifact = Artifact::read(&dir).unwrap();
+        let (read, checksum) = dictionary::read(&artifact, None).unwrap();
+        let error = level_data::read(&artifact, &scene, &read, &checksum).unwrap_err().to_string();
+        says(&error, &["mrt-level.bin", named]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

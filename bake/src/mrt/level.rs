@@ -60,6 +60,11 @@ impl Level {
         &self.cells
     }
 
+    /// The block standing at `cell`, if any.
+    pub fn block_at(&self, cell: (i32, i32)) -> Option<usize> {
+        self.at.get(&cell).copied()
+    }
+
     /// The block next to `block` through `face`, if any.
     pub fn neighbour(&self, block: usize, face: Face) -> Option<usize> {
         let (dx, dz) = SIDES.iter().find(|(f, _)| *f == face)?.1;

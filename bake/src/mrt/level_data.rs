@@ -14,9 +14,13 @@ use crate::scene::Scene;
 use glam::Vec3;
 
 pub const SECTION: &str = "mrt-level";
-pub const SECTION_VERSION: u32 = 1;
+pub const SECTION_VERSION: u32 = 2;
 const BIN: &str = "mrt-level.bin";
-const MAGIC: &[u8; 8] = b"RLMRTL01";
+const MAGIC: &[u8; 8] = b"RLMRTL02";
+
+/// The most coefficients a level's feedback may couple (blocks x k_max): its matrices are
+/// D^2 values a channel.
+pub const MAX_FEEDBACK: usize = 1 << 14;
 
 /// A receiver row on one of the block's openings: no sample.
 pub const NONE: u32 = u32::MAX;
@@ -137,6 +141,7 @@ impl LevelData {
     pub fn fed_back(&self, dictionary: &Dictionary, b0: &[Vec<Vec3>]) -> Vec<Vec<Vec3>> {
         let k_max = k_max(dictionary);
         let d = self.blocks.len() * k_max;
+        assert_eq!(self.feedback.len(), 3 * d * d, "the level's feedback is solved (baker::bake_level)");
         let flat: Vec<Vec3> = b0.iter().flat_map(|b| (0..k_max).map(move |m| b.get(m).copied().unwrap_or(Vec3::ZERO))).collect();
         let solved: Vec<Vec3> = (0..d)
             .map(|i| {
@@ -153,6 +158,7 @@ impl LevelData {
     /// The indirect irradiance at every level sample for the direct irradiance `direct`
     /// there (§7.3 steps 2-5): every bounce (`feedback`) or the first only.
     pub fn indirect(&self, dictionary: &Dictionary, direct: &[Vec3], feedback: bool) -> Vec<Vec3> {
+        assert_eq!(direct.len(), self.samples.len(), "direct light for every level sample");
         let light: Vec<Vec3> = direct.iter().zip(&self.samples).map(|(e, s)| *e * s.albedo).collect();
         let b0 = self.coefficients(dictionary, &light);
         let b = if feedback { self.fed_back(dictionary, &b0) } else { b0 };
@@ -237,7 +243,10 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
     let mut blocks = Vec::with_capacity(block_count.min(1 << 16));
     for b in 0..block_count {
         let (shape, n) = (r.u32("a block's shape")? as usize, r.u32("a block's row count")? as usize);
-        let ops = dictionary.blocks.get(shape).ok_or_else(|| bad(format!("block {b} has shape {shape}; the dictionary has 6")))?;
+        let ops = dictionary
+            .blocks
+            .get(shape)
+            .ok_or_else(|| bad(format!("block {b} has shape {shape}; the dictionary has {}", dictionary.blocks.len())))?;
         if n != ops.samples {
             return Err(bad(format!("block {b} has {n} rows; its shape has {} samples", ops.samples)));
         }
@@ -274,7 +283,19 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
         }
         receivers.push(LevelReceiver { block, rows, sources: from });
     }
-    let mut samples = Vec::with_capacity(sample_count);
+    // Each sample stands for exactly one row of one block (the passes read its block's U_b).
+    let mut owned = vec![false; sample_count];
+    for (b, block) in blocks.iter().enumerate() {
+        for &s in &block.rows {
+            if std::mem::replace(&mut owned[s as usize], true) {
+                return Err(bad(format!("block {b} names sample {s}, which another row names too")));
+            }
+        }
+    }
+    if let Some(s) = owned.iter().position(|o| !o) {
+        return Err(bad(format!("sample {s} belongs to no block")));
+    }
+    let mut samples = Vec::with_capacity(sample_count.min(1 << 16));
     for s in 0..sample_count {
         let f = r.f32s(9, "a sample")?;
         let texel = r.u32("a sample's texel")?;
@@ -294,8 +315,8 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
         return Err(bad(format!("a copy record names a texel past the light map's {}", layout.texel_count())));
     }
     let d = block_count * k_max(dictionary);
-    if d > 1 << 14 {
-        return Err(bad(format!("{block_count} blocks of {} modes: a feedback past 16384 coefficients", k_max(dictionary))));
+    if d > MAX_FEEDBACK {
+        return Err(bad(format!("{block_count} blocks of {} modes: a feedback past {MAX_FEEDBACK} coefficients", k_max(dictionary))));
     }
     let feedback = r.f32s(3 * d * d, "the feedback")?;
     if feedback.iter().any(|v| !v.is_finite()) {

@@ -148,7 +148,7 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
     }
     let inside = (p[0] + p[1] + p[2]) / 3.0 + facing * SLACK;
     let (x, z) = (inside.x.floor() as i32, inside.z.floor() as i32);
-    let block = level.cells().iter().position(|c| *c == (x, z)).filter(|_| (0.0..1.0).contains(&inside.y));
+    let block = level.block_at((x, z)).filter(|_| (0.0..1.0).contains(&inside.y));
     let block = block.ok_or_else(|| format!("it stands at {}, in no block", proxy.origin + inside * proxy.cell))?;
     let local = p.map(|q| q - Vec3::new(x as f32, 0.0, z as f32));
     let face = level

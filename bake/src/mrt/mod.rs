@@ -1,14 +1,14 @@
 //! Modular radiance transfer (Loos et al. 2011, paper 002; ../shared/specs/mrt.md): indirect
 //! light for block-structured levels from a dictionary of simple shapes built once for all
-//! scenes. This part holds the dictionary's shapes and, behind `baking`, the reduced
-//! direct-to-indirect operators of one block (§4 with the enrichment of App. A): the one-bounce
-//! operator F gathered on the block's samples, the light prior L_d, and from them U_b, T_d->b
-//! and the implicit lighting L_imp; the interface operators between blocks (§5.1: the reduced
-//! lightfield basis, R_b->rlf, the three turns, U_r and T_rlf->r); a level's blocks on a grid
-//! and the traversal behind T_b->r (§6.3); the scene's block proxy (`extras.relume.mrt`); a
-//! CPU evaluator of the run time's transfer (§7.3 steps 2-5); and the dictionary's section (the
-//! blocks' operators so far). The geometry's mapping, the padded atlas and the GPU passes come
-//! next.
+//! scenes. This part holds the dictionary's shapes; its section (`dictionary`: the blocks' and
+//! the interfaces' operators); the scene's block proxy (`proxy`, `extras.relume.mrt`); a
+//! level's blocks (`level`); the scene's geometry mapped onto them with the padded light map
+//! (`map`); and the level's tables as the run time takes them, with the CPU evaluator the GPU
+//! is checked against (`level_data`, section `mrt-level`). Behind `baking`: one block's reduced
+//! direct-to-indirect operators (`block`: §4 with the enrichment of App. A), the interface
+//! operators between blocks (`interface`: §5.1), T_b->r by traversal and a CPU evaluator on the
+//! operators themselves (`evaluate`: §6.3, §7.3), and the level's bake with its solved feedback
+//! (`baker`).
 
 #[cfg(feature = "baking")]
 pub mod baker;

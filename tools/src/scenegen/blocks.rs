@@ -2,7 +2,8 @@
 //! along +z, character c along +x) a 2 m cube room whose sides open onto the blocks next to it;
 //! the walls that remain, the floor and the ceiling as inward-facing quads, one per block face
 //! (so each lies on one face of one block), and `extras.relume.mrt.grid` declaring the blocks.
-//! 002 Table 3's levels: a single cube, a corridor, a small maze of 11 blocks with a cycle.
+//! 002 Table 3's levels: a single cube, a corridor, a small maze of 11 blocks with a cycle and
+//! a large one of 41; and Fig. 12's failure, the corridor declared as one long block.
 
 use super::geometry::quad_facing;
 use super::gltf_writer::Builder;
@@ -66,7 +67,7 @@ fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
     let light = light * CELL;
     b.point_light("BlockLight", light, DVec3::NEG_Y, exposure_one_intensity(light.y));
     b.camera("BlockCamera", eye * CELL, target * CELL, 70f64.to_radians(), Some(1.5), 0.05, 100.0);
-    b.mrt_grid(CELL, rows);
+    b.mrt_grid([CELL; 3], rows);
     b
 }
 
@@ -84,4 +85,46 @@ pub(super) fn corridor() -> Builder {
 /// one corner.
 pub(super) fn maze() -> Builder {
     level(&["....", ".#..", "...."], DVec3::new(0.5, 0.7, 0.5), DVec3::new(3.8, 0.5, 2.5), DVec3::new(0.0, 0.45, 2.5))
+}
+
+/// The corridor's geometry declared as one block 10 x 2 x 2 m (002 Fig. 12: one block for a
+/// long hall, the dictionary's cube stretched).
+pub(super) fn hall_one_block() -> Builder {
+    let mut b = corridor();
+    b.mrt_grid([5.0 * CELL, CELL, CELL], &["."]);
+    b
+}
+
+/// 41 blocks grown from one corner of a 9 x 9 grid by a fixed random walk over the frontier
+/// (a 64-bit LCG: the same level everywhere), mostly corridors; the light in the first block,
+/// the camera down a corridor.
+pub(super) fn maze_large() -> Builder {
+    const SIDE: usize = 9;
+    let mut open = [[false; SIDE]; SIDE];
+    open[0][0] = true;
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    for _ in 1..41 {
+        let neighbours = |x: usize, z: usize| {
+            [(x.wrapping_sub(1), z), (x + 1, z), (x, z.wrapping_sub(1)), (x, z + 1)]
+                .iter()
+                .filter(|&&(a, c)| a < SIDE && c < SIDE && open[c][a])
+                .count()
+        };
+        // Cells next to exactly one open cell (corridors), every eighth step any frontier cell
+        // (where corridors meet: loops and small halls).
+        let any = state >> 61 == 0;
+        let pick = |wanted: &dyn Fn(usize) -> bool| -> Vec<(usize, usize)> {
+            (0..SIDE * SIDE).map(|i| (i % SIDE, i / SIDE)).filter(|&(x, z)| !open[z][x] && wanted(neighbours(x, z))).collect()
+        };
+        let mut frontier = pick(&|n| n == 1 || (any && n > 1));
+        if frontier.is_empty() {
+            frontier = pick(&|n| n > 0);
+        }
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let (x, z) = frontier[(state >> 33) as usize % frontier.len()];
+        open[z][x] = true;
+    }
+    let rows: Vec<String> = open.iter().map(|row| row.iter().map(|&o| if o { '.' } else { '#' }).collect()).collect();
+    let rows: Vec<&str> = rows.iter().map(String::as_str).collect();
+    level(&rows, DVec3::new(0.5, 0.7, 0.5), DVec3::new(4.8, 0.5, 0.5), DVec3::new(0.0, 0.45, 0.5))
 }

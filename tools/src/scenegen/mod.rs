@@ -40,6 +40,8 @@
 //! - `mrt-cube`, `mrt-corridor`, `mrt-maze`: levels of 2 m blocks for modular radiance
 //!   transfer (002 Table 3): one closed block, five in a row, and 11 in two rows of four
 //!   joined at the ends and the middle (a cycle); one point light, one red wall.
+//! - `mrt-maze-large`: 41 blocks grown over a 9 x 9 grid (002 Table 3's large maze);
+//!   `mrt-hall-1block`: `mrt-corridor` declared as one 10 m block (002 Fig. 12's failure).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -76,7 +78,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 21] = [
+pub const SCENE_NAMES: [&str; 23] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -98,6 +100,8 @@ pub const SCENE_NAMES: [&str; 21] = [
     "mrt-cube",
     "mrt-corridor",
     "mrt-maze",
+    "mrt-maze-large",
+    "mrt-hall-1block",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -162,6 +166,8 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "mrt-cube" => blocks::cube(),
         "mrt-corridor" => blocks::corridor(),
         "mrt-maze" => blocks::maze(),
+        "mrt-maze-large" => blocks::maze_large(),
+        "mrt-hall-1block" => blocks::hall_one_block(),
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),

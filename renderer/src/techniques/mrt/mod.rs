@@ -160,7 +160,8 @@ impl Technique for Mrt {
 
 impl MakeTechnique for MrtData<'_> {
     /// Checks the level against the dictionary and uploads both in one submission that is
-    /// waited for. Refused, by name: a level whose tables do not fit the dictionary or a sample
+    /// waited for. Refused, by name: a level whose tables do not fit the dictionary (shapes,
+    /// rows, transfer sizes, an unsolved feedback, texels past the light map), a sample
     /// reached through more than four openings, and tables larger than one storage buffer may
     /// span.
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {

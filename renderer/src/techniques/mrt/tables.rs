@@ -31,7 +31,10 @@ fn non_empty<T: Default>(mut values: Vec<T>) -> Vec<T> {
 }
 
 impl Tables {
+    /// The tables of `level` made with `dictionary`; refused when they do not fit each other
+    /// (a level as `relume_bake::mrt::level_data::read` or `baker::bake_level` gives it fits).
     pub fn new(dictionary: &Dictionary, level: &LevelData) -> Result<Tables, String> {
+        fits(dictionary, level)?;
         let mut operators = Vec::new();
         let mut shapes = Vec::new();
         for block in &dictionary.blocks {
@@ -108,7 +111,7 @@ impl Tables {
         })
     }
 
-    /// Refuses tables a storage buffer of `limit` bytes cannot span, and indices past u32.
+    /// Refuses tables a storage buffer of `limit` bytes cannot span.
     pub fn check(&self, limit: u64) -> Result<(), String> {
         for (name, bytes) in
             [("operators", self.operators.len() * 4), ("matrices (T_b->r)", self.matrices.len() * 4), ("feedback", self.feedback_bytes)]
@@ -119,4 +122,43 @@ impl Tables {
         }
         Ok(())
     }
+}
+
+/// Whether the level's tables index the dictionary's operators and its own samples in range:
+/// shapes, row counts, transfer sizes and the solved feedback.
+fn fits(dictionary: &Dictionary, level: &LevelData) -> Result<(), String> {
+    let samples = level.samples.len();
+    let d = level.blocks.len() * relume_bake::mrt::level_data::k_max(dictionary);
+    let k_r = dictionary.interfaces.response_modes;
+    for (b, block) in level.blocks.iter().enumerate() {
+        let ops =
+            dictionary.blocks.get(block.shape as usize).ok_or(format!("block {b}'s shape {} is not the dictionary's", block.shape))?;
+        if block.rows.len() != ops.samples || block.rows.iter().any(|&s| s as usize >= samples) {
+            return Err(format!("block {b}'s rows do not fit its shape ({} samples) and the level's {samples}", ops.samples));
+        }
+    }
+    for (i, receiver) in level.receivers.iter().enumerate() {
+        let sizes = receiver
+            .sources
+            .iter()
+            .all(|(s, m)| level.blocks.get(*s as usize).is_some_and(|b| m.len() == k_r * dictionary.blocks[b.shape as usize].modes));
+        if !sizes
+            || receiver.rows.len() * k_r != dictionary.interfaces.u_r.len()
+            || receiver.rows.iter().any(|&s| s != NONE && s as usize >= samples)
+        {
+            return Err(format!("receiver {i}'s rows or transfer do not fit the dictionary and the level"));
+        }
+    }
+    if level.feedback.len() != 3 * d * d {
+        return Err(format!(
+            "the level's feedback holds {} values, not 3 x {d}^2 (bake the level with relume_bake::mrt::baker::bake_level)",
+            level.feedback.len()
+        ));
+    }
+    if level.samples.iter().any(|s| s.texel as usize >= level.layout.texel_count())
+        || level.copies.iter().flatten().any(|&t| t as usize >= level.layout.texel_count())
+    {
+        return Err("a sample or copy record names a texel past the light map".into());
+    }
+    Ok(())
 }
