@@ -72,3 +72,18 @@ fn the_passes_equal_the_cpu_evaluator_for_b_r_the_indirect_light_and_both_atlase
     }
     assert_clean(ctx);
 }
+
+#[test]
+fn a_level_without_its_solved_feedback_or_with_a_shape_the_dictionary_lacks_is_refused() {
+    let scene = load_scene("mrt-cube");
+    let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
+    let ctx = validated_context();
+    let unsolved = LevelData { feedback: Vec::new(), ..level.clone() };
+    let data = MrtData { dictionary: &dictionary, level: &unsolved, feedback: true };
+    says(&refusal(try_new_renderer(&ctx, &applied, &RenderSettings::default(), &[&data])), &["mrt", "feedback holds 0 values"]);
+    let mut other = level.clone();
+    other.blocks[0].shape = 9;
+    let data = MrtData { dictionary: &dictionary, level: &other, feedback: true };
+    says(&refusal(try_new_renderer(&ctx, &applied, &RenderSettings::default(), &[&data])), &["mrt", "block 0's shape 9"]);
+    assert_clean(ctx);
+}

@@ -267,3 +267,13 @@ fn a_corrupt_level_is_refused_by_item() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The level's tables, the solved feedback included, are the same bytes at 1 and 2 threads.
+#[test]
+fn a_level_is_the_same_bytes_at_one_and_two_threads() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, _, level, _) = mrt_quick_bake(&scene);
+    let one = relume_bake::work::with_threads(Some(1), || relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).unwrap().1);
+    let bytes = |l: &relume_bake::mrt::level_data::LevelData| level_data::section(l, serde_json::json!({})).files[0].1.clone();
+    assert!(bytes(&one) == bytes(&level), "the level differs between 1 and 2 threads");
+}

@@ -146,10 +146,16 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
     if facing == Vec3::ZERO {
         return Err("its vertex normals cancel: no side it faces".into());
     }
-    let inside = (p[0] + p[1] + p[2]) / 3.0 + facing * SLACK;
-    let (x, z) = (inside.x.floor() as i32, inside.z.floor() as i32);
-    let block = level.block_at((x, z)).filter(|_| (0.0..1.0).contains(&inside.y));
-    let block = block.ok_or_else(|| format!("it stands at {}, in no block", proxy.origin + inside * proxy.cell))?;
+    // The block it faces into; else, for a face on a block's boundary facing out of it (the
+    // underside of something standing on the floor), the block behind it.
+    let centroid = (p[0] + p[1] + p[2]) / 3.0;
+    let in_block = |q: Vec3| {
+        let (x, z) = (q.x.floor() as i32, q.z.floor() as i32);
+        level.block_at((x, z)).filter(|_| (0.0..1.0).contains(&q.y)).map(|b| (b, x, z))
+    };
+    let (block, x, z) = in_block(centroid + facing * SLACK)
+        .or_else(|| in_block(centroid - facing * SLACK))
+        .ok_or_else(|| format!("it stands at {}, in no block", proxy.origin + centroid * proxy.cell))?;
     let local = p.map(|q| q - Vec3::new(x as f32, 0.0, z as f32));
     let face = level
         .shape(block)

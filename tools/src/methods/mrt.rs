@@ -137,7 +137,9 @@ impl Method for MrtMethod {
         eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
         let dictionary = stages.timed("dictionary", || Dictionary::build(&block, &interface, |stage| eprintln!("mrt:   {stage}")));
         let d_max = values.count(&D_MAX) as usize;
-        let (mapped, level_data) = stages.timed("level", || bake_level(scene, &dictionary, d_max)).map_err(at)?;
+        let threads = work.threads;
+        let (mapped, level_data) =
+            stages.timed("level", || relume_bake::work::with_threads(threads, || bake_level(scene, &dictionary, d_max))).map_err(at)?;
         let matrices: usize = level_data.receivers.iter().flat_map(|r| r.sources.iter().map(|s| s.1.len())).sum();
         let facts = json!({
             "blocks": level_data.blocks.len(),

@@ -3,7 +3,8 @@
 //! the walls that remain, the floor and the ceiling as inward-facing quads, one per block face
 //! (so each lies on one face of one block), and `extras.relume.mrt.grid` declaring the blocks.
 //! 002 Table 3's levels: a single cube, a corridor, a small maze of 11 blocks with a cycle and
-//! a large one of 41; and Fig. 12's failure, the corridor declared as one long block.
+//! a large one of 41; and the paper's failures: the corridor declared as one long block (Fig.
+//! 12), the classroom with its furniture as one block (§8's Great Hall).
 
 use super::geometry::quad_facing;
 use super::gltf_writer::Builder;
@@ -67,7 +68,7 @@ fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
     let light = light * CELL;
     b.point_light("BlockLight", light, DVec3::NEG_Y, exposure_one_intensity(light.y));
     b.camera("BlockCamera", eye * CELL, target * CELL, 70f64.to_radians(), Some(1.5), 0.05, 100.0);
-    b.mrt_grid([CELL; 3], rows);
+    b.mrt_grid([0.0; 3], [CELL; 3], rows);
     b
 }
 
@@ -91,7 +92,15 @@ pub(super) fn maze() -> Builder {
 /// long hall, the dictionary's cube stretched).
 pub(super) fn hall_one_block() -> Builder {
     let mut b = corridor();
-    b.mrt_grid([5.0 * CELL, CELL, CELL], &["."]);
+    b.mrt_grid([0.0; 3], [5.0 * CELL, CELL, CELL], &["."]);
+    b
+}
+
+/// The classroom declared as one block, 8 x 3 x 7 m (002 §8's Great Hall: a room with
+/// furniture as one block; the desks' and chairs' faces project onto the room's faces).
+pub(super) fn classroom_one_block() -> Builder {
+    let mut b = super::scenes::classroom();
+    b.mrt_grid([-4.0, 0.0, -3.5], [8.0, 3.0, 7.0], &["."]);
     b
 }
 

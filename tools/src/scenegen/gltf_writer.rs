@@ -230,9 +230,9 @@ impl Builder {
     }
 
     /// Declares the blocks of modular radiance transfer (`extras.relume.mrt.grid`): cubes of
-    /// size `cell` from the origin, `rows` of '.' blocks and '#' solid cells.
-    pub(super) fn mrt_grid(&mut self, cell: [f64; 3], rows: &[&str]) {
-        self.mrt = Some(json!({ "grid": { "origin": [0, 0, 0], "cell": cell.map(num), "rows": rows } }));
+    /// size `cell` from `origin`, `rows` of '.' blocks and '#' solid cells.
+    pub(super) fn mrt_grid(&mut self, origin: [f64; 3], cell: [f64; 3], rows: &[&str]) {
+        self.mrt = Some(json!({ "grid": { "origin": origin.map(num), "cell": cell.map(num), "rows": rows } }));
     }
 
     /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.

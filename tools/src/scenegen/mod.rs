@@ -41,7 +41,8 @@
 //!   transfer (002 Table 3): one closed block, five in a row, and 11 in two rows of four
 //!   joined at the ends and the middle (a cycle); one point light, one red wall.
 //! - `mrt-maze-large`: 41 blocks grown over a 9 x 9 grid (002 Table 3's large maze);
-//!   `mrt-hall-1block`: `mrt-corridor` declared as one 10 m block (002 Fig. 12's failure).
+//!   `mrt-hall-1block`: `mrt-corridor` declared as one 10 m block (002 Fig. 12's failure);
+//!   `mrt-classroom-1block`: `classroom` declared as one block (002 §8's Great Hall).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -78,7 +79,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 23] = [
+pub const SCENE_NAMES: [&str; 24] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -102,6 +103,7 @@ pub const SCENE_NAMES: [&str; 23] = [
     "mrt-maze",
     "mrt-maze-large",
     "mrt-hall-1block",
+    "mrt-classroom-1block",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -168,6 +170,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "mrt-maze" => blocks::maze(),
         "mrt-maze-large" => blocks::maze_large(),
         "mrt-hall-1block" => blocks::hall_one_block(),
+        "mrt-classroom-1block" => blocks::classroom_one_block(),
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
