@@ -218,17 +218,23 @@ fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
         },
         ..dictionary.clone()
     };
-    let dir = std::env::temp_dir().join(format!("relume-mrt-level-{}", std::process::id()));
+    let error = level_refusal(&scene, &other, level_data::section(&level, serde_json::json!({})), "other");
+    says(&error, &["mrt-level.bin", "made with the dictionary", "bake the level again"]);
+}
+
+/// Why `level` (a section) is refused when read from an artifact beside `dictionary`'s.
+fn level_refusal(scene: &relume_bake::scene::Scene, dictionary: &Dictionary, level: relume_bake::artifact::Section, case: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("relume-mrt-level-{case}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let sections = vec![dictionary::section(&other, serde_json::json!({})), level_data::section(&level, serde_json::json!({}))];
-    BakeOutput { method: "mrt", scene: Some(&scene), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
+    let sections = vec![dictionary::section(dictionary, serde_json::json!({})), level];
+    BakeOutput { method: "mrt", scene: Some(scene), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
         .write(&dir)
         .unwrap();
     let artifact = Artifact::read(&dir).unwrap();
     let (read, checksum) = dictionary::read(&artifact, None).unwrap();
-    let error = level_data::read(&artifact, &scene, &read, &checksum).unwrap_err().to_string();
-    says(&error, &["mrt-level.bin", "made with the dictionary", "bake the level again"]);
+    let error = level_data::read(&artifact, scene, &read, &checksum).unwrap_err().to_string();
     let _ = std::fs::remove_dir_all(&dir);
+    error
 }
 
 /// A level file cut short, naming a shape the dictionary lacks, or naming one sample twice is
@@ -237,7 +243,6 @@ fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
 fn a_corrupt_level_is_refused_by_item() {
     let scene = load_scene("mrt-cube");
     let (dictionary, _, level, _) = mrt_quick_bake(&scene);
-    let dir = std::env::temp_dir().join(format!("relume-mrt-corrupt-{}", std::process::id()));
     let good = level_data::section(&level, serde_json::json!({})).files[0].1.clone();
     // Magic, the checksum's length and characters, the layout, the four counts: the first
     // block's shape.
@@ -253,19 +258,10 @@ fn a_corrupt_level_is_refused_by_item() {
         (other_shape, "block 0 has shape 9; the dictionary has 6"),
         (twice, "which another row names too"),
     ] {
-        let _ = std::fs::remove_dir_all(&dir);
         let mut section = level_data::section(&level, serde_json::json!({}));
         section.files[0].1 = bytes;
-        let sections = vec![dictionary::section(&dictionary, serde_json::json!({})), section];
-        BakeOutput { method: "mrt", scene: Some(&scene), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }
-            .write(&dir)
-            .unwrap();
-        let artifact = Artifact::read(&dir).unwrap();
-        let (read, checksum) = dictionary::read(&artifact, None).unwrap();
-        let error = level_data::read(&artifact, &scene, &read, &checksum).unwrap_err().to_string();
-        says(&error, &["mrt-level.bin", named]);
+        says(&level_refusal(&scene, &dictionary, section, "corrupt"), &["mrt-level.bin", named]);
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The level's tables, the solved feedback included, are the same bytes at 1 and 2 threads.
