@@ -428,3 +428,47 @@ fn light_cloud_refuses_spot_lights_and_warns_on_flat_meshes() {
     assert!(baked.status.success(), "{out}");
     assert!(out.contains("warning: 90 of 90 vertices belong to one triangle only"), "{out}");
 }
+
+/// An mrt bake reuses the dictionary of an earlier one (`--dictionary`), byte for byte, and
+/// refuses one made with other parameters, naming the file, the parameter and the fix.
+#[test]
+fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
+    let dir = temp_dir("mrt-dictionary");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let small = [
+        "--samples-per-face",
+        "4",
+        "--gather-rays",
+        "64",
+        "--modes",
+        "4",
+        "--prior-modes",
+        "8",
+        "--lightfield",
+        "2",
+        "--lightfield-modes",
+        "4",
+        "--response-modes",
+        "4",
+    ];
+    let bake = |scene: &str, out: &str, extra: &[&str]| {
+        let scene = scenes.join(format!("{scene}.gltf"));
+        let args = [&["bake", scene.to_str().unwrap(), "--method", "mrt", "--out", out][..], &small[..], extra].concat();
+        relume(&args, &dir)
+    };
+    assert!(bake("mrt-cube", "cube", &[]).status.success());
+    let reused = bake("mrt-corridor", "corridor", &["--dictionary", "cube"]);
+    assert!(reused.status.success(), "{}", String::from_utf8_lossy(&reused.stderr));
+    assert!(!String::from_utf8_lossy(&reused.stderr).contains("mrt:   blocks"), "the dictionary is read, not made");
+    let bytes = |bake: &str| std::fs::read(dir.join(bake).join("mrt-dictionary.bin")).unwrap();
+    assert!(bytes("cube") == bytes("corridor"));
+    let refused = bake("mrt-corridor", "other", &["--dictionary", "cube", "--no-enrich"]);
+    assert_eq!(refused.status.code(), Some(1));
+    let error = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        error.contains("mrt-dictionary.bin") && error.contains("enrich 1, not the 0") && error.contains("bake without --dictionary"),
+        "{error}"
+    );
+    assert!(!dir.join("other").exists(), "nothing written");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -125,7 +125,7 @@ pub fn read(artifact: &Artifact, wanted: Option<(&BlockSettings, &InterfaceSetti
         if let Some(((name, value), had)) = asked.iter().zip(stored).find(|((_, v), had)| v != had) {
             let show = |v: u64| if *name == "light-radius" { f32::from_bits(v as u32).to_string() } else { v.to_string() };
             let problem = format!("the dictionary was made with {name} {}, not the {} asked for", show(had), show(*value));
-            return Err(fail(&path, problem, "make the dictionary again with the parameters the level asks for"));
+            return Err(fail(&path, problem, "name a dictionary made with these parameters, or bake without --dictionary to make one"));
         }
     }
     let blocks = read_blocks(&mut r, &settings)?;

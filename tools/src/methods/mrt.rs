@@ -21,7 +21,7 @@ use relume_renderer::MakeTechnique;
 use serde_json::json;
 
 const SAMPLES_PER_FACE: Param =
-    Param::count("samples-per-face", "samples (light-map texels) a block face side (002 §7.1: 16)", 2, 64, Default::Value("16"));
+    Param::count("samples-per-face", "samples (light-map texels) a block face side (002: 16)", 2, 64, Default::Value("16"));
 const GATHER_RAYS: Param = Param::count(
     "gather-rays",
     "rays per sample gathering a block's one-bounce operator F (002: 16,384)",
@@ -45,6 +45,11 @@ const LIGHTFIELD: Param = Param::count(
 );
 const D_MAX: Param =
     Param::count("d-max", "the most interfaces light crosses between blocks (002 §6.3's traversal depth)", 1, 64, Default::Value("8"));
+const DICTIONARY: Param = Param::path(
+    "dictionary",
+    "an artifact folder whose dictionary to reuse (an earlier mrt bake of any scene, made with the same dictionary parameters: refused otherwise, naming the first that differs)",
+    "made by the bake",
+);
 const FEEDBACK: Param = Param::choice(
     "feedback",
     "every bounce (solved: the fixed point of 002 §7.3's frame-to-frame feedback, at once) or the first only (off)",
@@ -53,8 +58,19 @@ const FEEDBACK: Param = Param::choice(
 )
 .at_render();
 
-const PARAMS: [&Param; 10] =
-    [&SAMPLES_PER_FACE, &GATHER_RAYS, &MODES, &PRIOR_MODES, &NO_ENRICH, &LIGHTFIELD_MODES, &RESPONSE_MODES, &LIGHTFIELD, &D_MAX, &FEEDBACK];
+const PARAMS: [&Param; 11] = [
+    &SAMPLES_PER_FACE,
+    &GATHER_RAYS,
+    &MODES,
+    &PRIOR_MODES,
+    &NO_ENRICH,
+    &LIGHTFIELD_MODES,
+    &RESPONSE_MODES,
+    &LIGHTFIELD,
+    &D_MAX,
+    &DICTIONARY,
+    &FEEDBACK,
+];
 
 /// The dictionary's parameters from `values` (the interface's gather: a quarter of the block's
 /// rays, 2^2 supersamples: docs/BENCHMARKS.md, "Between blocks").
@@ -81,6 +97,21 @@ fn settings(values: &Values, work: &WorkOptions) -> (BlockSettings, InterfaceSet
         seed: work.seed,
     };
     (block, interface)
+}
+
+/// The dictionary of `--dictionary`, checked against the parameters asked for; else one made
+/// now (printing its stages).
+fn dictionary(values: &Values, block: &BlockSettings, interface: &InterfaceSettings) -> Result<Dictionary> {
+    match values.given_path(&DICTIONARY) {
+        Some(dir) => {
+            let artifact = Artifact::read(&dir)?;
+            Ok(dictionary::read(&artifact, Some((block, interface)))?.0)
+        }
+        None => {
+            eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
+            Ok(Dictionary::build(block, interface, |stage| eprintln!("mrt:   {stage}")))
+        }
+    }
 }
 
 pub(crate) struct MrtMethod;
@@ -134,8 +165,7 @@ impl Method for MrtMethod {
         let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
         Proxy::of(scene).map_err(at)?;
         let (block, interface) = settings(values, &work);
-        eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
-        let dictionary = stages.timed("dictionary", || Dictionary::build(&block, &interface, |stage| eprintln!("mrt:   {stage}")));
+        let dictionary = stages.timed("dictionary", || dictionary(values, &block, &interface))?;
         let d_max = values.count(&D_MAX) as usize;
         let threads = work.threads;
         let (mapped, level_data) =

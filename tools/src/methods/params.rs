@@ -26,6 +26,8 @@ pub(crate) enum Kind {
     Choice(&'static [&'static str]),
     /// Given or not.
     Flag,
+    /// A file or folder, as given (relative to the working folder).
+    Path,
 }
 
 /// What a parameter is when it is not given.
@@ -63,6 +65,11 @@ impl Param {
         Param { name, help, kind: Kind::Choice(choices), default, stage: Stage::Bake }
     }
 
+    /// A bake parameter naming a file or folder (its default: what the method does without).
+    pub const fn path(name: &'static str, help: &'static str, default: &'static str) -> Param {
+        Param { name, help, kind: Kind::Path, default: Default::From(default), stage: Stage::Bake }
+    }
+
     /// A bake flag.
     pub const fn flag(name: &'static str, help: &'static str) -> Param {
         Param { name, help, kind: Kind::Flag, default: Default::Value("false"), stage: Stage::Bake }
@@ -83,6 +90,7 @@ impl Param {
             }
             Kind::Choice(choices) => choices.join(", "),
             Kind::Flag => "a flag".into(),
+            Kind::Path => "a path".into(),
         }
     }
 
@@ -113,6 +121,8 @@ impl Param {
                 "true" => Value::Flag,
                 _ => bail!("--{name} takes no value ({text})"),
             },
+            Kind::Path if text.is_empty() => bail!("--{name}: give a path"),
+            Kind::Path => Value::Path(text.to_string()),
         })
     }
 }
@@ -123,6 +133,7 @@ enum Value {
     Number(f64),
     Choice(&'static str),
     Flag,
+    Path(String),
 }
 
 /// The values given to one method, checked; defaults are applied where they are read.
@@ -182,6 +193,14 @@ impl Values {
         }
     }
 
+    /// A path if given.
+    pub fn given_path(&self, param: &Param) -> Option<std::path::PathBuf> {
+        match self.given.get(param.name)? {
+            Value::Path(path) => Some(path.into()),
+            _ => wrong_kind(param),
+        }
+    }
+
     /// A count if given: for a parameter whose default comes from elsewhere.
     pub fn given_count(&self, param: &Param) -> Option<u64> {
         self.given(param).then(|| self.count(param))
@@ -224,6 +243,7 @@ impl Values {
                 Value::Number(v) => serde_json::json!(v),
                 Value::Choice(v) => serde_json::json!(v),
                 Value::Flag => serde_json::json!(true),
+                Value::Path(v) => serde_json::json!(v),
             };
             (name.to_string(), v)
         });
