@@ -189,10 +189,11 @@ impl Method for MrtMethod {
             dictionary.interfaces.lightfield_modes,
             dictionary.interfaces.response_modes
         );
-        let atlas = AtlasSection { meshes: mapped.meshes.clone(), layout: mapped.layout, texels: mapped.texels.clone() };
+        let layout = mapped.layout;
+        let atlas = AtlasSection { meshes: mapped.meshes, layout, texels: mapped.texels };
         Ok(Bake {
             sections: vec![
-                atlas.section(json!({ "width": mapped.layout.width, "height": mapped.layout.height })),
+                atlas.section(json!({ "width": layout.width, "height": layout.height })),
                 dictionary::section(&dictionary, json!({ "shapes": dictionary.blocks.len() })),
                 level_data::section(&level_data, facts.clone()),
             ],
