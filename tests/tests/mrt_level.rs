@@ -26,7 +26,7 @@ fn the_stored_tables_evaluate_as_the_level_transfer() {
     // A grey light falling off from one corner: every block lit, unevenly.
     let light: Vec<f32> = mapped.samples.iter().map(|s| 1.0 / (1.0 + s.position.length_squared())).collect();
     let mut at = 0;
-    let per_block: Vec<DVector<f64>> = (0..blocks.cells().len())
+    let per_block: Vec<DVector<f64>> = (0..blocks.len())
         .map(|b| {
             let n = Samples::new(blocks.shape(b), dictionary.settings.samples_per_face).len();
             at += n;
@@ -135,7 +135,7 @@ fn a_seam_reads_the_same_from_both_sides_and_a_crease_clamps_to_its_own_edge() {
     let floor = Face { axis: 1, positive: false };
     let read_at = |block: usize, face: Face, uv: Vec2| read(&texels, w, h, mapped.tiles.uv1_of(block, face, uv).expect("a present face")).0;
     let (mut seams, mut creases) = (0, 0);
-    for b in 0..blocks.cells().len() {
+    for b in 0..blocks.len() {
         // Seams: the floor across each opening (x and z).
         for axis in [0, 2] {
             let Some(n) = blocks.neighbour(b, Face { axis, positive: true }) else { continue };
@@ -192,6 +192,29 @@ fn crosses_a_seam(blocks: &relume_bake::mrt::level::Level, block: usize, face: F
 }
 
 #[test]
+fn the_warped_caves_samples_lie_on_the_triangles_they_light_facing_as_they_do() {
+    let scene = load_scene("mrt-cave");
+    let (_, mapped, _, _) = mrt_quick_bake(&scene);
+    let triangles: Vec<[Vec3; 3]> = scene
+        .meshes
+        .iter()
+        .flat_map(|m| m.indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| m.positions[t[k] as usize])).collect::<Vec<_>>())
+        .collect();
+    let mut covered = 0;
+    for sample in &mapped.samples {
+        let texel = &mapped.texels[sample.texel as usize];
+        assert_eq!(texel.coverage, 1.0, "every sample of a cave face is covered by the face's geometry");
+        let [a, b, c] = triangles[texel.triangle as usize];
+        let normal = (b - a).cross(c - a).normalize();
+        let off = (sample.position - a).dot(normal).abs();
+        assert!(off < 1e-4, "sample at {} stands {off} m off the plane of its triangle", sample.position);
+        assert!(sample.normal.dot(normal) > 0.9999, "sample normal {} against its triangle's {normal}", sample.normal);
+        covered += 1;
+    }
+    assert_eq!(covered, (19 * 6 - 42) * 64, "19 blocks' faces less their 42 openings, 8^2 samples each");
+}
+
+#[test]
 fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
     let mut scene = load_scene("mrt-cube");
     // The floor moved a block's side along x: it stands in no block.
@@ -200,7 +223,7 @@ fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
     }
     let (dictionary, ..) = mrt_quick_bake(&load_scene("mrt-cube"));
     let error = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).err().expect("refused");
-    says(&error, &["mesh \"Floor\" triangle 0", "in no block", "extras.relume.mrt.grid"]);
+    says(&error, &["mesh \"Floor\" triangle 0", "in no block", "extras.relume.mrt"]);
     // A floor triangle across two blocks' faces.
     let mut scene = load_scene("mrt-corridor");
     let floor = scene.meshes.iter_mut().find(|m| m.name == "Floor").unwrap();

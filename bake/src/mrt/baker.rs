@@ -16,11 +16,11 @@ use std::ops::AddAssign;
 pub fn bake_level(scene: &Scene, dictionary: &Dictionary, d_max: usize) -> Result<(Mapped, LevelData), String> {
     let proxy = Proxy::of(scene)?;
     let level = proxy.level();
-    let d = level.cells().len() * k_max(dictionary);
+    let d = level.len() * k_max(dictionary);
     if d > MAX_FEEDBACK {
         return Err(format!(
             "{} blocks of {} modes couple {d} coefficients in the feedback, past {MAX_FEEDBACK}; use fewer blocks or --modes",
-            level.cells().len(),
+            level.len(),
             k_max(dictionary)
         ));
     }

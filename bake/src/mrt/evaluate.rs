@@ -38,15 +38,15 @@ impl LevelTransfer {
             return Err(format!("the level's operators need the 2D dictionary's six shapes in order, not {shapes:?}"));
         }
         let grid = dictionary[0].samples.grid;
-        let blocks: Vec<(usize, Vec<usize>)> = (0..level.cells().len())
+        let blocks: Vec<(usize, Vec<usize>)> = (0..level.len())
             .map(|i| {
                 let index = level.shape(i).canonical().0;
                 (index, level.own_rows(&dictionary[index].samples, i))
             })
             .collect();
-        let sizes = (0..level.cells().len()).map(|i| super::Samples::new(level.shape(i), grid).len()).collect();
+        let sizes = (0..level.len()).map(|i| super::Samples::new(level.shape(i), grid).len()).collect();
         let mut receivers: Vec<Receiver> = Vec::new();
-        for source in 0..level.cells().len() {
+        for source in 0..level.len() {
             let from = |c: super::level::Crossing| {
                 let (index, face) = level.dictionary_face(c.block, c.face);
                 interfaces.from_block(index, face).expect("the dictionary's interfaces include every shape's openings").clone()

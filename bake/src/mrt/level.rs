@@ -21,12 +21,14 @@ pub struct Crossing {
     pub to: usize,
 }
 
-/// A level of unit blocks on a grid in the x-z plane (a 2D maze, spec C): block i stands at
-/// `cells[i]` = (x, z); faces between neighbouring blocks are open, all others closed.
-#[derive(Clone, Debug)]
+/// A level of blocks joined side to side: each block's side face is open to the block
+/// beyond it, if any, which it enters through the opposite face (+x joins -x, +z joins -z);
+/// all other faces are closed. Built from grid cells (the 2D maze shorthand, spec C) or from
+/// joins found between warped blocks (`proxy`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Level {
-    cells: Vec<(i32, i32)>,
-    at: HashMap<(i32, i32), usize>,
+    /// Per block, the block beyond each side face, in `SIDES` order.
+    links: Vec<[Option<usize>; 4]>,
 }
 
 /// The farthest a cell may lie from the origin along x or z.
@@ -41,7 +43,8 @@ const SIDES: [(Face, (i32, i32)); 4] = [
 ];
 
 impl Level {
-    /// The level of these cells; refused when a cell repeats or lies past 2^20.
+    /// The level of unit blocks at these grid cells (x, z), neighbouring cells joined; refused
+    /// when a cell repeats or lies past 2^20.
     pub fn new(cells: Vec<(i32, i32)>) -> Result<Level, String> {
         let mut at = HashMap::new();
         for (i, cell) in cells.iter().enumerate() {
@@ -52,24 +55,44 @@ impl Level {
                 return Err(format!("blocks {j} and {i} both stand at cell {cell:?}; give each cell one block"));
             }
         }
-        Ok(Level { cells, at })
+        let links = cells.iter().map(|&(x, z)| SIDES.map(|(_, (dx, dz))| at.get(&(x + dx, z + dz)).copied())).collect();
+        Ok(Level { links })
     }
 
-    /// Each block's cell (x, z).
-    pub fn cells(&self) -> &[(i32, i32)] {
-        &self.cells
+    /// The level of blocks joined as `join` says: `join(block, face)` is the block beyond
+    /// `block`'s side face `face`, if any. Refused unless every join is mutual (the block
+    /// beyond is entered through the opposite face and leads back) and between two blocks.
+    pub fn joined(blocks: usize, join: impl Fn(usize, Face) -> Option<usize>) -> Result<Level, String> {
+        let links: Vec<[Option<usize>; 4]> = (0..blocks).map(|b| SIDES.map(|(face, _)| join(b, face))).collect();
+        let level = Level { links };
+        for b in 0..blocks {
+            for (face, _) in SIDES {
+                let Some(n) = level.neighbour(b, face) else { continue };
+                if n >= blocks || n == b || level.neighbour(n, opposite(face)) != Some(b) {
+                    return Err(format!(
+                        "block {b}'s {} face joins block {n}, which does not join it back through its {} face",
+                        face.name(),
+                        opposite(face).name()
+                    ));
+                }
+            }
+        }
+        Ok(level)
     }
 
-    /// The block standing at `cell`, if any.
-    pub fn block_at(&self, cell: (i32, i32)) -> Option<usize> {
-        self.at.get(&cell).copied()
+    /// The number of blocks.
+    pub fn len(&self) -> usize {
+        self.links.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.links.is_empty()
     }
 
     /// The block next to `block` through `face`, if any.
     pub fn neighbour(&self, block: usize, face: Face) -> Option<usize> {
-        let (dx, dz) = SIDES.iter().find(|(f, _)| *f == face)?.1;
-        let (x, z) = self.cells[block];
-        self.at.get(&(x + dx, z + dz)).copied()
+        let side = SIDES.iter().position(|(f, _)| *f == face)?;
+        self.links[block][side]
     }
 
     /// Block `block`'s shape: open where a neighbour is.

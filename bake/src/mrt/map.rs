@@ -25,8 +25,8 @@ pub struct Mapped {
     pub tiles: Tiles,
 }
 
-/// How far (in cells) a vertex may stand off its block face, and a triangle's point is moved
-/// into the block it faces to find that block.
+/// How far (in block sides) a vertex may stand off its block face, and a triangle's point is
+/// moved into the block it faces to find that block.
 const SLACK: f32 = 1e-3;
 
 /// The light map's tiles: one per present face of each block, `grid` + 2 texels a side.
@@ -40,9 +40,9 @@ pub struct Tiles {
 
 impl Tiles {
     fn new(level: &Level, grid: usize) -> Result<Tiles, String> {
-        let mut blocks = Vec::with_capacity(level.cells().len());
+        let mut blocks = Vec::with_capacity(level.len());
         let mut count = 0;
-        for b in 0..level.cells().len() {
+        for b in 0..level.len() {
             let samples = Samples::new(level.shape(b), grid);
             let faces = samples.faces.len();
             blocks.push((samples, count));
@@ -92,10 +92,10 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize) -> Result<M
     let mut samples = Vec::new();
     for (b, (own, first)) in tiles.blocks.iter().enumerate() {
         for i in 0..own.len() {
-            let (face, p, n) = own.sample(i);
+            let (face, p, _) = own.sample(i);
             let (x, y) = ((i % (grid * grid)) % grid, (i % (grid * grid)) / grid);
             let texel = tiles.texel(first + i / (grid * grid), x as i64, y as i64);
-            samples.push(LevelSample { position: proxy.world(b, p), normal: n, albedo: Vec3::ZERO, texel });
+            samples.push(LevelSample { position: proxy.world(b, p), normal: proxy.inward(b, face, p), albedo: Vec3::ZERO, texel });
             debug_assert_eq!(Some(first + i / (grid * grid)), tiles.tile(b, face));
         }
     }
@@ -109,8 +109,12 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize) -> Result<M
         let mut out = AtlasMesh::default();
         let mut split: HashMap<(u32, usize), u32> = HashMap::new();
         for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
-            let (block, face, uvs, distance) = place(proxy, level, &mesh.positions, &mesh.normals, tri)
-                .map_err(|e| format!("mesh \"{}\" triangle {t}: {e}; split the geometry at the block boundaries of extras.relume.mrt.grid or change the grid", mesh.name))?;
+            let (block, face, uvs, distance) = place(proxy, level, &mesh.positions, &mesh.normals, tri).map_err(|e| {
+                format!(
+                    "mesh \"{}\" triangle {t}: {e}; split the geometry at the block boundaries of extras.relume.mrt or change the blocks",
+                    mesh.name
+                )
+            })?;
             let tile = tiles.tile(block, face).expect("placed on a present face");
             for (k, &v) in tri.iter().enumerate() {
                 let next = out.source_vertex.len() as u32;
@@ -139,24 +143,26 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize) -> Result<M
 }
 
 /// The block and present face a triangle lies on, its vertices' face coordinates, and its
-/// centroid's distance off the face (cells).
+/// centroid's distance off the face (in block sides).
 fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri: &[u32]) -> Result<(usize, Face, [Vec2; 3], f32), String> {
-    let p = [0, 1, 2].map(|k| (positions[tri[k] as usize] - proxy.origin) / proxy.cell);
-    let facing = tri.iter().map(|&v| normals[v as usize] / proxy.cell).sum::<Vec3>().normalize_or_zero();
-    if facing == Vec3::ZERO {
+    let p = [0, 1, 2].map(|k| positions[tri[k] as usize]);
+    let normal = tri.iter().map(|&v| normals[v as usize]).sum::<Vec3>().normalize_or_zero();
+    if normal == Vec3::ZERO {
         return Err("its vertex normals cancel: no side it faces".into());
     }
     // The block it faces into; else, for a face on a block's boundary facing out of it (the
     // underside of something standing on the floor), the block behind it.
     let centroid = (p[0] + p[1] + p[2]) / 3.0;
-    let in_block = |q: Vec3| {
-        let (x, z) = (q.x.floor() as i32, q.z.floor() as i32);
-        level.block_at((x, z)).filter(|_| (0.0..1.0).contains(&q.y)).map(|b| (b, x, z))
-    };
-    let (block, x, z) = in_block(centroid + facing * SLACK)
-        .or_else(|| in_block(centroid - facing * SLACK))
-        .ok_or_else(|| format!("it stands at {}, in no block", proxy.origin + centroid * proxy.cell))?;
-    let local = p.map(|q| q - Vec3::new(x as f32, 0.0, z as f32));
+    let step = normal * SLACK * proxy.side();
+    let (block, centre) = proxy
+        .locate(centroid + step)
+        .or_else(|| proxy.locate(centroid - step))
+        .ok_or_else(|| format!("it stands at {centroid}, in no block"))?;
+    let outside = || format!("it reaches past the face it lies on (block {block})");
+    let [Some(a), Some(b), Some(c)] = p.map(|q| proxy.local(block, q)) else { return Err(outside()) };
+    let local = [a, b, c];
+    // A normal is a covector: in the block's local frame it is J^T n.
+    let facing = proxy.jacobian(block, centre).transpose() * normal;
     let face = level
         .shape(block)
         .present()
@@ -165,7 +171,7 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
         .expect("top and bottom");
     let uvs = local.map(|q| face.uv(q));
     if uvs.iter().any(|uv| uv.min_element() < -SLACK || uv.max_element() > 1.0 + SLACK) {
-        return Err(format!("it reaches past the face it lies on (block {block} at cell ({x}, {z}))"));
+        return Err(outside());
     }
     let off = |q: Vec3| (q[face.axis] - face.positive as u32 as f32).abs();
     Ok((block, face, uvs.map(|uv| uv.clamp(Vec2::ZERO, Vec2::ONE)), off((local[0] + local[1] + local[2]) / 3.0)))

@@ -54,6 +54,11 @@ impl Face {
         self.axis * 2 + self.positive as usize
     }
 
+    /// "-x", "+x", "-y", "+y", "-z" or "+z", as errors name it.
+    pub fn name(self) -> &'static str {
+        ["-x", "+x", "-y", "+y", "-z", "+z"][self.index()]
+    }
+
     /// The unit normal pointing into the cube.
     pub fn inward(self) -> Vec3 {
         let mut n = Vec3::ZERO;

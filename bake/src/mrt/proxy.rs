@@ -1,12 +1,21 @@
-//! The block proxy a scene declares (`extras.relume.mrt`, §6.2): for now the grid shorthand of
-//! 2D mazes (spec C): `{"grid": {"origin": [x, y, z], "cell": [sx, sy, sz], "rows": ["#..#",
-//! ...]}}`, row r along +z, character c along +x, `.` a block and `#` solid. A block's faces
-//! towards its neighbours are open, the others closed; nothing can dangle or overlap.
+//! The block proxy a scene declares (`extras.relume.mrt`, §6.2), in one of two forms:
+//! - the grid shorthand of 2D mazes (spec C): `{"grid": {"origin": [x, y, z], "cell": [sx,
+//!   sy, sz], "rows": ["#..#", ...]}}`, row r along +z, character c along +x, `.` a block and
+//!   `#` solid; a block's faces towards its neighbours are open, the others closed;
+//! - warped blocks (spec B12): `{"blocks": [{"corners": [[x, y, z] x 8]}, ...]}`, corner i at
+//!   the unit cube's ((i & 1), (i >> 1) & 1, (i >> 2) & 1), +y up. A block is the trilinear
+//!   map of its corners; two blocks are joined where a side face of one has the same four
+//!   corners as the opposite face of the other. Refused: an inverted or flat block, two blocks
+//!   that overlap, a face that touches another block without being joined to it (a dangling
+//!   opening), and a joined top or bottom (the 2D dictionary has none).
+//!
+//! The dictionary's operators are reused under the warp unchanged (spec B12).
 
 use super::level::Level;
+use super::Face;
 use crate::scene::Scene;
 use crate::settings::{as_object, known_keys, vec3, SceneBlock};
-use glam::Vec3;
+use glam::{DMat3, DVec3, Mat3, Vec3};
 use serde_json::Value;
 
 const KEY: &str = "mrt";
@@ -16,14 +25,20 @@ pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| fro
 /// The most blocks a proxy may have (the paper's largest maze has 41).
 pub const MAX_BLOCKS: usize = 4096;
 
+/// How near (in block sides) two corners must be to be the same corner.
+const SAME: f64 = 1e-4;
+
+/// How far inside a block (in its local coordinates) a point must be to count as in it when
+/// checking for overlaps and dangling faces.
+const INSIDE: f64 = 1e-3;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Proxy {
-    /// The world position of cell (0, 0)'s minimum corner.
-    pub origin: Vec3,
-    /// A cell's size along x, y and z, metres.
-    pub cell: Vec3,
-    /// Each block's cell (x, z), in reading order.
-    pub cells: Vec<(i32, i32)>,
+    /// Each block's eight corners, corner i at local ((i & 1), (i >> 1) & 1, (i >> 2) & 1).
+    pub corners: Vec<[DVec3; 8]>,
+    level: Level,
+    /// The mean block side, metres: the scale of the proxy's tolerances.
+    side: f32,
 }
 
 impl Proxy {
@@ -31,26 +46,70 @@ impl Proxy {
     pub fn of(scene: &Scene) -> Result<Proxy, String> {
         match scene.settings.block(KEY) {
             Some(block) => from_block(block),
-            None => Err("the scene declares no block proxy (extras.relume.mrt.grid: rows of '.' blocks and '#' solid cells)".into()),
+            None => Err("the scene declares no block proxy (extras.relume.mrt: a grid of rows of '.' blocks and '#' solid cells, or warped blocks by their corners)".into()),
         }
     }
 
     pub fn level(&self) -> Level {
-        Level::new(self.cells.clone()).expect("a grid has one block a cell")
+        self.level.clone()
     }
 
-    /// The world position of a point of block `block`'s unit cube.
+    /// The world position of a point of block `block`'s unit cube (§6.2's warp: trilinear).
     pub fn world(&self, block: usize, local: Vec3) -> Vec3 {
-        let (x, z) = self.cells[block];
-        self.origin + (Vec3::new(x as f32, 0.0, z as f32) + local) * self.cell
+        trilinear(&self.corners[block], local.as_dvec3()).as_vec3()
+    }
+
+    /// d(world)/d(local) at a point of block `block`: its columns follow local x, y and z.
+    pub fn jacobian(&self, block: usize, local: Vec3) -> Mat3 {
+        jacobian(&self.corners[block], local.as_dvec3()).as_mat3()
+    }
+
+    /// The world normal of block `block`'s face `face` at local point `local`, into the block.
+    pub fn inward(&self, block: usize, face: Face, local: Vec3) -> Vec3 {
+        (self.jacobian(block, local).inverse().transpose() * face.inward()).normalize()
+    }
+
+    /// The local point of block `block` at world point `p` (None where the warp cannot be
+    /// undone there: far outside the block).
+    pub fn local(&self, block: usize, p: Vec3) -> Option<Vec3> {
+        local(&self.corners[block], p.as_dvec3()).map(|q| q.as_vec3())
+    }
+
+    /// The block `p` lies in (on a shared face: the one it lies deeper in) and its local
+    /// point there.
+    pub fn locate(&self, p: Vec3) -> Option<(usize, Vec3)> {
+        let p = p.as_dvec3();
+        (0..self.corners.len())
+            .filter(|&b| bounds(&self.corners[b], SAME * side(&self.corners[b])).contains(p))
+            .filter_map(|b| local(&self.corners[b], p).map(|q| (b, q)))
+            .filter(|(_, q)| depth(*q) >= -SAME)
+            .max_by(|a, b| depth(a.1).total_cmp(&depth(b.1)))
+            .map(|(b, q)| (b, q.as_vec3()))
+    }
+
+    /// The mean block side, metres: the scale of the proxy's tolerances.
+    pub fn side(&self) -> f32 {
+        self.side
+    }
+
+    fn new(corners: Vec<[DVec3; 8]>, level: Level) -> Proxy {
+        let side = (corners.iter().map(side).sum::<f64>() / corners.len() as f64) as f32;
+        Proxy { corners, level, side }
     }
 }
 
 fn from_block(block: &Value) -> Result<Proxy, String> {
     let key = "extras.relume.mrt";
     let block = as_object(block, key)?;
-    known_keys(block, key, &["grid"])?;
-    let grid = block.get("grid").ok_or_else(|| format!("{key} needs a grid (origin, cell, rows)"))?;
+    known_keys(block, key, &["grid", "blocks"])?;
+    match (block.get("grid"), block.get("blocks")) {
+        (Some(grid), None) => from_grid(grid),
+        (None, Some(blocks)) => from_blocks(blocks),
+        _ => Err(format!("{key} needs either a grid (origin, cell, rows) or blocks (each with its 8 corners), not both")),
+    }
+}
+
+fn from_grid(grid: &Value) -> Result<Proxy, String> {
     let key = "extras.relume.mrt.grid";
     let grid = as_object(grid, key)?;
     known_keys(grid, key, &["origin", "cell", "rows"])?;
@@ -75,7 +134,249 @@ fn from_block(block: &Value) -> Result<Proxy, String> {
     if cells.is_empty() || cells.len() > MAX_BLOCKS {
         return Err(format!("{key}.rows declare {} blocks; give 1..={MAX_BLOCKS} ('.')", cells.len()));
     }
-    Ok(Proxy { origin, cell, cells })
+    let (origin, cell) = (origin.as_dvec3(), cell.as_dvec3());
+    let corners = cells
+        .iter()
+        .map(|&(x, z)| std::array::from_fn(|i| origin + (DVec3::new(x as f64, 0.0, z as f64) + unit_corner(i)) * cell))
+        .collect();
+    Ok(Proxy::new(corners, Level::new(cells)?))
+}
+
+fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
+    let key = "extras.relume.mrt.blocks";
+    let blocks = blocks.as_array().ok_or_else(|| format!("{key} must be an array of blocks, each {{\"corners\": [8 x [x, y, z]]}}"))?;
+    if blocks.is_empty() || blocks.len() > MAX_BLOCKS {
+        return Err(format!("{key} declares {} blocks; give 1..={MAX_BLOCKS}", blocks.len()));
+    }
+    let corners = blocks.iter().enumerate().map(|(i, block)| read_corners(block, &format!("{key}[{i}]"))).collect::<Result<Vec<_>, _>>()?;
+    for (i, c) in corners.iter().enumerate() {
+        check_shape(c).map_err(|e| format!("{key}[{i}] {e}"))?;
+    }
+    let near = nearby(&corners);
+    for &(a, b) in &near {
+        if let Some(why) = overlap(&corners[a], &corners[b]) {
+            return Err(format!("{key}[{a}] and {key}[{b}] overlap ({why}); blocks may share faces but not volume"));
+        }
+    }
+    let mut links = vec![[None::<usize>; 6]; corners.len()];
+    for &(a, b) in &near {
+        for face in Face::ALL {
+            let other = Face { axis: face.axis, positive: !face.positive };
+            if !same_face(&corners[a], face, &corners[b]) {
+                continue;
+            }
+            if face.axis == 1 {
+                return Err(format!("{key}[{a}]'s {} face is joined to {key}[{b}]: the 2D dictionary's blocks have a closed top and bottom; stack no blocks", face.name()));
+            }
+            links[a][face.index()] = Some(b);
+            links[b][other.index()] = Some(a);
+        }
+    }
+    for (a, joins) in links.iter().enumerate() {
+        for face in Face::ALL.into_iter().filter(|f| joins[f.index()].is_none()) {
+            if let Some(b) = touched(&corners, &near, a, face) {
+                return Err(format!(
+                    "{key}[{a}]'s {} face touches {key}[{b}] without being joined to it (a dangling opening): joined faces share all four corners, +x with -x and +z with -z; give the faces the same corners or move the blocks apart",
+                    face.name()
+                ));
+            }
+        }
+    }
+    let level = Level::joined(corners.len(), |b, f| links[b][f.index()])?;
+    Ok(Proxy::new(corners, level))
+}
+
+fn read_corners(block: &Value, key: &str) -> Result<[DVec3; 8], String> {
+    let block = as_object(block, key)?;
+    known_keys(block, key, &["corners"])?;
+    let list = block.get("corners").and_then(Value::as_array).filter(|c| c.len() == 8);
+    let list = list
+        .ok_or_else(|| format!("{key}.corners must be 8 points [x, y, z], corner i at the unit cube's (i & 1, i >> 1 & 1, i >> 2 & 1)"))?;
+    let mut corners = [DVec3::ZERO; 8];
+    for (i, point) in list.iter().enumerate() {
+        let p = vec3(point, &format!("{key}.corners[{i}]"))?;
+        if !p.is_finite() {
+            return Err(format!("{key}.corners[{i}] must be finite"));
+        }
+        corners[i] = p.as_dvec3();
+    }
+    Ok(corners)
+}
+
+/// Refuses a block inverted or flat at a corner: its three edges from every corner must span
+/// a right-handed frame (x, y up, z) not thinner than 1 % of a box.
+fn check_shape(corners: &[DVec3; 8]) -> Result<(), String> {
+    for i in 0..8 {
+        let edge = |axis: usize| {
+            let bit = 1 << axis;
+            let towards = corners[i ^ bit] - corners[i];
+            if i & bit == 0 {
+                towards
+            } else {
+                -towards
+            }
+        };
+        let (x, y, z) = (edge(0), edge(1), edge(2));
+        if x.cross(y).dot(z) <= 0.01 * x.length() * y.length() * z.length() {
+            return Err(format!(
+                "is inverted or flat at corner {i}: list the corners x fastest, then y (up), then z, so that corner 1 is corner 0's +x neighbour, 2 its +y and 4 its +z, and keep the block from folding"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The pairs of blocks (a < b) whose bounds, widened by the corner tolerance, meet.
+fn nearby(corners: &[[DVec3; 8]]) -> Vec<(usize, usize)> {
+    let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, 2.0 * SAME * side(c))).collect();
+    let mut pairs = Vec::new();
+    for a in 0..boxes.len() {
+        for b in a + 1..boxes.len() {
+            if boxes[a].meets(&boxes[b]) {
+                pairs.push((a, b));
+            }
+        }
+    }
+    pairs
+}
+
+/// Why two blocks overlap, if they do: a point well inside one (its centre, or a corner or a
+/// face centre moved 1 % towards the centre) lies inside the other.
+fn overlap(a: &[DVec3; 8], b: &[DVec3; 8]) -> Option<String> {
+    let probes = |c: &[DVec3; 8]| {
+        let centre = trilinear(c, DVec3::splat(0.5));
+        let faces = Face::ALL.map(|f| trilinear(c, f.point(glam::Vec2::splat(0.5)).as_dvec3()));
+        std::iter::once(centre).chain(c.iter().chain(faces.iter()).map(move |&p| p + (centre - p) * 0.01)).collect::<Vec<_>>()
+    };
+    let inside = |c: &[DVec3; 8], p: DVec3| local(c, p).is_some_and(|q| depth(q) > INSIDE);
+    probes(a)
+        .into_iter()
+        .find(|&p| inside(b, p))
+        .or_else(|| probes(b).into_iter().find(|&p| inside(a, p)))
+        .map(|p| format!("both hold {p}"))
+}
+
+/// Whether face `fa` of block `a` has the same four corners as the opposite face of block `b`,
+/// corner for corner across the face.
+fn same_face(a: &[DVec3; 8], fa: Face, b: &[DVec3; 8]) -> bool {
+    let tolerance = SAME * side(a).min(side(b));
+    (0..8).filter(|i| (i >> fa.axis) & 1 == fa.positive as usize).all(|i| a[i].distance(b[i ^ (1 << fa.axis)]) <= tolerance)
+}
+
+/// A block other than `a` that face `face` of `a`'s centre lies on (not joined to it).
+fn touched(corners: &[[DVec3; 8]], near: &[(usize, usize)], a: usize, face: Face) -> Option<usize> {
+    let centre = trilinear(&corners[a], face.point(glam::Vec2::splat(0.5)).as_dvec3());
+    let others = near.iter().filter_map(|&(x, y)| {
+        if x == a {
+            Some(y)
+        } else if y == a {
+            Some(x)
+        } else {
+            None
+        }
+    });
+    others.into_iter().find(|&b| local(&corners[b], centre).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
+}
+
+/// Whether a local point lies on a face of the unit cube away from its edges.
+fn on_a_face(q: DVec3) -> bool {
+    (0..3).any(|axis| {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let on = q[axis].abs() < INSIDE || (q[axis] - 1.0).abs() < INSIDE;
+        on && [q[u], q[v]].iter().all(|t| (0.01..0.99).contains(t))
+    })
+}
+
+/// The unit cube's corner i.
+fn unit_corner(i: usize) -> DVec3 {
+    DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)
+}
+
+fn trilinear(c: &[DVec3; 8], q: DVec3) -> DVec3 {
+    (0..8).map(|i| c[i] * weight(i, q)).sum()
+}
+
+fn weight(i: usize, q: DVec3) -> f64 {
+    let t = unit_corner(i);
+    (0..3).map(|a| if t[a] > 0.5 { q[a] } else { 1.0 - q[a] }).product()
+}
+
+fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
+    let column = |axis: usize| -> DVec3 {
+        (0..8)
+            .map(|i| {
+                let t = unit_corner(i);
+                let d: f64 = (0..3)
+                    .map(|a| {
+                        if a == axis {
+                            if t[a] > 0.5 {
+                                1.0
+                            } else {
+                                -1.0
+                            }
+                        } else if t[a] > 0.5 {
+                            q[a]
+                        } else {
+                            1.0 - q[a]
+                        }
+                    })
+                    .product();
+                c[i] * d
+            })
+            .sum()
+    };
+    DMat3::from_cols(column(0), column(1), column(2))
+}
+
+/// The trilinear map's inverse at `p` by Newton's method from the block's centre (None where it
+/// does not converge: far outside the block or where the map folds).
+fn local(c: &[DVec3; 8], p: DVec3) -> Option<DVec3> {
+    let tolerance = 1e-9 * side(c);
+    let mut q = DVec3::splat(0.5);
+    for _ in 0..32 {
+        let miss = trilinear(c, q) - p;
+        if miss.length() <= tolerance {
+            return Some(q);
+        }
+        let j = jacobian(c, q);
+        if j.determinant().abs() < 1e-12 * side(c).powi(3) {
+            return None;
+        }
+        q = (q - j.inverse() * miss).clamp(DVec3::splat(-2.0), DVec3::splat(3.0));
+    }
+    (trilinear(c, q).distance(p) <= 1e-6 * side(c)).then_some(q)
+}
+
+/// How deep inside the unit cube a local point lies (negative: outside).
+fn depth(q: DVec3) -> f64 {
+    q.min_element().min((DVec3::ONE - q).min_element())
+}
+
+/// The mean length of a block's 12 edges.
+fn side(c: &[DVec3; 8]) -> f64 {
+    let edges = (0..8).flat_map(|i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| c[i].distance(c[i | (1 << a)])));
+    edges.sum::<f64>() / 12.0
+}
+
+struct Bounds {
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl Bounds {
+    fn contains(&self, p: DVec3) -> bool {
+        p.cmpge(self.lo).all() && p.cmple(self.hi).all()
+    }
+
+    fn meets(&self, other: &Bounds) -> bool {
+        self.lo.cmple(other.hi).all() && other.lo.cmple(self.hi).all()
+    }
+}
+
+fn bounds(c: &[DVec3; 8], widen: f64) -> Bounds {
+    let lo = c.iter().fold(DVec3::INFINITY, |m, p| m.min(*p)) - widen;
+    let hi = c.iter().fold(DVec3::NEG_INFINITY, |m, p| m.max(*p)) + widen;
+    Bounds { lo, hi }
 }
 
 #[cfg(test)]
@@ -86,7 +387,7 @@ mod tests {
     #[test]
     fn a_grid_reads_into_blocks_with_their_openings_and_bad_grids_are_refused_by_key() {
         let proxy = from_block(&json!({"grid": {"origin": [1, 0, 0], "cell": [2, 3, 2], "rows": ["..#", "#.."]}})).unwrap();
-        assert_eq!(proxy.cells, vec![(0, 0), (1, 0), (1, 1), (2, 1)]);
+        assert_eq!(proxy.corners.len(), 4);
         assert_eq!(proxy.world(3, Vec3::ONE), Vec3::new(7.0, 3.0, 4.0));
         let level = proxy.level();
         assert_eq!(level.shape(1).open_faces().len(), 2, "a corner block opens to two neighbours");
@@ -95,10 +396,70 @@ mod tests {
             (json!({"grid": {"rows": ["##"]}}), "0 blocks"),
             (json!({"grid": {"cell": [2, 0, 2], "rows": ["."]}}), "sizes > 0"),
             (json!({"grid": {"rows": "..."}}), "rows must be an array"),
-            (json!({"blocks": []}), "mrt.blocks is not a relume setting"),
+            (json!({"cells": []}), "mrt.cells is not a relume setting"),
+            (json!({"grid": {"rows": ["."]}, "blocks": []}), "not both"),
         ] {
             let error = from_block(&bad).unwrap_err();
             assert!(error.contains(named), "{bad}: {error}");
         }
+    }
+
+    /// The grid's blocks written as corners, moved by `warp`.
+    fn as_blocks(rows: &[&str], warp: impl Fn(DVec3) -> DVec3) -> Value {
+        let grid = from_block(&json!({"grid": {"rows": rows}})).unwrap();
+        let blocks: Vec<Value> = grid
+            .corners
+            .iter()
+            .map(|c| json!({"corners": c.iter().map(|p| { let w = warp(*p); [w.x, w.y, w.z] }).collect::<Vec<_>>()}))
+            .collect();
+        json!({ "blocks": blocks })
+    }
+
+    /// A smooth warp that keeps every block right-handed.
+    fn bend(p: DVec3) -> DVec3 {
+        DVec3::new(p.x + 0.3 * (p.z * 0.7).sin(), p.y * (1.0 + 0.05 * p.x), p.z + 0.25 * (p.x * 0.9).cos())
+    }
+
+    #[test]
+    fn warped_blocks_join_where_faces_coincide_as_the_grid_does() {
+        let rows = ["....", ".#..", "...."];
+        let grid = from_block(&json!({"grid": {"rows": rows}})).unwrap();
+        let warped = from_block(&as_blocks(&rows, bend)).unwrap();
+        assert_eq!(warped.level(), grid.level(), "the same joins, the same shapes");
+        for b in 0..warped.corners.len() {
+            for k in 0..20 {
+                let q = Vec3::new((k % 5) as f32 / 4.0, (k % 3) as f32 / 2.0, (k % 4) as f32 / 3.0) * 0.9 + 0.05;
+                let p = warped.world(b, q);
+                let (found, at) = warped.locate(p).unwrap();
+                assert_eq!(found, b, "{q} of block {b}");
+                assert!(at.distance(q) < 1e-4, "{at} against {q}");
+            }
+        }
+    }
+
+    #[test]
+    fn bad_block_layouts_are_refused_naming_the_block_and_the_fix() {
+        let shift = |d: DVec3| move |p: DVec3| p + d;
+        let two = |second: &dyn Fn(DVec3) -> DVec3| {
+            let mut blocks = as_blocks(&["."], |p| p);
+            let other = as_blocks(&["."], second);
+            blocks["blocks"].as_array_mut().unwrap().push(other["blocks"][0].clone());
+            blocks
+        };
+        let mut inverted = as_blocks(&["."], |p| p);
+        inverted["blocks"][0]["corners"].as_array_mut().unwrap().swap(0, 1);
+        for (bad, named) in [
+            (inverted, "blocks[0] is inverted or flat at corner 0"),
+            (two(&shift(DVec3::new(1.0, 0.0, 0.0))), "blocks[0] and extras.relume.mrt.blocks[1] overlap"),
+            (two(&shift(DVec3::new(2.0, 0.0, 0.5))), "blocks[0]'s +x face touches extras.relume.mrt.blocks[1] without being joined"),
+            (two(&shift(DVec3::new(0.0, 2.0, 0.0))), "+y face is joined"),
+            (json!({"blocks": [{"corners": [[0, 0, 0]]}]}), "blocks[0].corners must be 8 points"),
+            (json!({"blocks": []}), "declares 0 blocks"),
+        ] {
+            let error = from_block(&bad).unwrap_err();
+            assert!(error.contains(named), "{error}");
+        }
+        let apart = from_block(&two(&shift(DVec3::new(2.5, 0.0, 0.0)))).unwrap();
+        assert!(apart.level().shape(0).open_faces().is_empty(), "blocks apart are not joined");
     }
 }

@@ -16,8 +16,17 @@ use glam::DVec3;
 const CELL: f64 = 2.0;
 
 /// The level of `rows`, lit by a point light at `light` (in cells), seen from `eye` towards
-/// `target` (in cells).
+/// `target` (in cells), declared as a grid.
 fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
+    let mut b = surfaces(rows, &|p| p * CELL, 1, &[light], eye, target);
+    b.mrt_grid([0.0; 3], [CELL; 3], rows);
+    b
+}
+
+/// The surfaces of the level of `rows` with grid points (in cells) placed by `warp`, each block
+/// face as `split` x `split` quads, lit by point lights at `lights` and seen from `eye`
+/// towards `target` (grid points).
+fn surfaces(rows: &[&str], warp: &dyn Fn(DVec3) -> DVec3, split: usize, lights: &[DVec3], eye: DVec3, target: DVec3) -> Builder {
     let mut b = Builder::new(BLOCKS_SETTINGS);
     let floor = b.material("floor", [0.55, 0.5, 0.45]);
     let wall = b.material("wall", [0.7, 0.7, 0.65]);
@@ -30,8 +39,8 @@ fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
             if c != b'.' {
                 continue;
             }
-            let lo = DVec3::new(x as f64, 0.0, z as f64) * CELL;
-            let centre = lo + DVec3::splat(CELL / 2.0);
+            let lo = DVec3::new(x as f64, 0.0, z as f64);
+            let centre = warp(lo + DVec3::splat(0.5));
             let (x, z) = (x as i64, z as i64);
             for (axis, side, step) in
                 [(0, 0.0, (-1, 0)), (0, 1.0, (1, 0)), (1, 0.0, (0, 0)), (1, 1.0, (0, 0)), (2, 0.0, (0, -1)), (2, 1.0, (0, 1))]
@@ -40,14 +49,17 @@ fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
                     continue;
                 }
                 let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-                let corner = |s: f64, t: f64| {
+                let corner = |i: usize, j: usize| {
                     let mut p = lo;
-                    p[axis] += side * CELL;
-                    p[u] += s * CELL;
-                    p[v] += t * CELL;
-                    p
+                    p[axis] += side;
+                    p[u] += i as f64 / split as f64;
+                    p[v] += j as f64 / split as f64;
+                    warp(p)
                 };
-                let quad = quad_facing([corner(0.0, 0.0), corner(1.0, 0.0), corner(1.0, 1.0), corner(0.0, 1.0)], |c| centre - c);
+                let quads = (0..split * split).map(|k| (k % split, k / split));
+                let quad = quads.flat_map(|(i, j)| {
+                    quad_facing([corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)], |c| centre - c)
+                });
                 // The wall at the +x end of the first row is red: colour bleeding to follow.
                 let which = match (axis, side) {
                     (1, 0.0) => 0,
@@ -65,10 +77,15 @@ fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
             b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
         }
     }
-    let light = light * CELL;
-    b.point_light("BlockLight", light, DVec3::NEG_Y, exposure_one_intensity(light.y));
-    b.camera("BlockCamera", eye * CELL, target * CELL, 70f64.to_radians(), Some(1.5), 0.05, 100.0);
-    b.mrt_grid([0.0; 3], [CELL; 3], rows);
+    for (i, light) in lights.iter().enumerate() {
+        let name = if i == 0 { "BlockLight".to_string() } else { format!("BlockLight{i}") };
+        // Pointed straight at the floor below, pi lux there (the floor is one plane).
+        let floor = |dx: f64, dz: f64| warp(DVec3::new(light.x + dx, 0.0, light.z + dz));
+        let up = (floor(0.0, 0.25) - floor(0.0, 0.0)).cross(floor(0.25, 0.0) - floor(0.0, 0.0)).normalize();
+        let at = warp(*light);
+        b.point_light(&name, at, -up, exposure_one_intensity((at - floor(0.0, 0.0)).dot(up)));
+    }
+    b.camera("BlockCamera", warp(eye), warp(target), 70f64.to_radians(), Some(1.5), 0.05, 100.0);
     b
 }
 
@@ -136,4 +153,47 @@ pub(super) fn maze_large() -> Builder {
     let rows: Vec<String> = open.iter().map(|row| row.iter().map(|&o| if o { '.' } else { '#' }).collect()).collect();
     let rows: Vec<&str> = rows.iter().map(String::as_str).collect();
     level(&rows, DVec3::new(0.5, 0.7, 0.5), DVec3::new(4.8, 0.5, 0.5), DVec3::new(0.0, 0.45, 0.5))
+}
+
+/// 002 Fig. 1's cave: 19 blocks of a winding grid with two cycles, every lattice point moved
+/// along x and z by up to ±15 % of a side (a fixed 64-bit LCG) and the floor and the ceiling
+/// tilted two ways, so the blocks are warped cubes (trilinear from their 8 corners) whose faces
+/// are flat (the scene's triangles lie on them); the faces 4 x 4 quads; four point lights; the
+/// blocks declared by their corners (`extras.relume.mrt.blocks`).
+pub(super) fn cave() -> Builder {
+    const ROWS: [&str; 5] = ["...##", ".#...", "...#.", "#.#..", "....."];
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut jitter = || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 0.15
+    };
+    // Lattice point (i, j, k) of the 6 x 2 x 6 grid points, moved; a column's two points
+    // share x and z, so the walls stand upright and are flat.
+    let columns: Vec<(f64, f64)> = (0..36).map(|n| ((n % 6) as f64 + jitter(), (n / 6) as f64 + jitter())).collect();
+    let lattice: Vec<DVec3> = (0..72)
+        .map(|n| {
+            let (x, z) = columns[(n / 12) * 6 + n % 6];
+            let y = if (n / 6) % 2 == 0 { 0.06 * x - 0.04 * z } else { 1.0 - 0.04 * x + 0.05 * z };
+            DVec3::new(x, y, z)
+        })
+        .collect();
+    let point = |i: usize, j: usize, k: usize| lattice[k.min(5) * 12 + j.min(1) * 6 + i.min(5)] * CELL;
+    let warp = move |p: DVec3| {
+        let cell = p.floor().clamp(DVec3::ZERO, DVec3::new(4.0, 0.0, 4.0));
+        let (f, [i, j, k]) = (p - cell, [cell.x as usize, cell.y as usize, cell.z as usize]);
+        let corner = |n: usize| point(i + (n & 1), j + ((n >> 1) & 1), k + ((n >> 2) & 1));
+        (0..8)
+            .map(|n| {
+                let w = |bit: usize, t: f64| if n & (1 << bit) != 0 { t } else { 1.0 - t };
+                corner(n) * w(0, f.x) * w(1, f.y) * w(2, f.z)
+            })
+            .sum()
+    };
+    let lights = [DVec3::new(0.5, 0.7, 0.5), DVec3::new(3.5, 0.7, 1.5), DVec3::new(1.5, 0.7, 2.5), DVec3::new(4.5, 0.7, 4.5)];
+    let mut b = surfaces(&ROWS, &warp, 4, &lights, DVec3::new(1.5, 0.55, 4.7), DVec3::new(1.5, 0.45, 1.0));
+    let cells = ROWS.iter().enumerate().flat_map(|(z, row)| row.bytes().enumerate().filter(|c| c.1 == b'.').map(move |(x, _)| (x, z)));
+    let blocks = cells
+        .map(|(x, z)| std::array::from_fn(|n| warp(DVec3::new((x + (n & 1)) as f64, ((n >> 1) & 1) as f64, (z + ((n >> 2) & 1)) as f64))));
+    b.mrt_blocks(&blocks.collect::<Vec<[DVec3; 8]>>());
+    b
 }

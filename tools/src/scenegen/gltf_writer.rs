@@ -235,6 +235,13 @@ impl Builder {
         self.mrt = Some(json!({ "grid": { "origin": origin.map(num), "cell": cell.map(num), "rows": rows } }));
     }
 
+    /// Declares warped blocks of modular radiance transfer (`extras.relume.mrt.blocks`): each
+    /// by its 8 corners, corner i at the unit cube's (i & 1, i >> 1 & 1, i >> 2 & 1).
+    pub(super) fn mrt_blocks(&mut self, blocks: &[[DVec3; 8]]) {
+        let blocks: Vec<Value> = blocks.iter().map(|c| json!({ "corners": c.iter().map(|p| vec_json(*p)).collect::<Vec<_>>() })).collect();
+        self.mrt = Some(json!({ "blocks": blocks }));
+    }
+
     /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.
     pub(super) fn environment(&mut self, image: &str, intensity: f64) {
         self.environment = Some((image.to_string(), intensity));

@@ -42,7 +42,8 @@
 //!   joined at the ends and the middle (a cycle); one point light, one red wall.
 //! - `mrt-maze-large`: 41 blocks grown over a 9 x 9 grid (002 Table 3's large maze);
 //!   `mrt-hall-1block`: `mrt-corridor` declared as one 10 m block (002 Fig. 12's failure);
-//!   `mrt-classroom-1block`: `classroom` declared as one block (002 §8's Great Hall).
+//!   `mrt-classroom-1block`: `classroom` declared as one block (002 §8's Great Hall);
+//!   `mrt-cave`: 19 warped blocks declared by their corners, four lights (002 Fig. 1).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -79,7 +80,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 24] = [
+pub const SCENE_NAMES: [&str; 25] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -104,6 +105,7 @@ pub const SCENE_NAMES: [&str; 24] = [
     "mrt-maze-large",
     "mrt-hall-1block",
     "mrt-classroom-1block",
+    "mrt-cave",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -171,6 +173,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "mrt-maze-large" => blocks::maze_large(),
         "mrt-hall-1block" => blocks::hall_one_block(),
         "mrt-classroom-1block" => blocks::classroom_one_block(),
+        "mrt-cave" => blocks::cave(),
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
