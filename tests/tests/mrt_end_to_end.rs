@@ -6,7 +6,7 @@
 //! at the same light, and with the best constant ambient light (the constant method's, its
 //! ambient fitted to that reference by least squares).
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image::Image;
 use relume_bake::reference::{render_reference, ReferenceSettings};
@@ -36,7 +36,11 @@ fn best_scaled(name: &str, shape: &Image, reference: &Image) -> f64 {
 /// `path`.
 fn along_path(name: &str, path: &[Vec3]) -> (Vec<f64>, Vec<f64>) {
     let scene = load_scene(name);
-    let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
+    let (dictionary, _, level, mut applied) = mrt_quick_bake(&scene);
+    // The camera moved by 2-3 mm: the levels' edges lie on round coordinates, and at the scene's own
+    // camera some project exactly onto a pixel centre, where the rasteriser's tie rule and the
+    // path tracer's can pick different surfaces (one pixel off by the whole direct light).
+    applied.camera.world_from_camera = Mat4::from_translation(Vec3::new(0.0011, 0.0013, 0.0017)) * applied.camera.world_from_camera;
     let ctx = validated_context();
     let settings = RenderSettings { width: WIDTH, height: HEIGHT, ..RenderSettings::default() };
     let data = MrtData { dictionary: &dictionary, level: &level, feedback: true };
@@ -81,8 +85,8 @@ fn indirect_light_in_the_warped_cave_follows_the_reference_and_beats_constant_am
     // Down the first column of blocks, the other three lights still.
     let path = [Vec3::new(1.0, 1.4, 1.0), Vec3::new(1.0, 1.4, 3.0), Vec3::new(1.0, 1.4, 5.0)];
     let (errors, constants) = along_path("mrt-cave", &path);
-    // Bars from the first honest measurement (0.054, 0.055, 0.055 against the best constant's
-    // 0.530, 0.539, 0.585).
+    // Bars from the first honest measurement (0.054, 0.056, 0.056 against the best constant's
+    // 0.530, 0.540, 0.585).
     for (k, (e, c)) in errors.iter().zip(&constants).enumerate() {
         assert!(*e < 0.075 && *e < c / 3.0, "frame {k}: MRT {e:.3}, the best constant ambient {c:.3}");
     }

@@ -17,6 +17,7 @@ use crate::scene::Scene;
 use crate::settings::{as_object, known_keys, vec3, SceneBlock};
 use glam::{DMat3, DVec3, Mat3, Vec3};
 use serde_json::Value;
+use std::collections::HashMap;
 
 const KEY: &str = "mrt";
 
@@ -28,6 +29,9 @@ pub const MAX_BLOCKS: usize = 4096;
 /// How near (in block sides) two corners must be to be the same corner.
 const SAME: f64 = 1e-4;
 
+/// The farthest a corner may lie from the origin along any axis, metres.
+const MAX_COORDINATE: f32 = 1e6;
+
 /// How far inside a block (in its local coordinates) a point must be to count as in it when
 /// checking for overlaps and dangling faces.
 const INSIDE: f64 = 1e-3;
@@ -37,8 +41,13 @@ pub struct Proxy {
     /// Each block's eight corners, corner i at local ((i & 1), (i >> 1) & 1, (i >> 2) & 1).
     pub corners: Vec<[DVec3; 8]>,
     level: Level,
-    /// The mean block side, metres: the scale of the proxy's tolerances.
+    /// The shortest block edge, metres: the scale of the mapping's tolerances.
     side: f32,
+    /// Each block's bounds, widened by the corner tolerance.
+    boxes: Vec<Bounds>,
+    /// The blocks whose bounds meet each cube of a uniform grid of side `bucket`.
+    buckets: HashMap<[i64; 3], Vec<usize>>,
+    bucket: f64,
 }
 
 impl Proxy {
@@ -79,22 +88,41 @@ impl Proxy {
     /// point there.
     pub fn locate(&self, p: Vec3) -> Option<(usize, Vec3)> {
         let p = p.as_dvec3();
-        (0..self.corners.len())
-            .filter(|&b| bounds(&self.corners[b], SAME * side(&self.corners[b])).contains(p))
+        let near = self.buckets.get(&bucket_of(p, self.bucket))?;
+        near.iter()
+            .copied()
+            .filter(|&b| self.boxes[b].contains(p))
             .filter_map(|b| local(&self.corners[b], p).map(|q| (b, q)))
             .filter(|(_, q)| depth(*q) >= -SAME)
             .max_by(|a, b| depth(a.1).total_cmp(&depth(b.1)))
             .map(|(b, q)| (b, q.as_vec3()))
     }
 
-    /// The mean block side, metres: the scale of the proxy's tolerances.
+    /// The shortest block edge, metres: the scale of the mapping's tolerances.
     pub fn side(&self) -> f32 {
         self.side
     }
 
     fn new(corners: Vec<[DVec3; 8]>, level: Level) -> Proxy {
-        let side = (corners.iter().map(side).sum::<f64>() / corners.len() as f64) as f32;
-        Proxy { corners, level, side }
+        let edges = || corners.iter().flat_map(edges);
+        let shortest = edges().fold(f64::INFINITY, f64::min);
+        let longest = edges().fold(0.0, f64::max);
+        let mean = edges().sum::<f64>() / (12 * corners.len()) as f64;
+        // A bucket about a block wide; never so small that one block spans more than 8^3.
+        let bucket = mean.max(longest / 8.0);
+        let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, SAME * side(c))).collect();
+        let mut buckets: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        for (b, bounds) in boxes.iter().enumerate() {
+            let (lo, hi) = (bucket_of(bounds.lo, bucket), bucket_of(bounds.hi, bucket));
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets.entry([x, y, z]).or_default().push(b);
+                    }
+                }
+            }
+        }
+        Proxy { corners, level, side: shortest as f32, boxes, buckets, bucket }
     }
 }
 
@@ -153,6 +181,11 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
         check_shape(c).map_err(|e| format!("{key}[{i}] {e}"))?;
     }
     let near = nearby(&corners);
+    let mut around = vec![Vec::new(); corners.len()];
+    for &(a, b) in &near {
+        around[a].push(b);
+        around[b].push(a);
+    }
     for &(a, b) in &near {
         if let Some(why) = overlap(&corners[a], &corners[b]) {
             return Err(format!("{key}[{a}] and {key}[{b}] overlap ({why}); blocks may share faces but not volume"));
@@ -174,7 +207,7 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
     }
     for (a, joins) in links.iter().enumerate() {
         for face in Face::ALL.into_iter().filter(|f| joins[f.index()].is_none()) {
-            if let Some(b) = touched(&corners, &near, a, face) {
+            if let Some(b) = touched(&corners, &around[a], a, face) {
                 return Err(format!(
                     "{key}[{a}]'s {} face touches {key}[{b}] without being joined to it (a dangling opening): joined faces share all four corners, +x with -x and +z with -z; give the faces the same corners or move the blocks apart",
                     face.name()
@@ -195,35 +228,32 @@ fn read_corners(block: &Value, key: &str) -> Result<[DVec3; 8], String> {
     let mut corners = [DVec3::ZERO; 8];
     for (i, point) in list.iter().enumerate() {
         let p = vec3(point, &format!("{key}.corners[{i}]"))?;
-        if !p.is_finite() {
-            return Err(format!("{key}.corners[{i}] must be finite"));
+        if !p.is_finite() || p.abs().max_element() > MAX_COORDINATE {
+            return Err(format!("{key}.corners[{i}] must be finite and within {MAX_COORDINATE} m of the origin"));
         }
         corners[i] = p.as_dvec3();
     }
     Ok(corners)
 }
 
-/// Refuses a block inverted or flat at a corner: its three edges from every corner must span
-/// a right-handed frame (x, y up, z) not thinner than 1 % of a box.
+/// Refuses a block inverted, flat or folded: at every point of a 5^3 lattice of its unit cube
+/// (its corners among them) the warp's three derivatives must span a right-handed frame (x, y
+/// up, z) at least 1 % of a box's volume.
 fn check_shape(corners: &[DVec3; 8]) -> Result<(), String> {
-    for i in 0..8 {
-        let edge = |axis: usize| {
-            let bit = 1 << axis;
-            let towards = corners[i ^ bit] - corners[i];
-            if i & bit == 0 {
-                towards
-            } else {
-                -towards
-            }
-        };
-        let (x, y, z) = (edge(0), edge(1), edge(2));
-        if x.cross(y).dot(z) <= 0.01 * x.length() * y.length() * z.length() {
+    for q in lattice(&[0.0, 0.25, 0.5, 0.75, 1.0]) {
+        let j = jacobian(corners, q);
+        if j.determinant() <= 0.01 * j.x_axis.length() * j.y_axis.length() * j.z_axis.length() {
             return Err(format!(
-                "is inverted or flat at corner {i}: list the corners x fastest, then y (up), then z, so that corner 1 is corner 0's +x neighbour, 2 its +y and 4 its +z, and keep the block from folding"
+                "is inverted, flat or folded at its local point {q}: list the corners x fastest, then y (up), then z, so that corner 1 is corner 0's +x neighbour, 2 its +y and 4 its +z, and keep the block from folding"
             ));
         }
     }
     Ok(())
+}
+
+/// The points of the unit cube with every coordinate in `steps`.
+fn lattice(steps: &[f64]) -> impl Iterator<Item = DVec3> + '_ {
+    steps.iter().flat_map(move |&z| steps.iter().flat_map(move |&y| steps.iter().map(move |&x| DVec3::new(x, y, z))))
 }
 
 /// The pairs of blocks (a < b) whose bounds, widened by the corner tolerance, meet.
@@ -240,20 +270,14 @@ fn nearby(corners: &[[DVec3; 8]]) -> Vec<(usize, usize)> {
     pairs
 }
 
-/// Why two blocks overlap, if they do: a point well inside one (its centre, or a corner or a
-/// face centre moved 1 % towards the centre) lies inside the other.
+/// Why two blocks overlap, if they do: a point of a 5^3 lattice of one's unit cube, 1 % in
+/// from its faces, lies inside the other.
 fn overlap(a: &[DVec3; 8], b: &[DVec3; 8]) -> Option<String> {
-    let probes = |c: &[DVec3; 8]| {
-        let centre = trilinear(c, DVec3::splat(0.5));
-        let faces = Face::ALL.map(|f| trilinear(c, f.point(glam::Vec2::splat(0.5)).as_dvec3()));
-        std::iter::once(centre).chain(c.iter().chain(faces.iter()).map(move |&p| p + (centre - p) * 0.01)).collect::<Vec<_>>()
-    };
-    let inside = |c: &[DVec3; 8], p: DVec3| local(c, p).is_some_and(|q| depth(q) > INSIDE);
-    probes(a)
-        .into_iter()
-        .find(|&p| inside(b, p))
-        .or_else(|| probes(b).into_iter().find(|&p| inside(a, p)))
-        .map(|p| format!("both hold {p}"))
+    let probes = |c: &[DVec3; 8]| lattice(&[0.01, 0.25, 0.5, 0.75, 0.99]).map(|q| trilinear(c, q)).collect::<Vec<_>>();
+    let (box_a, box_b) = (bounds(a, 0.0), bounds(b, 0.0));
+    let inside = |c: &[DVec3; 8], outer: &Bounds, p: DVec3| outer.contains(p) && local(c, p).is_some_and(|q| depth(q) > INSIDE);
+    let found = probes(a).into_iter().find(|&p| inside(b, &box_b, p)).or_else(|| probes(b).into_iter().find(|&p| inside(a, &box_a, p)));
+    found.map(|p| format!("both hold {p}"))
 }
 
 /// Whether face `fa` of block `a` has the same four corners as the opposite face of block `b`,
@@ -263,19 +287,16 @@ fn same_face(a: &[DVec3; 8], fa: Face, b: &[DVec3; 8]) -> bool {
     (0..8).filter(|i| (i >> fa.axis) & 1 == fa.positive as usize).all(|i| a[i].distance(b[i ^ (1 << fa.axis)]) <= tolerance)
 }
 
-/// A block other than `a` that face `face` of `a`'s centre lies on (not joined to it).
-fn touched(corners: &[[DVec3; 8]], near: &[(usize, usize)], a: usize, face: Face) -> Option<usize> {
-    let centre = trilinear(&corners[a], face.point(glam::Vec2::splat(0.5)).as_dvec3());
-    let others = near.iter().filter_map(|&(x, y)| {
-        if x == a {
-            Some(y)
-        } else if y == a {
-            Some(x)
-        } else {
-            None
-        }
-    });
-    others.into_iter().find(|&b| local(&corners[b], centre).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
+/// A block of `others` (near `a`) that a point of a 4 x 4 lattice on face `face` of `a` lies
+/// on, away from its edges: a face that touches a block it is not joined to.
+fn touched(corners: &[[DVec3; 8]], others: &[usize], a: usize, face: Face) -> Option<usize> {
+    let points: Vec<DVec3> = (0..16)
+        .map(|k| trilinear(&corners[a], face.point(glam::Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0).as_dvec3()))
+        .collect();
+    others.iter().copied().find(|&b| {
+        let outer = bounds(&corners[b], SAME * side(&corners[b]));
+        points.iter().any(|&p| outer.contains(p) && local(&corners[b], p).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
+    })
 }
 
 /// Whether a local point lies on a face of the unit cube away from its edges.
@@ -328,23 +349,39 @@ fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
     DMat3::from_cols(column(0), column(1), column(2))
 }
 
-/// The trilinear map's inverse at `p` by Newton's method from the block's centre (None where it
-/// does not converge: far outside the block or where the map folds).
+/// The trilinear map's inverse at `p` by Newton's method: from the block's centre, and where
+/// that lands outside the cube (a warped block's map has other roots), from near each corner;
+/// the first root inside, else the first found (None where none converges: far outside the
+/// block, or where the map folds).
 fn local(c: &[DVec3; 8], p: DVec3) -> Option<DVec3> {
-    let tolerance = 1e-9 * side(c);
-    let mut q = DVec3::splat(0.5);
+    let seeds = std::iter::once(DVec3::splat(0.5)).chain((0..8).map(|i| DVec3::splat(0.1) + unit_corner(i) * 0.8));
+    let mut first = None;
+    for seed in seeds {
+        if let Some(q) = newton(c, p, seed) {
+            if depth(q) >= -INSIDE {
+                return Some(q);
+            }
+            first = first.or(Some(q));
+        }
+    }
+    first
+}
+
+fn newton(c: &[DVec3; 8], p: DVec3, seed: DVec3) -> Option<DVec3> {
+    let size = side(c);
+    let mut q = seed;
     for _ in 0..32 {
         let miss = trilinear(c, q) - p;
-        if miss.length() <= tolerance {
+        if miss.length() <= 1e-9 * size {
             return Some(q);
         }
         let j = jacobian(c, q);
-        if j.determinant().abs() < 1e-12 * side(c).powi(3) {
+        if j.determinant().abs() < 1e-12 * size.powi(3) {
             return None;
         }
         q = (q - j.inverse() * miss).clamp(DVec3::splat(-2.0), DVec3::splat(3.0));
     }
-    (trilinear(c, q).distance(p) <= 1e-6 * side(c)).then_some(q)
+    (trilinear(c, q).distance(p) <= 1e-6 * size).then_some(q)
 }
 
 /// How deep inside the unit cube a local point lies (negative: outside).
@@ -354,10 +391,19 @@ fn depth(q: DVec3) -> f64 {
 
 /// The mean length of a block's 12 edges.
 fn side(c: &[DVec3; 8]) -> f64 {
-    let edges = (0..8).flat_map(|i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| c[i].distance(c[i | (1 << a)])));
-    edges.sum::<f64>() / 12.0
+    edges(c).sum::<f64>() / 12.0
 }
 
+/// The lengths of a block's 12 edges.
+fn edges(c: &[DVec3; 8]) -> impl Iterator<Item = f64> + '_ {
+    (0..8).flat_map(move |i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| c[i].distance(c[i | (1 << a)])))
+}
+
+fn bucket_of(p: DVec3, size: f64) -> [i64; 3] {
+    (p / size).floor().as_i64vec3().to_array()
+}
+
+#[derive(Clone, Debug, PartialEq)]
 struct Bounds {
     lo: DVec3,
     hi: DVec3,
@@ -438,8 +484,20 @@ mod tests {
     }
 
     #[test]
+    fn the_largest_warped_level_joins_as_its_grid() {
+        let row = ".".repeat(64);
+        let rows = vec![row.as_str(); MAX_BLOCKS / 64];
+        let grid = from_block(&json!({"grid": {"rows": rows}})).unwrap();
+        let warped = from_block(&as_blocks(&rows, bend)).unwrap();
+        assert_eq!(warped.level(), grid.level());
+        let p = warped.world(2080, Vec3::splat(0.3));
+        assert_eq!(warped.locate(p).map(|(b, _)| b), Some(2080));
+    }
+
+    #[test]
     fn bad_block_layouts_are_refused_naming_the_block_and_the_fix() {
         let shift = |d: DVec3| move |p: DVec3| p + d;
+        let boxed = |lo: DVec3, hi: DVec3| json!({"corners": (0..8).map(|i| { let p = lo + unit_corner(i) * (hi - lo); [p.x, p.y, p.z] }).collect::<Vec<_>>()});
         let two = |second: &dyn Fn(DVec3) -> DVec3| {
             let mut blocks = as_blocks(&["."], |p| p);
             let other = as_blocks(&["."], second);
@@ -449,12 +507,21 @@ mod tests {
         let mut inverted = as_blocks(&["."], |p| p);
         inverted["blocks"][0]["corners"].as_array_mut().unwrap().swap(0, 1);
         for (bad, named) in [
-            (inverted, "blocks[0] is inverted or flat at corner 0"),
+            (inverted, "blocks[0] is inverted, flat or folded"),
             (two(&shift(DVec3::new(1.0, 0.0, 0.0))), "blocks[0] and extras.relume.mrt.blocks[1] overlap"),
             (two(&shift(DVec3::new(2.0, 0.0, 0.5))), "blocks[0]'s +x face touches extras.relume.mrt.blocks[1] without being joined"),
             (two(&shift(DVec3::new(0.0, 2.0, 0.0))), "+y face is joined"),
             (json!({"blocks": [{"corners": [[0, 0, 0]]}]}), "blocks[0].corners must be 8 points"),
             (json!({"blocks": []}), "declares 0 blocks"),
+            (two(&shift(DVec3::new(2.0, 0.0, 1.0))), "+x face touches"),
+            (
+                json!({"blocks": [boxed(DVec3::new(0.0, 0.0, 1.0), DVec3::new(4.0, 1.0, 2.0)), boxed(DVec3::new(2.5, 0.0, -3.0), DVec3::new(3.5, 1.0, 4.0))]}),
+                "overlap",
+            ),
+            (
+                json!({"blocks": [{"corners": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 2e7]]}]}),
+                "within 1000000 m",
+            ),
         ] {
             let error = from_block(&bad).unwrap_err();
             assert!(error.contains(named), "{error}");

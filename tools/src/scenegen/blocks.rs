@@ -6,10 +6,9 @@
 //! a large one of 41; and the paper's failures: the corridor declared as one long block (Fig.
 //! 12), the classroom with its furniture as one block (§8's Great Hall).
 
-use super::geometry::quad_facing;
 use super::gltf_writer::Builder;
 use super::scenes::exposure_one_intensity;
-use super::settings::BLOCKS_SETTINGS;
+use super::settings::{Settings, BLOCKS_SETTINGS};
 use glam::DVec3;
 
 /// A block's side, metres.
@@ -18,22 +17,40 @@ const CELL: f64 = 2.0;
 /// The level of `rows`, lit by a point light at `light` (in cells), seen from `eye` towards
 /// `target` (in cells), declared as a grid.
 fn level(rows: &[&str], light: DVec3, eye: DVec3, target: DVec3) -> Builder {
-    let mut b = surfaces(rows, &|p| p * CELL, 1, &[light], eye, target);
+    let mut b = surfaces(rows, &|p| p * CELL, &[light], eye, target);
     b.mrt_grid([0.0; 3], [CELL; 3], rows);
     b
 }
 
+/// Cells a block face's side is split into (a welded grid): vertices every 50 cm, for the
+/// per-vertex light clouds beside MRT.
+const SPLIT: usize = 4;
+
 /// The surfaces of the level of `rows` with grid points (in cells) placed by `warp`, each block
-/// face as `split` x `split` quads, lit by point lights at `lights` and seen from `eye`
-/// towards `target` (grid points).
-fn surfaces(rows: &[&str], warp: &dyn Fn(DVec3) -> DVec3, split: usize, lights: &[DVec3], eye: DVec3, target: DVec3) -> Builder {
-    let mut b = Builder::new(BLOCKS_SETTINGS);
+/// face as `SPLIT` x `SPLIT` quads, lit by point lights at `lights` and seen from `eye`
+/// towards `target` (grid points). The other local-light methods get the level too: a light
+/// cloud of two cloud lights a block per axis, two high, and light path maps' region over the
+/// level's whole floor plan between 1.2 and 1.6 m.
+fn surfaces(rows: &[&str], warp: &dyn Fn(DVec3) -> DVec3, lights: &[DVec3], eye: DVec3, target: DVec3) -> Builder {
+    let size = DVec3::new(rows.iter().map(|r| r.len()).max().unwrap_or(0) as f64, 1.0, rows.len() as f64);
+    let columns = size.x as usize + 1;
+    let layer = |y: f64| (0..columns * (size.z as usize + 1)).map(move |n| warp(DVec3::new((n % columns) as f64, y, (n / columns) as f64)));
+    let (lo, hi) = layer(0.0).chain(layer(1.0)).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let region = ([lo.x, 1.2, lo.z], [hi.x, 1.6, hi.z], 64);
+    let mut b = Builder::new(Settings { light_region: Some(region), ..BLOCKS_SETTINGS });
+    // The cloud between the highest floor point and the lowest ceiling point: inside the level.
+    let (top_of_floor, foot_of_ceiling) =
+        (layer(0.0).map(|p| p.y).fold(f64::MIN, f64::max), layer(1.0).map(|p| p.y).fold(f64::MAX, f64::min));
+    let counts = (size * 2.0).as_uvec3();
+    b.light_cloud_grid(lo.with_y(top_of_floor), hi.with_y(foot_of_ceiling), counts.to_array());
     let floor = b.material("floor", [0.55, 0.5, 0.45]);
     let wall = b.material("wall", [0.7, 0.7, 0.65]);
     let red = b.material("red-wall", [0.7, 0.15, 0.1]);
     let ceiling = b.material("ceiling", [0.75, 0.75, 0.75]);
     let open = |x: i64, z: i64| rows.get(z as usize).and_then(|r| r.as_bytes().get(x as usize)) == Some(&b'.') && x >= 0 && z >= 0;
-    let mut surfaces: [Vec<[DVec3; 3]>; 4] = Default::default();
+    let mut surfaces: [Vec<[DVec3; 4]>; 4] = Default::default();
+    // Each face quad's centre and the centre of the block it faces into.
+    let mut facing: Vec<(DVec3, DVec3)> = Vec::new();
     for (z, row) in rows.iter().enumerate() {
         for (x, c) in row.bytes().enumerate() {
             if c != b'.' {
@@ -49,17 +66,17 @@ fn surfaces(rows: &[&str], warp: &dyn Fn(DVec3) -> DVec3, split: usize, lights: 
                     continue;
                 }
                 let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-                let corner = |i: usize, j: usize| {
+                let corner = |i: f64, j: f64| {
                     let mut p = lo;
                     p[axis] += side;
-                    p[u] += i as f64 / split as f64;
-                    p[v] += j as f64 / split as f64;
+                    p[u] += i;
+                    p[v] += j;
                     warp(p)
                 };
-                let quads = (0..split * split).map(|k| (k % split, k / split));
-                let quad = quads.flat_map(|(i, j)| {
-                    quad_facing([corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)], |c| centre - c)
-                });
+                // On a face the trilinear warp is the bilinear blend of its corners, as the grid
+                // mesh splits it.
+                let quad = [corner(0.0, 0.0), corner(1.0, 0.0), corner(1.0, 1.0), corner(0.0, 1.0)];
+                facing.push((quad.iter().sum::<DVec3>() / 4.0, centre));
                 // The wall at the +x end of the first row is red: colour bleeding to follow.
                 let which = match (axis, side) {
                     (1, 0.0) => 0,
@@ -67,13 +84,15 @@ fn surfaces(rows: &[&str], warp: &dyn Fn(DVec3) -> DVec3, split: usize, lights: 
                     (0, 1.0) if z == 0 && !open(x + 1, z) && x > 0 => 2,
                     _ => 1,
                 };
-                surfaces[which].extend(quad);
+                surfaces[which].push(quad);
             }
         }
     }
-    for ((name, material), tris) in [("Floor", floor), ("Walls", wall), ("RedWall", red), ("Ceiling", ceiling)].into_iter().zip(&surfaces) {
-        if !tris.is_empty() {
-            let mesh = b.mesh(name, tris, material);
+    let inward = |c: DVec3| facing.iter().find(|(q, _)| q.distance(c) < 1e-9).map_or(DVec3::ZERO, |(_, centre)| *centre - c);
+    for ((name, material), quads) in [("Floor", floor), ("Walls", wall), ("RedWall", red), ("Ceiling", ceiling)].into_iter().zip(&surfaces)
+    {
+        if !quads.is_empty() {
+            let mesh = b.grid_mesh(name, quads, SPLIT as u32, inward, material);
             b.mesh_node(name, mesh, DVec3::ZERO, DVec3::ONE);
         }
     }
@@ -190,7 +209,7 @@ pub(super) fn cave() -> Builder {
             .sum()
     };
     let lights = [DVec3::new(0.5, 0.7, 0.5), DVec3::new(3.5, 0.7, 1.5), DVec3::new(1.5, 0.7, 2.5), DVec3::new(4.5, 0.7, 4.5)];
-    let mut b = surfaces(&ROWS, &warp, 4, &lights, DVec3::new(1.5, 0.55, 4.7), DVec3::new(1.5, 0.45, 1.0));
+    let mut b = surfaces(&ROWS, &warp, &lights, DVec3::new(1.5, 0.55, 4.7), DVec3::new(1.5, 0.45, 1.0));
     let cells = ROWS.iter().enumerate().flat_map(|(z, row)| row.bytes().enumerate().filter(|c| c.1 == b'.').map(move |(x, _)| (x, z)));
     let blocks = cells
         .map(|(x, z)| std::array::from_fn(|n| warp(DVec3::new((x + (n & 1)) as f64, ((n >> 1) & 1) as f64, (z + ((n >> 2) & 1)) as f64))));
