@@ -1,10 +1,11 @@
 //! A level of modular radiance transfer on the CPU (no GPU): the stored tables evaluate as the
 //! level's transfer does (the CPU oracle of the GPU passes is right); the padded atlas: every
 //! bilinear read of every mapped triangle reads a written texel, a seam between connected
-//! blocks reads the same from both sides, a crease clamps to its own edge; refusals of
-//! geometry off the blocks and of a level made with another dictionary.
+//! blocks reads the same from both sides, a crease clamps to its own edge; a warped level's
+//! samples lie on its triangles, and a level turned as warped blocks bakes the same tables;
+//! refusals of geometry off the blocks and of a level made with another dictionary.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Quat, Vec2, Vec3, Vec4};
 use nalgebra::DVector;
 use relume_bake::artifact::{Artifact, BakeOutput};
 use relume_bake::mrt::dictionary::{self, Dictionary};
@@ -212,6 +213,37 @@ fn the_warped_caves_samples_lie_on_the_triangles_they_light_facing_as_they_do() 
         covered += 1;
     }
     assert_eq!(covered, (19 * 6 - 42) * 64, "19 blocks' faces less their 42 openings, 8^2 samples each");
+}
+
+#[test]
+fn a_level_turned_a_quarter_about_the_vertical_and_declared_as_warped_blocks_bakes_the_same_tables() {
+    let scene = load_scene("mrt-maze");
+    let (dictionary, _, level, _) = mrt_quick_bake(&scene);
+    let turn = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    let mut turned = scene.clone();
+    for mesh in &mut turned.meshes {
+        mesh.positions.iter_mut().for_each(|p| *p = turn * *p);
+        mesh.normals.iter_mut().for_each(|n| *n = turn * *n);
+    }
+    // The grid's blocks by their corners, turned with the scene: each keeps its corner order,
+    // so its local +x now runs along world -z.
+    let blocks: Vec<serde_json::Value> = Proxy::of(&scene)
+        .unwrap()
+        .corners
+        .iter()
+        .map(|c| serde_json::json!({ "corners": c.iter().map(|p| (turn * p.as_vec3()).to_array()).collect::<Vec<_>>() }))
+        .collect();
+    turned.settings.blocks.insert("mrt".into(), serde_json::json!({ "blocks": blocks }));
+    let (_, turned_level) = relume_bake::mrt::baker::bake_level(&turned, &dictionary, 8).unwrap();
+    assert_eq!(turned_level.blocks, level.blocks);
+    assert_eq!(turned_level.receivers, level.receivers);
+    assert_eq!(turned_level.copies, level.copies);
+    assert_eq!(turned_level.feedback, level.feedback);
+    for (i, (a, b)) in level.samples.iter().zip(&turned_level.samples).enumerate() {
+        assert_eq!((a.albedo, a.texel), (b.albedo, b.texel), "sample {i}");
+        assert!((turn * a.position).distance(b.position) < 1e-5, "sample {i} at {} against {}", a.position, b.position);
+        assert!((turn * a.normal).distance(b.normal) < 1e-5, "sample {i} facing {} against {}", a.normal, b.normal);
+    }
 }
 
 #[test]

@@ -459,7 +459,7 @@ fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
     assert!(bake("mrt-cube", "cube", &[]).status.success());
     let reused = bake("mrt-corridor", "corridor", &["--dictionary", "cube"]);
     assert!(reused.status.success(), "{}", String::from_utf8_lossy(&reused.stderr));
-    assert!(!String::from_utf8_lossy(&reused.stderr).contains("mrt:   blocks"), "the dictionary is read, not made");
+    assert!(!String::from_utf8_lossy(&reused.stderr).contains("mrt:   block shape"), "the dictionary is read, not made");
     let bytes = |bake: &str| std::fs::read(dir.join(bake).join("mrt-dictionary.bin")).unwrap();
     assert!(bytes("cube") == bytes("corridor"));
     let refused = bake("mrt-corridor", "other", &["--dictionary", "cube", "--no-enrich"]);

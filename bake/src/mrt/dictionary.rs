@@ -246,8 +246,13 @@ mod built {
         /// Builds the six shapes' operators, then their interfaces; `stage` is told each
         /// stage's name as it starts.
         pub fn build(settings: &BlockSettings, interface: &InterfaceSettings, mut stage: impl FnMut(&str)) -> Dictionary {
-            stage("blocks");
-            let operators: Vec<BlockOperators> = Shape::dictionary().iter().map(|&s| block::build(s, settings)).collect();
+            let shapes = Shape::dictionary();
+            let operators: Vec<BlockOperators> = (shapes.iter().enumerate())
+                .map(|(i, &s)| {
+                    stage(&format!("block shape {} of {}", i + 1, shapes.len()));
+                    block::build(s, settings)
+                })
+                .collect();
             stage("interfaces");
             let built = crate::work::with_threads(settings.threads, || interface::build(&operators, interface));
             Dictionary::of(settings, interface, &operators, &built)
