@@ -37,7 +37,7 @@ fn best_scaled(name: &str, shape: &Image, reference: &Image) -> f64 {
 fn along_path(name: &str, path: &[Vec3], bar: f64) {
     let scene = load_scene(name);
     let (dictionary, _, level, mut applied) = mrt_quick_bake(&scene);
-    // The camera moved by 2-3 mm: the levels' edges lie on round coordinates, and at the scene's own
+    // The camera moved by 2-3 mm: the maze's edges lie on round coordinates, and at the scene's own
     // camera some project exactly onto a pixel centre, where the rasteriser's tie rule and the
     // path tracer's can pick different surfaces (one pixel off by the whole direct light).
     applied.camera.world_from_camera = Mat4::from_translation(Vec3::new(0.0011, 0.0013, 0.0017)) * applied.camera.world_from_camera;

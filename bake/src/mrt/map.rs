@@ -25,8 +25,9 @@ pub struct Mapped {
     pub tiles: Tiles,
 }
 
-/// How far (in block sides) a vertex may stand off its block face, and a triangle's point is
-/// moved into the block it faces to find that block.
+/// How far past its face's edges a vertex's face coordinates may go (in face widths); and how
+/// far a triangle's centroid is moved along its normal to find the block it faces, in the
+/// proxy's shortest block edges.
 const SLACK: f32 = 1e-3;
 
 /// The light map's tiles: one per present face of each block, `grid` + 2 texels a side.

@@ -26,14 +26,17 @@ pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| fro
 /// The most blocks a proxy may have (the paper's largest maze has 41).
 pub const MAX_BLOCKS: usize = 4096;
 
-/// How near (in block sides) two corners must be to be the same corner.
+/// How near (in block sides) two corners must be to be the same corner; also how much a
+/// block's bounds are widened, and how far outside its cube (in its local coordinates) a point
+/// still counts as in it when locating.
 const SAME: f64 = 1e-4;
 
 /// The farthest a corner may lie from the origin along any axis, metres.
 const MAX_COORDINATE: f32 = 1e6;
 
-/// How far inside a block (in its local coordinates) a point must be to count as in it when
-/// checking for overlaps and dangling faces.
+/// In a block's local coordinates: how far inside it a point must be to overlap it; how near
+/// one of its faces a point must be to touch it (a dangling face); and how far outside its
+/// cube Newton's root may fall and still be taken as the point's.
 const INSIDE: f64 = 1e-3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -108,9 +111,9 @@ impl Proxy {
         let shortest = edges().fold(f64::INFINITY, f64::min);
         let longest = edges().fold(0.0, f64::max);
         let mean = edges().sum::<f64>() / (12 * corners.len()) as f64;
-        // A bucket about a block wide; never so small that one block spans more than 8^3.
+        // A bucket about a block wide; never so small that one block meets more than 9^3.
         let bucket = mean.max(longest / 8.0);
-        let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, SAME * side(c))).collect();
+        let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, SAME * mean_edge(c))).collect();
         let mut buckets: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
         for (b, bounds) in boxes.iter().enumerate() {
             let (lo, hi) = (bucket_of(bounds.lo, bucket), bucket_of(bounds.hi, bucket));
@@ -258,7 +261,7 @@ fn lattice(steps: &[f64]) -> impl Iterator<Item = DVec3> + '_ {
 
 /// The pairs of blocks (a < b) whose bounds, widened by the corner tolerance, meet.
 fn nearby(corners: &[[DVec3; 8]]) -> Vec<(usize, usize)> {
-    let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, 2.0 * SAME * side(c))).collect();
+    let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, 2.0 * SAME * mean_edge(c))).collect();
     let mut pairs = Vec::new();
     for a in 0..boxes.len() {
         for b in a + 1..boxes.len() {
@@ -283,7 +286,7 @@ fn overlap(a: &[DVec3; 8], b: &[DVec3; 8]) -> Option<String> {
 /// Whether face `fa` of block `a` has the same four corners as the opposite face of block `b`,
 /// corner for corner across the face.
 fn same_face(a: &[DVec3; 8], fa: Face, b: &[DVec3; 8]) -> bool {
-    let tolerance = SAME * side(a).min(side(b));
+    let tolerance = SAME * mean_edge(a).min(mean_edge(b));
     (0..8).filter(|i| (i >> fa.axis) & 1 == fa.positive as usize).all(|i| a[i].distance(b[i ^ (1 << fa.axis)]) <= tolerance)
 }
 
@@ -294,7 +297,7 @@ fn touched(corners: &[[DVec3; 8]], others: &[usize], a: usize, face: Face) -> Op
         .map(|k| trilinear(&corners[a], face.point(glam::Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0).as_dvec3()))
         .collect();
     others.iter().copied().find(|&b| {
-        let outer = bounds(&corners[b], SAME * side(&corners[b]));
+        let outer = bounds(&corners[b], SAME * mean_edge(&corners[b]));
         points.iter().any(|&p| outer.contains(p) && local(&corners[b], p).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
     })
 }
@@ -368,7 +371,7 @@ fn local(c: &[DVec3; 8], p: DVec3) -> Option<DVec3> {
 }
 
 fn newton(c: &[DVec3; 8], p: DVec3, seed: DVec3) -> Option<DVec3> {
-    let size = side(c);
+    let size = mean_edge(c);
     let mut q = seed;
     for _ in 0..32 {
         let miss = trilinear(c, q) - p;
@@ -390,7 +393,7 @@ fn depth(q: DVec3) -> f64 {
 }
 
 /// The mean length of a block's 12 edges.
-fn side(c: &[DVec3; 8]) -> f64 {
+fn mean_edge(c: &[DVec3; 8]) -> f64 {
     edges(c).sum::<f64>() / 12.0
 }
 

@@ -166,7 +166,7 @@ impl Method for MrtMethod {
         Proxy::of(scene).map_err(at)?;
         let (block, interface) = settings(values, &work);
         if work.time_limit.is_some() {
-            eprintln!("mrt: --time-limit does not cut the bake short (its dictionary takes 5-11 s on 2 cores, its level under 3 s); fewer --gather-rays shorten the dictionary, --dictionary DIR skips it");
+            eprintln!("mrt: --time-limit does not cut the bake short (its dictionary takes 5-11 s on 2 cores, its level a few seconds); fewer --gather-rays shorten the dictionary, --dictionary DIR skips it");
         }
         let dictionary = stages.timed("dictionary", || dictionary(values, &block, &interface))?;
         let d_max = values.count(&D_MAX) as usize;

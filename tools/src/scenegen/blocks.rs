@@ -1,10 +1,12 @@
 //! Levels of blocks for modular radiance transfer (002): each `.` of a grid of rows (row r
 //! along +z, character c along +x) a 2 m cube room whose sides open onto the blocks next to it;
-//! the walls that remain, the floor and the ceiling as inward-facing quads, one per block face
-//! (so each lies on one face of one block), and `extras.relume.mrt.grid` declaring the blocks.
-//! 002 Table 3's levels: a single cube, a corridor, a small maze of 11 blocks with a cycle and
-//! a large one of 41; and the paper's failures: the corridor declared as one long block (Fig.
-//! 12), the classroom with its furniture as one block (§8's Great Hall).
+//! the walls that remain, the floor and the ceiling facing inward, each block face a welded 4 x
+//! 4 grid (so each lies on one face of one block), and `extras.relume.mrt.grid` declaring the
+//! blocks (`mrt.blocks`, by their corners, for the warped cave); each level also declares a
+//! light cloud and light path maps' region, for the other local-light methods. 002 Table 3's
+//! levels: a single cube, a corridor, a small maze of 11 blocks with a cycle and a large one of
+//! 41; Fig. 1's cave of 19 warped blocks; and the paper's failures: the corridor declared as
+//! one long block (Fig. 12), the classroom with its furniture as one block (§8's Great Hall).
 
 use super::gltf_writer::Builder;
 use super::scenes::exposure_one_intensity;
