@@ -183,7 +183,10 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
     for (i, c) in corners.iter().enumerate() {
         check_shape(c).map_err(|e| format!("{key}[{i}] {e}"))?;
     }
-    let near = nearby(&corners);
+    // Each block's bounds, widened by twice the corner tolerance: the candidates for joins,
+    // overlaps and touching faces.
+    let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, 2.0 * SAME * mean_edge(c))).collect();
+    let near = nearby(&boxes);
     let mut around = vec![Vec::new(); corners.len()];
     for &(a, b) in &near {
         around[a].push(b);
@@ -210,7 +213,7 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
     }
     for (a, joins) in links.iter().enumerate() {
         for face in Face::ALL.into_iter().filter(|f| joins[f.index()].is_none()) {
-            if let Some(b) = touched(&corners, &around[a], a, face) {
+            if let Some(b) = touched(&corners, &boxes, &around[a], a, face) {
                 return Err(format!(
                     "{key}[{a}]'s {} face touches {key}[{b}] without being joined to it (a dangling opening): joined faces share all four corners, +x with -x and +z with -z; give the faces the same corners or move the blocks apart",
                     face.name()
@@ -259,9 +262,8 @@ fn lattice(steps: &[f64]) -> impl Iterator<Item = DVec3> + '_ {
     steps.iter().flat_map(move |&z| steps.iter().flat_map(move |&y| steps.iter().map(move |&x| DVec3::new(x, y, z))))
 }
 
-/// The pairs of blocks (a < b) whose bounds, widened by the corner tolerance, meet.
-fn nearby(corners: &[[DVec3; 8]]) -> Vec<(usize, usize)> {
-    let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, 2.0 * SAME * mean_edge(c))).collect();
+/// The pairs of blocks (a < b) whose bounds meet.
+fn nearby(boxes: &[Bounds]) -> Vec<(usize, usize)> {
     let mut pairs = Vec::new();
     for a in 0..boxes.len() {
         for b in a + 1..boxes.len() {
@@ -292,13 +294,12 @@ fn same_face(a: &[DVec3; 8], fa: Face, b: &[DVec3; 8]) -> bool {
 
 /// A block of `others` (near `a`) that a point of a 4 x 4 lattice on face `face` of `a` lies
 /// on, away from its edges: a face that touches a block it is not joined to.
-fn touched(corners: &[[DVec3; 8]], others: &[usize], a: usize, face: Face) -> Option<usize> {
+fn touched(corners: &[[DVec3; 8]], boxes: &[Bounds], others: &[usize], a: usize, face: Face) -> Option<usize> {
     let points: Vec<DVec3> = (0..16)
         .map(|k| trilinear(&corners[a], face.point(glam::Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0).as_dvec3()))
         .collect();
     others.iter().copied().find(|&b| {
-        let outer = bounds(&corners[b], SAME * mean_edge(&corners[b]));
-        points.iter().any(|&p| outer.contains(p) && local(&corners[b], p).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
+        points.iter().any(|&p| boxes[b].contains(p) && local(&corners[b], p).is_some_and(|q| depth(q) > -INSIDE && on_a_face(q)))
     })
 }
 
@@ -321,31 +322,26 @@ fn trilinear(c: &[DVec3; 8], q: DVec3) -> DVec3 {
 }
 
 fn weight(i: usize, q: DVec3) -> f64 {
-    let t = unit_corner(i);
-    (0..3).map(|a| if t[a] > 0.5 { q[a] } else { 1.0 - q[a] }).product()
+    (0..3).map(|a| factor(i, a, q[a])).product()
+}
+
+/// Corner i's trilinear factor along axis `a` at coordinate t: t on its high side, 1 - t on
+/// its low side.
+fn factor(i: usize, a: usize, t: f64) -> f64 {
+    if (i >> a) & 1 == 1 {
+        t
+    } else {
+        1.0 - t
+    }
 }
 
 fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
+    // d/dq_axis of corner i's weight: its factor along `axis` becomes +1 or -1.
     let column = |axis: usize| -> DVec3 {
         (0..8)
             .map(|i| {
-                let t = unit_corner(i);
-                let d: f64 = (0..3)
-                    .map(|a| {
-                        if a == axis {
-                            if t[a] > 0.5 {
-                                1.0
-                            } else {
-                                -1.0
-                            }
-                        } else if t[a] > 0.5 {
-                            q[a]
-                        } else {
-                            1.0 - q[a]
-                        }
-                    })
-                    .product();
-                c[i] * d
+                let slope = if (i >> axis) & 1 == 1 { 1.0 } else { -1.0 };
+                c[i] * (0..3).map(|a| if a == axis { slope } else { factor(i, a, q[a]) }).product::<f64>()
             })
             .sum()
     };

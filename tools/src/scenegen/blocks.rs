@@ -8,6 +8,7 @@
 //! 41; Fig. 1's cave of 19 warped blocks; and the paper's failures: the corridor declared as
 //! one long block (Fig. 12), the classroom with its furniture as one block (§8's Great Hall).
 
+use super::geometry::lcg;
 use super::gltf_writer::Builder;
 use super::scenes::exposure_one_intensity;
 use super::settings::{Settings, BLOCKS_SETTINGS};
@@ -167,8 +168,7 @@ pub(super) fn maze_large() -> Builder {
         if frontier.is_empty() {
             frontier = pick(&|n| n > 0);
         }
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        let (x, z) = frontier[(state >> 33) as usize % frontier.len()];
+        let (x, z) = frontier[(lcg(&mut state) >> 33) as usize % frontier.len()];
         open[z][x] = true;
     }
     let rows: Vec<String> = open.iter().map(|row| row.iter().map(|&o| if o { '.' } else { '#' }).collect()).collect();
@@ -184,10 +184,7 @@ pub(super) fn maze_large() -> Builder {
 pub(super) fn cave() -> Builder {
     const ROWS: [&str; 5] = ["...##", ".#...", "...#.", "#.#..", "....."];
     let mut state: u64 = 0x2545_f491_4f6c_dd1d;
-    let mut jitter = || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 0.15
-    };
+    let mut jitter = || ((lcg(&mut state) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 0.15;
     // Lattice point (i, j, k) of the 6 x 2 x 6 grid points, moved; a column's two points
     // share x and z, so the walls stand upright and are flat.
     let columns: Vec<(f64, f64)> = (0..36).map(|n| ((n % 6) as f64 + jitter(), (n / 6) as f64 + jitter())).collect();

@@ -83,3 +83,10 @@ pub(super) fn blob(radius: f64, subdivisions: u32) -> Vec<[DVec3; 3]> {
     let lump = |d: DVec3| d * radius * (1.0 + 0.15 * (3.0 * d.x).sin() * (4.0 * d.y).sin() * (2.0 * d.z).cos());
     relume_bake::testing::icosphere(subdivisions).iter().map(|t| t.map(lump)).collect()
 }
+
+/// One step of a 64-bit LCG (Knuth's MMIX constants): the same levels and jitter on every
+/// machine.
+pub(super) fn lcg(state: &mut u64) -> u64 {
+    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state
+}

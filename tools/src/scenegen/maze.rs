@@ -35,9 +35,7 @@ fn wall_segments() -> Vec<([usize; 2], [usize; 2])> {
             stack.pop();
             continue;
         }
-        // A 64-bit LCG (Knuth's MMIX constants): the same maze on every machine.
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        let next = neighbours[(state >> 33) as usize % neighbours.len()];
+        let next = neighbours[(super::geometry::lcg(&mut state) >> 33) as usize % neighbours.len()];
         let (low, high) = (cell.min(next), cell.max(next));
         joined[low][usize::from(high - low == CELLS)] = true;
         visited[next] = true;
