@@ -14,7 +14,8 @@
 //   O        = the occlusion term (rgb), bilinear from its atlas image through uv1; 1 without
 //              one (OCCLUSION_TERM false): W of 001 eq. (5);
 //   E_term   = the irradiance term (lux) of kind IRRADIANCE_TERM: bilinear through uv1 (texel),
-//              interpolated from the vertices (vertex) or this pixel's (pixel); times O when
+//              interpolated from the vertices (vertex), one of those two per mesh (texel or
+//              vertex: a mesh whose vertices say so reads them) or this pixel's (pixel); times O when
 //              frame.irradiance_times_occlusion; plus O * E_direct when frame.occluded_direct
 //              (000 §3.4's readings of "the two texture values are multiplied").
 //
@@ -52,7 +53,7 @@ layout(location = 3) in vec2 uv1;
 layout(location = 4) in vec4 radiance_sh[12];
 #include "sh.glsl"
 #else
-layout(location = 4) in vec3 vertex_term;
+layout(location = 4) in vec4 vertex_term;
 #endif
 layout(location = 0) out vec4 radiance;
 
@@ -95,7 +96,9 @@ vec3 radiance_term(vec3 to_camera) {
 #else
 vec3 irradiance_term() {
     if (IRRADIANCE_TERM == TERM_TEXEL) return atlas_sample(irradiance_texels, uv1);
-    if (IRRADIANCE_TERM == TERM_VERTEX) return vertex_term;
+    if (IRRADIANCE_TERM == TERM_VERTEX) return vertex_term.rgb;
+    // Alpha is 1 across a mesh lit per vertex and 0 across the others: exact when interpolated.
+    if (IRRADIANCE_TERM == TERM_TEXEL_OR_VERTEX) return vertex_term.a > 0.5 ? vertex_term.rgb : atlas_sample(irradiance_texels, uv1);
     return texelFetch(irradiance_pixels, ivec3(ivec2(gl_FragCoord.xy), 0), 0).rgb;
 }
 #endif

@@ -5,12 +5,14 @@
 // A texel term scaling the ambient light, read through uv1 (W of 001 eq. (5)).
 layout(constant_id = 0) const bool OCCLUSION_TERM = false;
 // The indirect irradiance term's kind: TERM_NONE, TERM_TEXEL (through uv1), TERM_VERTEX
-// (one value per vertex, interpolated), TERM_PIXEL (one value per pixel of the frame).
+// (one value per vertex, interpolated), TERM_PIXEL (one value per pixel of the frame),
+// TERM_TEXEL_OR_VERTEX (through uv1, but the vertex value where its alpha is 1).
 layout(constant_id = 1) const uint IRRADIANCE_TERM = 0u;
 const uint TERM_NONE = 0u;
 const uint TERM_TEXEL = 1u;
 const uint TERM_VERTEX = 2u;
 const uint TERM_PIXEL = 3u;
+const uint TERM_TEXEL_OR_VERTEX = 4u;
 
 #define FRAME_BINDING 9
 #include "frame.glsl"

@@ -17,7 +17,7 @@ layout(location = 3) out vec2 uv1;
 #ifdef SH_RADIANCE
 layout(location = 4) out vec4 radiance_sh[12];
 #else
-layout(location = 4) out vec3 vertex_term;
+layout(location = 4) out vec4 vertex_term;
 #endif
 
 void main() {
@@ -36,7 +36,8 @@ void main() {
         radiance_sh[i] = packed;
     }
 #else
-    vertex_term = IRRADIANCE_TERM == TERM_VERTEX ? vertex_irradiance[gl_VertexIndex].rgb : vec3(0.0);
+    bool per_vertex = IRRADIANCE_TERM == TERM_VERTEX || IRRADIANCE_TERM == TERM_TEXEL_OR_VERTEX;
+    vertex_term = per_vertex ? vertex_irradiance[gl_VertexIndex] : vec4(0.0);
 #endif
     gl_Position = frame.clip_from_world * vec4(in_position, 1.0);
 }

@@ -4,7 +4,8 @@
 //! paper's Table 2 and Fig. 13, feedback, the same bytes at any thread count, the dictionary's
 //! section. Between blocks (§5.1, §6.3, §7.3): next door and down a corridor, round a corner,
 //! a maze, each against a brute-force walk through the level; the traversal against explicit
-//! path enumeration.
+//! path enumeration. The light volume (§6.5, §7.3 steps 8-9): a closed cube's uniform light,
+//! and a maze's against a brute-force gather from points between the probes.
 
 use glam::Vec3;
 use nalgebra::DVector;
@@ -438,4 +439,93 @@ fn a_maze_s_indirect_light_beats_the_best_constant_against_a_brute_force_bounce(
         assert!(error < ambient && error <= bar, "{what}: {error:.4} against {ambient:.4}, bar {bar}");
     }
     eprintln!("per block: {per_block:.3?}");
+}
+
+/// §6.5's light volume in a closed cube under uniform radiosity 1: every probe sees radiance
+/// 1 / pi every way, so a surface anywhere in the cube, facing anywhere, gets irradiance 1.
+#[test]
+fn the_light_volume_of_a_closed_cube_under_uniform_radiosity_gives_it_everywhere() {
+    use relume_bake::mrt::volume::{self, PROBE_COUNT, ROWS, SH};
+    let ops = closed_cube();
+    let b = &ops.t_d_b * DVector::from_element(ops.samples.len(), 1.0);
+    let probes = volume::own(&ops) * b;
+    assert_eq!(probes.len(), ROWS);
+    let sh: Vec<[Vec3; SH]> = (0..PROBE_COUNT).map(|p| std::array::from_fn(|s| Vec3::splat(probes[p * SH + s] as f32))).collect();
+    let normals = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::new(1.0, 1.0, -1.0).normalize()];
+    let mut worst = 0.0f32;
+    for q in scattered_points(32, 0.0, 1.0) {
+        for n in normals {
+            worst = worst.max((volume::irradiance(&volume::interpolate(&sh, q), n).x - 1.0).abs());
+        }
+    }
+    eprintln!("closed cube's light volume under uniform radiosity: worst |E - 1| {worst:.4}");
+    // Bar from the first measurement (0.0137).
+    assert!(worst <= 0.02, "{worst:.4}");
+}
+
+/// §7.3 steps 8-9 on the 11 blocks of `mrt-maze` (their own cells), one bounce of a point
+/// light's direct light: the light volume's irradiance (U_bvol b + U_rvol r, read between the
+/// probes) at points and normals in every block against a brute-force gather through the
+/// level, and against the best constant.
+#[test]
+fn the_light_volume_matches_a_brute_force_gather_in_the_lit_block_and_beyond_its_openings() {
+    use relume_bake::mrt::dictionary::Dictionary;
+    use relume_bake::mrt::interface::InterfaceSettings;
+    use relume_bake::mrt::proxy::Proxy;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mrt-maze.gltf");
+    let scene = relume_bake::gltf_load::load(&path).unwrap().scene;
+    let block_settings = BlockSettings { samples_per_face: 8, gather_rays: 2048, ..BlockSettings::default() };
+    let lightfield = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 4096, ..InterfaceSettings::default() };
+    let dictionary = Dictionary::build(&block_settings, &lightfield, |_| {});
+    let (_, level) = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).unwrap();
+    let blocks = Proxy::of(&scene).unwrap().level();
+    // The maze's 2 m cells in the oracle's unit cells.
+    let cells: Vec<(i32, i32)> = level.corners.iter().map(|c| ((c[0].x / 2.0).round() as i32, (c[0].z / 2.0).round() as i32)).collect();
+    let samples: Vec<Samples> = (0..cells.len()).map(|b| Samples::new(blocks.shape(b), 8)).collect();
+    let light = Vec3::new(0.4, 0.6, 0.45);
+    let l_d: Vec<DVector<f64>> = samples
+        .iter()
+        .enumerate()
+        .map(|(block, own)| {
+            DVector::from_iterator(
+                own.len(),
+                (0..own.len()).map(|i| {
+                    let (_, x, n) = own.sample(i);
+                    let to = light - Vec3::new(cells[block].0 as f32 + x.x, x.y, cells[block].1 as f32 + x.z);
+                    let cos = n.dot(to.normalize());
+                    match cos > 0.0 && oracle::sees(&cells, block, x, light) {
+                        true => (cos / to.length_squared().max(0.0025)) as f64,
+                        false => 0.0,
+                    }
+                }),
+            )
+        })
+        .collect();
+    // Level samples are the blocks' own samples, block by block.
+    let radiosity: Vec<Vec3> = l_d.iter().flat_map(|l| l.iter().map(|&v| Vec3::splat(v as f32))).collect();
+    let b = level.coefficients(&dictionary, &radiosity);
+    let volume = level.volume(&dictionary, &b, &level.received(&dictionary, &b));
+    let normals = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let points = scattered_points(6, 0.15, 0.85);
+    let (mut estimate, mut truth) = (Vec::new(), Vec::new());
+    for block in 0..cells.len() {
+        for (i, &q) in points.iter().enumerate() {
+            let world = Vec3::new(cells[block].0 as f32 + q.x, q.y, cells[block].1 as f32 + q.z) * 2.0;
+            for (k, n) in normals.into_iter().enumerate() {
+                estimate.push(level.volume_irradiance(&volume, world, n).x as f64);
+                let stream = (block * 1000 + i * 10 + k) as u32;
+                truth.push(oracle::gather(&cells, &samples, &l_d, (block, q, n), stream, 4096));
+            }
+        }
+    }
+    assert_eq!(cells[0], (0, 0), "block 0 holds the light");
+    let lit = points.len() * normals.len();
+    // Bars from the first measurement (0.046 and 0.056; the best constant's 0.89 and 0.87).
+    for (what, range, bar) in [("every block", 0..truth.len(), 0.06), ("the unlit blocks", lit..truth.len(), 0.07)] {
+        let (e, t) = (DVector::from_column_slice(&estimate[range.clone()]), DVector::from_column_slice(&truth[range]));
+        let error = relative(&e, &t);
+        let ambient = relative(&DVector::from_element(t.len(), t.mean()), &t);
+        eprintln!("light volume in the maze, {what}: relative error {error:.4}; the best constant's {ambient:.4}");
+        assert!(error < ambient && error <= bar, "{what}: {error:.4} against {ambient:.4}, bar {bar}");
+    }
 }

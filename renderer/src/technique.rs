@@ -33,6 +33,10 @@ pub enum Source<'t> {
     /// One rgb value per pixel of the frame (RGBA32F, a 2D array of one layer), read at the
     /// fragment's pixel.
     Pixel(&'t Image),
+    /// The atlas image, except at vertices whose vec4 in the buffer has alpha 1 (one per
+    /// vertex of the scene's vertex buffer): meshes lit per vertex, off the atlas (mrt's
+    /// dynamic meshes under its light volume). Alpha is 0 or 1 across each mesh.
+    TexelOrVertex(&'t Image, &'t Buffer),
 }
 
 /// What a technique hands the lighting pass (lighting_fragment.glsl states the formula).

@@ -51,9 +51,10 @@ pub fn upload_array_layers_blocking(
 }
 
 /// Device-local storage buffers holding `sources` (name, bytes), filled through one staging
-/// buffer and one submission, waited for; they are then ready for compute-shader reads.
+/// buffer and one submission, waited for; they are then ready for compute-shader reads (and
+/// may be read back: a technique's passes may write one it uploaded with its first contents).
 pub fn upload_buffers_blocking<const N: usize>(ctx: &Arc<Context>, sources: [(&str, &[u8]); N]) -> VkResult<[Buffer; N]> {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
     let made = sources
         .iter()
         .map(|(name, bytes)| Buffer::new(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly))

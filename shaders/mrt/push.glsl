@@ -11,6 +11,8 @@ layout(push_constant) uniform MrtPush {
     uint width;           // of the light map, texels
     uint feedback;        // 1: every bounce (the solved feedback); 0: the first only
     uint u_r;             // where U_r (n_r x k_r) starts in the operator buffer
+    uint u_rvol;          // where U_rvol (4 side faces x VOLUME_ROWS x k_r) starts there
+    uint dynamic_count;   // vertices of the meshes the light volume lights
 } pc;
 
 const uint NONE = 0xffffffffu;

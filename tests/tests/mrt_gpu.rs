@@ -87,3 +87,64 @@ fn a_level_without_its_solved_feedback_or_with_a_shape_the_dictionary_lacks_is_r
     says(&refusal(try_new_renderer(&ctx, &applied, &RenderSettings::default(), &[&data])), &["mrt", "block 0's shape 9"]);
     assert_clean(ctx);
 }
+
+/// The scene's vertex indices (mesh by mesh, as the vertex buffer holds them) of mesh `mesh`.
+fn vertex_range(scene: &relume_bake::scene::Scene, mesh: usize) -> std::ops::Range<usize> {
+    let first: usize = scene.meshes[..mesh].iter().map(|m| m.positions.len()).sum();
+    first..first + scene.meshes[mesh].positions.len()
+}
+
+#[test]
+fn the_light_volume_and_the_dynamic_vertices_equal_the_cpu_evaluator_as_a_figure_moves() {
+    let scene = load_scene("mrt-figures");
+    let (dictionary, _, level, applied) = mrt_quick_bake(&scene);
+    assert_eq!(level.dynamic.len(), 2, "the two figures are dynamic");
+    let ctx = validated_context();
+    let settings = RenderSettings { width: 64, height: 48, ..RenderSettings::default() };
+    let data = MrtData { dictionary: &dictionary, level: &level, feedback: true };
+    let mut renderer = new_renderer(&ctx, &applied, &settings, &[&data]);
+    let mut moved = applied.clone();
+    let mut before: Option<Vec<Vec4>> = None;
+    // Where the scene has the first figure, then 1.8 m along the row (another block).
+    for translation in [Vec3::ZERO, Vec3::new(-1.8, 0.0, 0.2)] {
+        let figure = level.dynamic[0] as usize;
+        renderer.set_mesh_translation(figure, translation).unwrap();
+        moved.meshes[figure].positions = applied.meshes[figure].positions.iter().map(|p| *p + translation).collect();
+        let (direct, _) = frame(&mut renderer);
+        let b = level.fed_back(&dictionary, &level.coefficients(&dictionary, &light(&level, &direct)));
+        let r = level.received(&dictionary, &b);
+        let volume = level.volume(&dictionary, &b, &r);
+        let gpu_volume = rgb(&read_vec4s(&mut renderer, "mrt.volume").unwrap());
+        let e_volume = relative(&gpu_volume, &volume.concat());
+        let vertex_light = read_vec4s(&mut renderer, "mrt.vertex_light").unwrap();
+        let (mut gpu, mut cpu) = (Vec::new(), Vec::new());
+        for &mesh in &level.dynamic {
+            let m = &moved.meshes[mesh as usize];
+            for (k, v) in vertex_range(&moved, mesh as usize).enumerate() {
+                gpu.push(vertex_light[v]);
+                cpu.push(level.volume_irradiance(&volume, m.positions[k], m.normals[k]));
+            }
+        }
+        let e_vertices = relative(&rgb(&gpu), &cpu);
+        let lit = cpu.iter().filter(|e| e.min_element() > 0.0).count();
+        eprintln!(
+            "light volume at {translation}: GPU against CPU {e_volume:.2e}, dynamic vertices {e_vertices:.2e}, {lit} of {} lit",
+            cpu.len()
+        );
+        assert!(e_volume < 1e-4 && e_vertices < 1e-3, "volume {e_volume:e}, dynamic vertices {e_vertices:e}");
+        assert!(lit > cpu.len() * 9 / 10, "the volume lights the figures: {lit} of {} vertices", cpu.len());
+        assert!(gpu.iter().all(|v| v.w == 1.0), "dynamic vertices are marked");
+        let unmarked =
+            vertex_light.iter().enumerate().filter(|(v, _)| !level.dynamic.iter().any(|&m| vertex_range(&moved, m as usize).contains(v)));
+        assert!(unmarked.clone().all(|(_, l)| *l == Vec4::ZERO), "the other vertices read the light map");
+        if let Some(before) = before.replace(vertex_light.clone()) {
+            let figure = vertex_range(&moved, level.dynamic[0] as usize);
+            assert!(
+                figure.clone().any(|v| (before[v] - vertex_light[v]).abs().max_element() > 1e-3),
+                "the moved figure's light follows it"
+            );
+        }
+    }
+    drop(renderer);
+    assert_clean(ctx);
+}

@@ -262,6 +262,11 @@ fn geometry_off_the_blocks_and_a_level_of_another_dictionary_are_refused() {
     floor.positions[0].x += 2.5;
     let error = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).err().expect("refused");
     says(&error, &["mesh \"Floor\" triangle", "reaches past the face", "split the geometry"]);
+    // A dynamic mesh the scene lacks.
+    let mut scene = load_scene("mrt-figures");
+    scene.settings.blocks["mrt"]["dynamic"] = serde_json::json!(["Figure", "Nobody"]);
+    let error = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).err().expect("refused");
+    says(&error, &["extras.relume.mrt.dynamic", "\"Nobody\"", "no mesh of the scene"]);
     // A level read with a dictionary other than the one it was made with.
     let scene = load_scene("mrt-cube");
     let (_, _, level, _) = mrt_quick_bake(&scene);
@@ -304,13 +309,18 @@ fn a_corrupt_level_is_refused_by_item() {
     let shape_at = 8 + 4 + 4 * level.dictionary.len() + 12 + 16;
     let mut other_shape = good.clone();
     other_shape[shape_at..shape_at + 4].copy_from_slice(&9u32.to_le_bytes());
+    let mut turned = good.clone();
+    turned[shape_at + 4..shape_at + 8].copy_from_slice(&7u32.to_le_bytes());
     let mut twice = good.clone();
-    let first_row = shape_at + 8;
+    let first_row = shape_at + 12;
     let second = twice[first_row + 4..first_row + 8].to_vec();
     twice[first_row..first_row + 4].copy_from_slice(&second);
     for (bytes, named) in [
-        (good[..good.len() - 7].to_vec(), "the feedback"),
+        // The cube's tail: its block's corners (96 bytes) and no dynamic meshes (4).
+        (good[..good.len() - 107].to_vec(), "the feedback"),
+        (good[..good.len() - 7].to_vec(), "a block's corners"),
         (other_shape, "block 0 has shape 9; the dictionary has 6"),
+        (turned, "7 quarter turns"),
         (twice, "which another row names too"),
     ] {
         let mut section = level_data::section(&level, serde_json::json!({}));

@@ -6,7 +6,7 @@ use super::dictionary::{self, Dictionary};
 use super::evaluate::LevelTransfer;
 use super::level_data::{k_max, LevelData, MAX_FEEDBACK};
 use super::map::{map, Mapped};
-use super::proxy::Proxy;
+use super::proxy::{dynamic_meshes, Proxy};
 use crate::scene::Scene;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -24,11 +24,14 @@ pub fn bake_level(scene: &Scene, dictionary: &Dictionary, d_max: usize) -> Resul
             k_max(dictionary)
         ));
     }
-    let mapped = map(scene, &proxy, &level, dictionary.settings.samples_per_face)?;
+    let dynamic = dynamic_meshes(scene)?;
+    let mapped = map(scene, &proxy, &level, dictionary.settings.samples_per_face, &dynamic)?;
     let (operators, interfaces) = dictionary.operators();
     let transfer = LevelTransfer::new(&level, &operators, &interfaces, d_max)?;
     let mut data = transfer.level_data(dictionary::checksum(dictionary), &mapped);
     data.feedback = solve_feedback(&data, dictionary)?;
+    data.corners = proxy.corners.iter().map(|c| c.map(|p| p.as_vec3())).collect();
+    data.dynamic = dynamic.into_iter().map(|m| m as u32).collect();
     Ok((mapped, data))
 }
 

@@ -38,7 +38,8 @@ impl BlockOperators {
         &self.u_b * (&self.t_d_b * l_d)
     }
 
-    /// The operators as the dictionary stores them (f32, column-major).
+    /// The operators as the dictionary stores them (f32, column-major), with the light
+    /// volume's U_bvol gathered from L_imp.
     pub fn data(&self) -> BlockData {
         let f32s = |m: &DMatrix<f64>| m.iter().map(|&v| v as f32).collect();
         BlockData {
@@ -48,6 +49,7 @@ impl BlockOperators {
             u_b: f32s(&self.u_b),
             t_d_b: f32s(&self.t_d_b),
             l_imp: f32s(&self.l_imp),
+            u_bvol: f32s(&super::volume::own(self)),
         }
     }
 }

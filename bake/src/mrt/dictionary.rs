@@ -1,16 +1,17 @@
 //! The dictionary's section, `mrt-dictionary` (keyed to nothing: made once for every scene):
 //! what it was made with, each shape's operators U_b, T_d->b and L_imp (§4), and the interface
-//! operators R_b->rlf, the three turns, U_r and T_rlf->r (§5.1); f32, column-major. A level
+//! operators R_b->rlf, the three turns, U_r and T_rlf->r (§5.1); and the light volume's U_bvol
+//! per shape and U_rvol per side face (§6.5, `volume`); f32, column-major. A level
 //! reads it only when it was made with the parameters the level asks for.
 
-use super::{BlockSettings, Face, InterfaceSettings, Samples, Shape};
+use super::{volume, BlockSettings, Face, InterfaceSettings, Samples, Shape};
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
 use crate::binary::{Reader, Writer};
 
 pub const SECTION: &str = "mrt-dictionary";
-pub const SECTION_VERSION: u32 = 2;
+pub const SECTION_VERSION: u32 = 3;
 pub const BIN: &str = "mrt-dictionary.bin";
-const MAGIC: &[u8; 8] = b"RLMRTD02";
+const MAGIC: &[u8; 8] = b"RLMRTD03";
 
 /// One shape's operators: `samples` (n) rows, `modes` (k) columns.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +25,8 @@ pub struct BlockData {
     pub t_d_b: Vec<f32>,
     /// n x k.
     pub l_imp: Vec<f32>,
+    /// U_bvol: volume::ROWS x k.
+    pub u_bvol: Vec<f32>,
 }
 
 /// The interface operators (§5.1), for `lightfield_modes` (k_rlf) and `response_modes` (k_r).
@@ -39,6 +42,8 @@ pub struct InterfaceData {
     pub u_r: Vec<f32>,
     /// T_rlf->r (k_r x k_rlf).
     pub t_rlf_r: Vec<f32>,
+    /// U_rvol per side face, `volume::SIDES` order (volume::ROWS x k_r each).
+    pub u_rvol: Vec<Vec<f32>>,
 }
 
 #[derive(Clone, Debug)]
@@ -92,6 +97,7 @@ pub fn section(dictionary: &Dictionary, summary: serde_json::Value) -> Section {
         w.f32s(&block.u_b);
         w.f32s(&block.t_d_b);
         w.f32s(&block.l_imp);
+        w.f32s(&block.u_bvol);
     }
     let i = &dictionary.interfaces;
     w.u32s(&[i.lightfield_modes as u32, i.response_modes as u32, i.from_blocks.len() as u32]);
@@ -101,6 +107,7 @@ pub fn section(dictionary: &Dictionary, summary: serde_json::Value) -> Section {
     i.turns.iter().for_each(|t| w.f32s(t));
     w.f32s(&i.u_r);
     w.f32s(&i.t_rlf_r);
+    i.u_rvol.iter().for_each(|u| w.f32s(u));
     Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Nothing, summary, files: vec![(BIN.into(), w.bytes)] }
 }
 
@@ -185,10 +192,11 @@ fn read_blocks(r: &mut Reader, wanted: &BlockSettings) -> Result<Vec<BlockData>,
         }
         let size = samples * modes;
         let (u_b, t_d_b, l_imp) = (r.f32s(size, "U_b")?, r.f32s(size, "T_d->b")?, r.f32s(size, "L_imp")?);
-        if ![&u_b, &t_d_b, &l_imp].iter().all(|m| finite(m)) {
+        let u_bvol = r.f32s(volume::ROWS * modes, "U_bvol")?;
+        if ![&u_b, &t_d_b, &l_imp, &u_bvol].iter().all(|m| finite(m)) {
             return Err(fail(&path, "an operator holds a value that is not finite", REBAKE));
         }
-        blocks.push(BlockData { shape, samples, modes, u_b, t_d_b, l_imp });
+        blocks.push(BlockData { shape, samples, modes, u_b, t_d_b, l_imp, u_bvol });
     }
     Ok(blocks)
 }
@@ -219,11 +227,12 @@ fn read_interfaces(
     }
     let turns = [r.f32s(k_rlf * k_rlf, "R_ahead")?, r.f32s(k_rlf * k_rlf, "R_left")?, r.f32s(k_rlf * k_rlf, "R_right")?];
     let (u_r, t_rlf_r) = (r.f32s(n_r * k_r, "U_r")?, r.f32s(k_r * k_rlf, "T_rlf->r")?);
-    let all = from_blocks.iter().map(|f| &f.2).chain(&turns).chain([&u_r, &t_rlf_r]);
+    let u_rvol = volume::SIDES.iter().map(|_| r.f32s(volume::ROWS * k_r, "U_rvol")).collect::<Result<Vec<_>, _>>()?;
+    let all = from_blocks.iter().map(|f| &f.2).chain(&turns).chain([&u_r, &t_rlf_r]).chain(&u_rvol);
     if !all.into_iter().all(|m| finite(m)) {
         return Err(fail(&path, "an interface operator holds a value that is not finite", REBAKE));
     }
-    Ok(InterfaceData { lightfield_modes: k_rlf, response_modes: k_r, from_blocks, turns, u_r, t_rlf_r })
+    Ok(InterfaceData { lightfield_modes: k_rlf, response_modes: k_r, from_blocks, turns, u_r, t_rlf_r, u_rvol })
 }
 
 #[cfg(feature = "baking")]
@@ -272,6 +281,7 @@ mod built {
                 turns,
                 u_r: f32s(&i.u_r),
                 t_rlf_r: f32s(&i.t_rlf_r),
+                u_rvol: i.u_rvol.iter().map(f32s).collect(),
             };
             let settings = BlockSettings { threads: None, ..settings.clone() };
             Dictionary { settings, interface: interface.clone(), blocks: blocks.iter().map(|b| b.data()).collect(), interfaces }
@@ -303,7 +313,8 @@ mod built {
             let receiver = receiver(grid);
             let u_r = matrix(receiver.len(), i.response_modes, &i.u_r);
             let t_rlf_r = matrix(i.response_modes, k, &i.t_rlf_r);
-            (blocks, Interfaces { from_blocks, turns, u_r, t_rlf_r, receiver })
+            let u_rvol = i.u_rvol.iter().map(|u| matrix(volume::ROWS, i.response_modes, u)).collect();
+            (blocks, Interfaces { from_blocks, turns, u_r, t_rlf_r, receiver, u_rvol })
         }
     }
 }

@@ -22,8 +22,9 @@ struct Receiver {
 
 /// A level's transfer: each block's dictionary shape and rows, and T_b->r by receiver.
 pub struct LevelTransfer {
-    /// Per block: its dictionary shape's index and, per dictionary sample, its own sample.
-    blocks: Vec<(usize, Vec<usize>)>,
+    /// Per block: its dictionary shape's index, the quarter turns to it, and per dictionary
+    /// sample its own sample.
+    blocks: Vec<(usize, u32, Vec<usize>)>,
     receivers: Vec<Receiver>,
     /// Own sample counts, per block.
     sizes: Vec<usize>,
@@ -38,10 +39,10 @@ impl LevelTransfer {
             return Err(format!("the level's operators need the 2D dictionary's six shapes in order, not {shapes:?}"));
         }
         let grid = dictionary[0].samples.grid;
-        let blocks: Vec<(usize, Vec<usize>)> = (0..level.len())
+        let blocks: Vec<(usize, u32, Vec<usize>)> = (0..level.len())
             .map(|i| {
-                let index = level.shape(i).canonical().0;
-                (index, level.own_rows(&dictionary[index].samples, i))
+                let (index, turns) = level.shape(i).canonical();
+                (index, turns, level.own_rows(&dictionary[index].samples, i))
             })
             .collect();
         let sizes = (0..level.len()).map(|i| super::Samples::new(level.shape(i), grid).len()).collect();
@@ -88,7 +89,7 @@ impl LevelTransfer {
             .blocks
             .iter()
             .enumerate()
-            .map(|(i, (index, rows))| {
+            .map(|(i, (index, _, rows))| {
                 let ops = &dictionary[*index];
                 let on_shape = DVector::from_iterator(rows.len(), rows.iter().map(|&r| l_d[i][r]));
                 let b = &ops.t_d_b * on_shape;
@@ -113,20 +114,25 @@ impl LevelTransfer {
 impl LevelTransfer {
     /// The tables the run time takes (`LevelData`): level samples numbered block by block, so
     /// `samples` (the mapped scene's, in that order) fit; made with the dictionary of `checksum`;
-    /// the feedback left empty (`baker::bake_level` solves it).
+    /// the feedback, the corners and the dynamic meshes left empty (`baker::bake_level` fills them).
     pub fn level_data(&self, checksum: String, samples: &super::map::Mapped) -> LevelData {
         let offsets: Vec<u32> = self.sizes.iter().scan(0u32, |at, &n| Some(std::mem::replace(at, *at + n as u32))).collect();
         let blocks = self
             .blocks
             .iter()
             .zip(&offsets)
-            .map(|((shape, rows), &first)| LevelBlock { shape: *shape as u32, rows: rows.iter().map(|&r| first + r as u32).collect() })
+            .map(|((shape, turns, rows), &first)| LevelBlock {
+                shape: *shape as u32,
+                turns: *turns,
+                rows: rows.iter().map(|&r| first + r as u32).collect(),
+            })
             .collect();
         let receivers = self
             .receivers
             .iter()
             .map(|r| LevelReceiver {
                 block: r.block as u32,
+                entry: r.entry,
                 rows: r.rows.iter().map(|row| row.map_or(NONE, |j| offsets[r.block] + j as u32)).collect(),
                 sources: r.sources.iter().map(|(s, m)| (*s as u32, m.iter().map(|&v| v as f32).collect())).collect(),
             })
@@ -139,6 +145,8 @@ impl LevelTransfer {
             copies: samples.copies.clone(),
             layout: samples.layout,
             feedback: Vec::new(),
+            corners: Vec::new(),
+            dynamic: Vec::new(),
         }
     }
 }

@@ -14,6 +14,7 @@
 use super::block::{exit, gather_rows, BlockOperators};
 use super::level::{target, Turn};
 use super::svd;
+use super::volume;
 pub use super::InterfaceSettings;
 use super::{Face, Samples};
 use crate::sampling::concentric_disk;
@@ -124,6 +125,9 @@ pub struct Interfaces {
     pub t_rlf_r: DMatrix<f64>,
     /// The canonical receiver's samples (the unit cube open at -z only).
     pub receiver: Samples,
+    /// U_rvol per side face (`volume::SIDES` order): the light volume's probes for response
+    /// coefficients r arriving through that face (volume::ROWS x k_r).
+    pub u_rvol: Vec<DMatrix<f64>>,
 }
 
 impl Interfaces {
@@ -163,7 +167,10 @@ pub fn build(blocks: &[BlockOperators], settings: &InterfaceSettings) -> Interfa
     let k_r = settings.response_modes.min(g_svd.sigma.len());
     let u_r = g_svd.u.columns(0, k_r).into_owned();
     let t_rlf_r = DMatrix::from_diagonal(&DVector::from_column_slice(&g_svd.sigma[..k_r])) * g_svd.v.columns(0, k_r).transpose();
-    Interfaces { from_blocks, turns, u_r, t_rlf_r, receiver }
+    // The response modes' implicit lightfields: the coefficients c with T_rlf->r c = r (spec B15).
+    let implicit = g_svd.v.columns(0, k_r) * inverse_diagonal(&g_svd.sigma[..k_r]);
+    let u_rvol = volume::SIDES.iter().map(|&face| arriving_volume(&h_rlf, cells, face) * &implicit).collect();
+    Interfaces { from_blocks, turns, u_r, t_rlf_r, receiver, u_rvol }
 }
 
 fn inverse_diagonal(sigma: &[f64]) -> DMatrix<f64> {
@@ -235,6 +242,18 @@ fn respond(receiver: &Samples, h_rlf: &DMatrix<f64>, cells: Cells, settings: &In
         }
     });
     DMatrix::from_fn(receiver.len(), h_rlf.ncols(), |r, c| rows[r][c])
+}
+
+/// The light volume's probes (volume::ROWS x k_rlf) for each basis lightfield entering
+/// through side face `face`: a probe's ray that leaves through it meets the arriving light.
+fn arriving_volume(h_rlf: &DMatrix<f64>, cells: Cells, face: Face) -> DMatrix<f64> {
+    let entry = Frame::new(face, face.inward());
+    volume::gather(h_rlf.ncols(), |hit, point, direction, row| {
+        if hit == face {
+            let source = cells.row(entry.local_point(point), entry.local_direction(-direction));
+            row.iter_mut().zip(h_rlf.row(source).iter()).for_each(|(v, x)| *v += x);
+        }
+    })
 }
 
 #[cfg(test)]

@@ -1,22 +1,24 @@
 //! A level as the run time takes it (§6.3, §7.3), section `mrt-level` (keyed to the scene):
 //! every block's dictionary shape and rows, the receivers with T_b->r's matrices per source
 //! block, the level's samples (where each stands, its albedo, its texel of the light map) and
-//! the padded atlas's copy records; plus [`LevelData::indirect`], the CPU evaluator of §7.3
-//! steps 1-6 on exactly these tables: the oracle of the GPU passes.
+//! the padded atlas's copy records, each block's corners and the meshes the light volume lights;
+//! plus [`LevelData::indirect`], the CPU evaluator of §7.3 steps 1-6 on exactly these tables
+//! (and `volume`'s of steps 8-9): the oracle of the GPU passes.
 //!
 //! A level sample is a block's own sample: blocks in order, each block's samples as
 //! `Samples::new(its shape, grid)` orders them.
 
 use super::dictionary::Dictionary;
+use super::Face;
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};
 use crate::scene::Scene;
 use glam::Vec3;
 
 pub const SECTION: &str = "mrt-level";
-pub const SECTION_VERSION: u32 = 2;
+pub const SECTION_VERSION: u32 = 3;
 const BIN: &str = "mrt-level.bin";
-const MAGIC: &[u8; 8] = b"RLMRTL02";
+const MAGIC: &[u8; 8] = b"RLMRTL03";
 
 /// The most coefficients a level's feedback may couple (blocks x k_max): its matrices are
 /// D^2 values a channel.
@@ -29,6 +31,8 @@ pub const NONE: u32 = u32::MAX;
 pub struct LevelBlock {
     /// Its shape's index in the dictionary.
     pub shape: u32,
+    /// The quarter turns about +y that take the dictionary shape to the block (`Shape::canonical`).
+    pub turns: u32,
     /// For each of the dictionary shape's samples, the level sample it stands for.
     pub rows: Vec<u32>,
 }
@@ -37,6 +41,8 @@ pub struct LevelBlock {
 #[derive(Clone, Debug, PartialEq)]
 pub struct LevelReceiver {
     pub block: u32,
+    /// The side face of the block the light enters through.
+    pub entry: Face,
     /// For each canonical receiver sample, the level sample it lands on (or [`NONE`]).
     pub rows: Vec<u32>,
     /// (source block, T_rlf->r times the paths' turns times R_b->rlf: k_r x the source
@@ -70,6 +76,10 @@ pub struct LevelData {
     /// bounce of §7.3's feedback.
     pub feedback: Vec<f32>,
     pub layout: PageLayout,
+    /// Each block's eight corners (`proxy::Proxy::corners`), for locating the volume's points.
+    pub corners: Vec<[Vec3; 8]>,
+    /// The scene's meshes lit by the light volume (`extras.relume.mrt.dynamic`), ascending.
+    pub dynamic: Vec<u32>,
 }
 
 impl LevelData {
@@ -189,11 +199,11 @@ pub fn section(level: &LevelData, summary: serde_json::Value) -> Section {
     w.u32s(&[level.layout.width, level.layout.height, level.layout.pages]);
     w.u32s(&[level.blocks.len() as u32, level.receivers.len() as u32, level.samples.len() as u32, level.copies.len() as u32]);
     for block in &level.blocks {
-        w.u32s(&[block.shape, block.rows.len() as u32]);
+        w.u32s(&[block.shape, block.turns, block.rows.len() as u32]);
         w.u32s(&block.rows);
     }
     for receiver in &level.receivers {
-        w.u32s(&[receiver.block, receiver.rows.len() as u32, receiver.sources.len() as u32]);
+        w.u32s(&[receiver.block, receiver.entry.index() as u32, receiver.rows.len() as u32, receiver.sources.len() as u32]);
         w.u32s(&receiver.rows);
         for (source, matrix) in &receiver.sources {
             w.u32s(&[*source]);
@@ -206,6 +216,9 @@ pub fn section(level: &LevelData, summary: serde_json::Value) -> Section {
     }
     w.u32s(&level.copies.iter().flatten().copied().collect::<Vec<_>>());
     w.f32s(&level.feedback);
+    level.corners.iter().for_each(|c| w.f32s(&c.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>()));
+    w.u32s(&[level.dynamic.len() as u32]);
+    w.u32s(&level.dynamic);
     Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Scene, summary, files: vec![(BIN.into(), w.bytes)] }
 }
 
@@ -242,29 +255,33 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
     let in_range = |v: &[u32], end: usize, none: bool| v.iter().all(|&x| (x as usize) < end || (none && x == NONE));
     let mut blocks = Vec::with_capacity(block_count.min(1 << 16));
     for b in 0..block_count {
-        let (shape, n) = (r.u32("a block's shape")? as usize, r.u32("a block's row count")? as usize);
+        let (shape, turns, n) = (r.u32("a block's shape")? as usize, r.u32("a block's turns")?, r.u32("a block's row count")? as usize);
         let ops = dictionary
             .blocks
             .get(shape)
             .ok_or_else(|| bad(format!("block {b} has shape {shape}; the dictionary has {}", dictionary.blocks.len())))?;
-        if n != ops.samples {
-            return Err(bad(format!("block {b} has {n} rows; its shape has {} samples", ops.samples)));
+        if n != ops.samples || turns > 3 {
+            return Err(bad(format!(
+                "block {b} has {n} rows and {turns} quarter turns; its shape has {} samples, and 0-3 turns",
+                ops.samples
+            )));
         }
         let rows = r.u32s(n, "a block's rows")?;
         if !in_range(&rows, sample_count, false) {
             return Err(bad(format!("block {b} names a sample past the level's {sample_count}")));
         }
-        blocks.push(LevelBlock { shape: shape as u32, rows });
+        blocks.push(LevelBlock { shape: shape as u32, turns, rows });
     }
     let interfaces = &dictionary.interfaces;
     let n_r = interfaces.u_r.len() / interfaces.response_modes;
     let mut receivers = Vec::with_capacity(receiver_count);
     for i in 0..receiver_count {
-        let (block, rows, sources) =
-            (r.u32("a receiver's block")?, r.u32("a receiver's row count")? as usize, r.u32("a receiver's source count")? as usize);
-        if block as usize >= block_count || rows != n_r || sources > block_count {
+        let (block, entry) = (r.u32("a receiver's block")?, r.u32("a receiver's entry face")? as usize);
+        let (rows, sources) = (r.u32("a receiver's row count")? as usize, r.u32("a receiver's source count")? as usize);
+        let entry = Face::ALL.get(entry).copied().filter(|f| f.axis != 1);
+        if block as usize >= block_count || rows != n_r || sources > block_count || entry.is_none() {
             return Err(bad(format!(
-                "receiver {i}: block {block}, {rows} rows, {sources} sources (the level has {block_count} blocks, a receiver {n_r} rows)"
+                "receiver {i}: block {block}, {rows} rows, {sources} sources, entry {entry:?} (the level has {block_count} blocks, a receiver {n_r} rows and a side face)"
             )));
         }
         let rows = r.u32s(rows, "a receiver's rows")?;
@@ -281,7 +298,7 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
             }
             from.push((source as u32, matrix));
         }
-        receivers.push(LevelReceiver { block, rows, sources: from });
+        receivers.push(LevelReceiver { block, entry: entry.expect("checked"), rows, sources: from });
     }
     // Each sample stands for exactly one row of one block (the passes read its block's U_b).
     let mut owned = vec![false; sample_count];
@@ -322,7 +339,20 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
     if feedback.iter().any(|v| !v.is_finite()) {
         return Err(bad("the feedback holds a value that is not finite".into()));
     }
-    r.finish("the feedback")?;
+    let mut corners = Vec::with_capacity(block_count.min(1 << 16));
+    for b in 0..block_count {
+        let f = r.f32s(24, "a block's corners")?;
+        if !f.iter().all(|v| v.is_finite()) {
+            return Err(bad(format!("block {b}'s corners are not finite")));
+        }
+        corners.push(std::array::from_fn(|i| Vec3::from_slice(&f[3 * i..3 * i + 3])));
+    }
+    let count = r.u32("the dynamic mesh count")? as usize;
+    let dynamic = r.u32s(count.min(scene.meshes.len() + 1), "the dynamic meshes")?;
+    if count > scene.meshes.len() || !dynamic.windows(2).all(|w| w[0] < w[1]) || !in_range(&dynamic, scene.meshes.len(), false) {
+        return Err(bad(format!("{count} dynamic meshes, not ascending indices of the scene's {}", scene.meshes.len())));
+    }
+    r.finish("the dynamic meshes")?;
     let copies = flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-    Ok(LevelData { dictionary: named, blocks, receivers, samples, copies, layout, feedback })
+    Ok(LevelData { dictionary: named, blocks, receivers, samples, copies, layout, feedback, corners, dynamic })
 }

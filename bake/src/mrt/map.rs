@@ -86,8 +86,9 @@ impl Tiles {
     }
 }
 
-/// Maps `scene` onto `proxy`'s blocks with `grid` x `grid` samples a face.
-pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize) -> Result<Mapped, String> {
+/// Maps `scene` onto `proxy`'s blocks with `grid` x `grid` samples a face; the meshes
+/// `dynamic` (ascending) stay off the light map (the light volume lights them: their uv1 are 0).
+pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize, dynamic: &[usize]) -> Result<Mapped, String> {
     let tiles = Tiles::new(level, grid)?;
     let mut texels = vec![Texel { triangle: EMPTY, ..Texel::default() }; tiles.layout.texel_count()];
     let mut samples = Vec::new();
@@ -105,7 +106,17 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize) -> Result<M
     let sample_at: HashMap<u32, usize> = samples.iter().enumerate().map(|(i, s)| (s.texel, i)).collect();
     let mut meshes = Vec::with_capacity(scene.meshes.len());
     let mut triangle_id = 0u32;
-    for mesh in &scene.meshes {
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        if dynamic.binary_search(&m).is_ok() {
+            let count = mesh.positions.len();
+            meshes.push(AtlasMesh {
+                source_vertex: (0..count as u32).collect(),
+                uv1: vec![Vec2::ZERO; count],
+                indices: mesh.indices.clone(),
+            });
+            triangle_id += (mesh.indices.len() / 3) as u32;
+            continue;
+        }
         let albedo = scene.materials[mesh.material].base_color.truncate();
         let mut out = AtlasMesh::default();
         let mut split: HashMap<(u32, usize), u32> = HashMap::new();

@@ -23,6 +23,7 @@ pub mod level;
 pub mod level_data;
 pub mod map;
 pub mod proxy;
+pub mod volume;
 
 pub use proxy::SCENE_BLOCK;
 #[cfg(feature = "baking")]

@@ -129,10 +129,47 @@ impl Proxy {
     }
 }
 
+/// The scene's meshes that the light volume lights (§6.5), by index, ascending:
+/// `extras.relume.mrt.dynamic`, an array of mesh names (none when absent); refused by name when
+/// one matches no mesh or is named twice.
+pub fn dynamic_meshes(scene: &Scene) -> Result<Vec<usize>, String> {
+    let key = "extras.relume.mrt.dynamic";
+    let names = match scene.settings.block(KEY).and_then(|b| b.get("dynamic")) {
+        None => return Ok(Vec::new()),
+        Some(names) => dynamic_names(names)?,
+    };
+    let mut meshes = Vec::with_capacity(names.len());
+    for (k, name) in names.iter().enumerate() {
+        if names[..k].contains(name) {
+            return Err(format!("{key} names \"{name}\" twice"));
+        }
+        let found: Vec<usize> = scene.meshes.iter().enumerate().filter(|(_, m)| &m.name == name).map(|(i, _)| i).collect();
+        if found.is_empty() {
+            let listed: Vec<&str> = scene.meshes.iter().take(12).map(|m| m.name.as_str()).collect();
+            return Err(format!(
+                "{key} names \"{name}\", which is no mesh of the scene (its meshes: {}); name a mesh or remove it",
+                listed.join(", ")
+            ));
+        }
+        meshes.extend(found);
+    }
+    meshes.sort_unstable();
+    Ok(meshes)
+}
+
+fn dynamic_names(names: &Value) -> Result<Vec<String>, String> {
+    let bad = || "extras.relume.mrt.dynamic must be an array of mesh names (strings)".to_string();
+    let list = names.as_array().ok_or_else(bad)?;
+    list.iter().map(|n| n.as_str().map(str::to_string).ok_or_else(bad)).collect()
+}
+
 fn from_block(block: &Value) -> Result<Proxy, String> {
     let key = "extras.relume.mrt";
     let block = as_object(block, key)?;
-    known_keys(block, key, &["grid", "blocks"])?;
+    known_keys(block, key, &["grid", "blocks", "dynamic"])?;
+    if let Some(names) = block.get("dynamic") {
+        dynamic_names(names)?;
+    }
     match (block.get("grid"), block.get("blocks")) {
         (Some(grid), None) => from_grid(grid),
         (None, Some(blocks)) => from_blocks(blocks),
@@ -335,7 +372,7 @@ fn factor(i: usize, a: usize, t: f64) -> f64 {
     }
 }
 
-fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
+pub(super) fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
     // d/dq_axis of corner i's weight: its factor along `axis` becomes +1 or -1.
     let column = |axis: usize| -> DVec3 {
         (0..8)
@@ -352,7 +389,7 @@ fn jacobian(c: &[DVec3; 8], q: DVec3) -> DMat3 {
 /// that lands outside the cube (a warped block's map has other roots), from near each corner;
 /// the first root inside, else the first found (None where none converges: far outside the
 /// block, or where the map folds).
-fn local(c: &[DVec3; 8], p: DVec3) -> Option<DVec3> {
+pub(super) fn local(c: &[DVec3; 8], p: DVec3) -> Option<DVec3> {
     let seeds = std::iter::once(DVec3::splat(0.5)).chain((0..8).map(|i| DVec3::splat(0.1) + unit_corner(i) * 0.8));
     let mut first = None;
     for seed in seeds {
@@ -384,12 +421,12 @@ fn newton(c: &[DVec3; 8], p: DVec3, seed: DVec3) -> Option<DVec3> {
 }
 
 /// How deep inside the unit cube a local point lies (negative: outside).
-fn depth(q: DVec3) -> f64 {
+pub(super) fn depth(q: DVec3) -> f64 {
     q.min_element().min((DVec3::ONE - q).min_element())
 }
 
 /// The mean length of a block's 12 edges.
-fn mean_edge(c: &[DVec3; 8]) -> f64 {
+pub(super) fn mean_edge(c: &[DVec3; 8]) -> f64 {
     edges(c).sum::<f64>() / 12.0
 }
 
@@ -443,6 +480,7 @@ mod tests {
             (json!({"grid": {"rows": "..."}}), "rows must be an array"),
             (json!({"cells": []}), "mrt.cells is not a relume setting"),
             (json!({"grid": {"rows": ["."]}, "blocks": []}), "not both"),
+            (json!({"grid": {"rows": ["."]}, "dynamic": "Figure"}), "dynamic must be an array of mesh names"),
         ] {
             let error = from_block(&bad).unwrap_err();
             assert!(error.contains(named), "{bad}: {error}");

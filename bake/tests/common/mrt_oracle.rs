@@ -59,7 +59,6 @@ pub fn sees(cells: &[(i32, i32)], block: usize, x: Vec3, light: Vec3) -> bool {
 /// Brute-force one bounce over a whole level: for every block's samples, the mean over
 /// cosine rays of the direct light `l_d` (per block, its own samples) where each ray lands.
 pub fn bounce(cells: &[(i32, i32)], samples: &[Samples], l_d: &[DVector<f64>], rays: u32) -> Vec<DVector<f64>> {
-    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
     (0..cells.len())
         .map(|block| {
             let own = &samples[block];
@@ -67,18 +66,33 @@ pub fn bounce(cells: &[(i32, i32)], samples: &[Samples], l_d: &[DVector<f64>], r
                 own.len(),
                 (0..own.len()).map(|i| {
                     let (_, origin, normal) = own.sample(i);
-                    let (t, b) = orthonormal_basis(normal);
-                    let mut sum = 0.0;
-                    for r in 0..rays {
-                        let u = PathSampler::new(7, (block * 100_000 + i) as u32, r).sobol4(0);
-                        let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
-                        let (hit, face, point) = land(cells, block, origin, t * local.x + b * local.y + normal * local.z);
-                        let slot = samples[hit].faces.iter().position(|f| *f == face).expect("a wall");
-                        sum += samples[hit].bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[hit][*j]).sum::<f64>();
-                    }
-                    sum / rays as f64
+                    gather(cells, samples, l_d, (block, origin, normal), (block * 100_000 + i) as u32, rays)
                 }),
             )
         })
         .collect()
+}
+
+/// The irradiance the radiosity `l_d` (per block, its own samples) gives a surface at local
+/// point `origin` of block `block` facing `normal`: the mean over `rays` cosine rays (the
+/// random stream `stream`) of `l_d` where each lands.
+pub fn gather(
+    cells: &[(i32, i32)],
+    samples: &[Samples],
+    l_d: &[DVector<f64>],
+    (block, origin, normal): (usize, Vec3, Vec3),
+    stream: u32,
+    rays: u32,
+) -> f64 {
+    use relume_bake::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
+    let (t, b) = orthonormal_basis(normal);
+    let mut sum = 0.0;
+    for r in 0..rays {
+        let u = PathSampler::new(7, stream, r).sobol4(0);
+        let local = cosine_hemisphere(glam::Vec2::new(u[0], u[1]));
+        let (hit, face, point) = land(cells, block, origin, t * local.x + b * local.y + normal * local.z);
+        let slot = samples[hit].faces.iter().position(|f| *f == face).expect("a wall");
+        sum += samples[hit].bilinear(slot, face.uv(point)).iter().map(|(j, w)| *w as f64 * l_d[hit][*j]).sum::<f64>();
+    }
+    sum / rays as f64
 }

@@ -13,7 +13,8 @@ pub enum Slot<'r> {
     /// A storage buffer used as `access` (ComputeStorageRead, -Write or -ReadWrite).
     Buffer(&'r Buffer, Access),
     /// A storage buffer the frame rewrites in its command stream before any pass (the lights
-    /// and shadow layers, `GpuScene::record_updates`), whose barriers come with that update.
+    /// and shadow layers, `GpuScene::record_updates`), whose barriers come with that update,
+    /// or the host writes while no frame is in flight (the vertex buffer as meshes move).
     Updated(&'r Buffer),
     /// The frame's uniform buffer, rewritten the same way.
     Uniform(&'r Buffer),

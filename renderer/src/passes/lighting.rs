@@ -3,7 +3,8 @@
 //! terms the frame's techniques hand over, for Lambertian surfaces (shaders/lighting_fragment.glsl
 //! states the formula). It knows terms by kind, never by technique: at most one occlusion
 //! term (an atlas image scaling the ambient light) and one indirect term: irradiance, read
-//! through uv1 (texel), per vertex (vertex) or per pixel (pixel), or exitant radiance in
+//! through uv1 (texel), per vertex (vertex), through uv1 but per vertex where the vertex says
+//! so (texel or vertex), or per pixel (pixel), or exitant radiance in
 //! spherical harmonics per vertex. Which terms are there picks the shader's variant
 //! (specialization constants; the radiance term its own shaders, lighting_sh.vert and .frag,
 //! whose vertex outputs differ); what may change per frame (ambient, beta,
@@ -32,6 +33,7 @@ const TERM_NONE: u32 = 0;
 const TERM_TEXEL: u32 = 1;
 const TERM_VERTEX: u32 = 2;
 const TERM_PIXEL: u32 = 3;
+const TERM_TEXEL_OR_VERTEX: u32 = 4;
 
 /// The terms a frame's techniques hand over, at most one of each role.
 #[derive(Default)]
@@ -75,11 +77,15 @@ impl<'t> Terms<'t> {
 
     /// The atlas images the terms are read from through uv1.
     pub fn atlas_images(&self) -> impl Iterator<Item = &'t Image> {
-        let texel = match self.irradiance {
-            Some(Source::Texel(image)) => Some(image),
+        self.occlusion.into_iter().chain(self.texels())
+    }
+
+    /// The irradiance term's atlas image, when it reads one.
+    fn texels(&self) -> Option<&'t Image> {
+        match self.irradiance {
+            Some(Source::Texel(image)) | Some(Source::TexelOrVertex(image, _)) => Some(image),
             _ => None,
-        };
-        self.occlusion.into_iter().chain(texel)
+        }
     }
 
     fn irradiance_kind(&self) -> u32 {
@@ -88,6 +94,7 @@ impl<'t> Terms<'t> {
             Some(Source::Texel(_)) => TERM_TEXEL,
             Some(Source::Vertex(_)) => TERM_VERTEX,
             Some(Source::Pixel(_)) => TERM_PIXEL,
+            Some(Source::TexelOrVertex(..)) => TERM_TEXEL_OR_VERTEX,
         }
     }
 }
@@ -125,16 +132,13 @@ impl LightingPass {
         let stand_in_buffer = Buffer::new(ctx, "lighting stand-in", 16, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
         let sampled = |image: &Image| Binding::SampledImage { view: image.view, sampler: texture_sampler.raw };
         let term_image = |image: Option<&Image>| sampled(image.unwrap_or(&stand_in_image));
-        let texels = match terms.irradiance {
-            Some(Source::Texel(image)) => Some(image),
-            _ => None,
-        };
+        let texels = terms.texels();
         let pixels = match terms.irradiance {
             Some(Source::Pixel(image)) => Some(image),
             _ => None,
         };
         let vertices = match (&terms.irradiance, terms.radiance) {
-            (Some(Source::Vertex(buffer)), _) => *buffer,
+            (Some(Source::Vertex(buffer)), _) | (Some(Source::TexelOrVertex(_, buffer)), _) => *buffer,
             (_, Some(buffer)) => buffer,
             _ => &stand_in_buffer,
         };

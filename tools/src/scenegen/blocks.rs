@@ -8,7 +8,7 @@
 //! 41; Fig. 1's cave of 19 warped blocks; and the paper's failures: the corridor declared as
 //! one long block (Fig. 12), the classroom with its furniture as one block (§8's Great Hall).
 
-use super::geometry::lcg;
+use super::geometry::{blob, lcg};
 use super::gltf_writer::Builder;
 use super::scenes::exposure_one_intensity;
 use super::settings::{Settings, BLOCKS_SETTINGS};
@@ -125,6 +125,21 @@ pub(super) fn corridor() -> Builder {
 /// one corner.
 pub(super) fn maze() -> Builder {
     level(&["....", ".#..", "...."], DVec3::new(0.5, 0.7, 0.5), DVec3::new(3.8, 0.5, 2.5), DVec3::new(0.0, 0.45, 2.5))
+}
+
+/// 002 Fig. 5: the maze with two figures (a lumpy blob 0.6 m wide and 1.2 m tall, an
+/// untextured stand-in for a character) standing in its third row, where the light arrives
+/// round the cycle, declared dynamic (`extras.relume.mrt.dynamic`): the light volume lights
+/// them; they are not mapped onto the blocks.
+pub(super) fn figures() -> Builder {
+    let mut b = maze();
+    let stone = b.material("figure", [0.6, 0.6, 0.6]);
+    let figure = b.smooth_mesh("Figure", &blob(0.3, 3), stone);
+    let tall = DVec3::new(1.0, 2.0, 1.0);
+    b.mesh_node("Figure", figure, DVec3::new(5.0, 0.62, 4.7), tall);
+    b.mesh_node("Figure.001", figure, DVec3::new(2.6, 0.62, 5.4), tall);
+    b.mrt_dynamic(&["Figure", "Figure.001"]);
+    b
 }
 
 /// The corridor's geometry declared as one block 10 x 2 x 2 m (002 Fig. 12: one block for a

@@ -242,6 +242,12 @@ impl Builder {
         self.mrt = Some(json!({ "blocks": blocks }));
     }
 
+    /// Declares the meshes (by node name) that modular radiance transfer's light volume lights
+    /// instead of mapping them onto the blocks (`extras.relume.mrt.dynamic`), after the blocks.
+    pub(super) fn mrt_dynamic(&mut self, names: &[&str]) {
+        self.mrt.as_mut().expect("the blocks are declared first")["dynamic"] = json!(names);
+    }
+
     /// Lights the scene by the lat-long EXR `image` (relative to the glTF file) times `intensity`.
     pub(super) fn environment(&mut self, image: &str, intensity: f64) {
         self.environment = Some((image.to_string(), intensity));

@@ -43,7 +43,8 @@
 //! - `mrt-maze-large`: 41 blocks grown over a 9 x 9 grid (002 Table 3's large maze);
 //!   `mrt-hall-1block`: `mrt-corridor` declared as one 10 m block (002 Fig. 12's failure);
 //!   `mrt-classroom-1block`: `classroom` declared as one block (002 §8's Great Hall);
-//!   `mrt-cave`: 19 warped blocks declared by their corners, four lights (002 Fig. 1).
+//!   `mrt-cave`: 19 warped blocks declared by their corners, four lights (002 Fig. 1);
+//!   `mrt-figures`: `mrt-maze` with two figures its light volume lights (002 Fig. 5).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -80,7 +81,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 25] = [
+pub const SCENE_NAMES: [&str; 26] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -106,6 +107,7 @@ pub const SCENE_NAMES: [&str; 25] = [
     "mrt-hall-1block",
     "mrt-classroom-1block",
     "mrt-cave",
+    "mrt-figures",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -174,6 +176,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "mrt-hall-1block" => blocks::hall_one_block(),
         "mrt-classroom-1block" => blocks::classroom_one_block(),
         "mrt-cave" => blocks::cave(),
+        "mrt-figures" => blocks::figures(),
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),

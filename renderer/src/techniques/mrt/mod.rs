@@ -1,6 +1,6 @@
 //! Modular radiance transfer (Loos et al. 2011, 002) at run time, §7.3: the dictionary's
 //! operators and the level's tables uploaded once, and every frame, lights moving, seven
-//! passes, each in a file of its own:
+//! passes (nine when the scene declares dynamic meshes), each in a file of its own:
 //! 1. `direct`: the shadowed direct light at every level sample, l_d = rho E_d;
 //! 2. `coefficients`: b0 = T_d->b l_d per block;
 //! 3. `feedback`: b = (I - K)^-1 b0, every bounce at once (the fixed point of §7.3's
@@ -8,39 +8,67 @@
 //! 4. `transfer`: r = T_b->r b per receiver;
 //! 5. `response`: U_b b + U_r r per sample, the indirect irradiance;
 //! 6. `light_map`: the samples' indirect irradiance into their texels;
-//! 7. `padding`: the tiles' borders by the copy records (the padded atlas).
+//! 7. `padding`: the tiles' borders by the copy records (the padded atlas);
+//! 8. `volume`: the light volume's probes, U_bvol b + U_rvol r per block (§6.5);
+//! 9. `dynamic`: each dynamic mesh's vertices lit by the volume where they stand now.
 //!
 //! It hands the lighting pass the light map as a texel irradiance term (the scene's uv1 are
-//! the level's light-map coordinates). `LevelData::indirect` (relume_bake) is the same on the
-//! CPU. A frame depends on its lights alone: no state is carried from frame to frame.
+//! the level's light-map coordinates), and with dynamic meshes the vertex light too, which
+//! their vertices read instead. `LevelData::indirect` and `LevelData::volume` (relume_bake)
+//! are the same on the CPU. A frame depends on its lights and where the meshes stand alone:
+//! no state is carried from frame to frame.
 //!
 //! Uploaded at creation (device-local, never written again): `samples` (S x 3 vec4: position,
 //! normal, albedo), `shapes` (6 x uvec4: n, k, where T_d->b and U_b start), `operators` (f32:
 //! each shape's T_d->b and U_b, then U_r), `blocks` (B x uvec2: shape, first row), `rows`
 //! (u32), `receivers` (R x uvec2: first source, count), `sources` (uvec2: block, first matrix
 //! value), `matrices` (f32), `feedback` (3 x D x D f32, D = B k_max), `sample_rows` (S x 3
-//! uvec4), `texel_samples` (u32 per texel), `copies` (uvec2). Written every frame: `light`,
-//! `direct`, `indirect` (S x vec4), `b0`, `b` (D x vec4), `r` (R k_r x vec4), the `light_map`
-//! image.
+//! uvec4), `texel_samples` (u32 per texel), `copies` (uvec2), `volume_blocks` (B x
+//! shaders/mrt/volume.glsl's VolumeBlock), `dynamic_vertices` (u32: the scene's vertex indices
+//! of the dynamic meshes). Written every frame: `light`, `direct`, `indirect` (S x vec4), `b0`,
+//! `b` (D x vec4), `r` (R k_r x vec4), the `light_map` image, `volume` (B x 64 x 9 vec4) and
+//! `vertex_light` (a vec4 per scene vertex, alpha 1 at dynamic ones, zero elsewhere).
 
 mod coefficients;
 mod direct;
+mod dynamic;
 mod feedback;
 mod light_map;
 mod padding;
 mod response;
 mod tables;
 mod transfer;
+mod volume;
 
 use crate::passes::compute::ComputePass;
 use crate::passes::padding::ATLAS_FORMAT;
 use crate::technique::{MakeTechnique, Resource, Shared, Source, Technique, Term};
 use crate::upload::upload_buffers_blocking;
 use crate::vk::{vk, Buffer, CommandRecorder, Image, ImageDesc, Sampler, Tracker, VkError, VkResult};
+use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 use relume_bake::mrt::dictionary::Dictionary;
 use relume_bake::mrt::level_data::LevelData;
+use relume_bake::mrt::volume::ROWS;
 use tables::Tables;
+
+/// The scene's vertex indices (the vertex buffer's order: mesh by mesh) of the level's
+/// dynamic meshes; one zero when there are none (a buffer cannot be empty).
+fn dynamic_vertices(shared: &Shared, level: &LevelData) -> Vec<u32> {
+    let mut first = 0u32;
+    let mut out = Vec::new();
+    for (m, mesh) in shared.scene.meshes.iter().enumerate() {
+        let count = mesh.positions.len() as u32;
+        if level.dynamic.contains(&(m as u32)) {
+            out.extend(first..first + count);
+        }
+        first += count;
+    }
+    if out.is_empty() {
+        out.push(0);
+    }
+    out
+}
 
 /// What the technique is made from: a dictionary, a level made with it, and whether every
 /// bounce is fed back (the solved feedback) or the first only.
@@ -65,6 +93,8 @@ struct MrtPush {
     width: u32,
     feedback: u32,
     u_r: u32,
+    u_rvol: u32,
+    dynamic_count: u32,
 }
 
 /// One compute pass and its workgroup count: the shape every MRT pass has.
@@ -98,12 +128,16 @@ struct Buffers {
     sample_rows: Buffer,
     texel_samples: Buffer,
     copies: Buffer,
+    volume_blocks: Buffer,
+    dynamic_vertices: Buffer,
     light: Buffer,
     indirect: Buffer,
     direct: Buffer,
     b0: Buffer,
     b: Buffer,
     r: Buffer,
+    volume: Buffer,
+    vertex_light: Buffer,
 }
 
 pub struct Mrt {
@@ -116,13 +150,28 @@ pub struct Mrt {
     response: Dispatch,
     light_map_pass: Dispatch,
     padding: Dispatch,
+    volume: Dispatch,
+    dynamic: Dispatch,
     push: MrtPush,
     // Held so the sampler lives as long as the descriptor set that names it.
     _shadow_sampler: Sampler,
 }
 
-const PASSES: [&str; 7] =
-    ["mrt.direct", "mrt.coefficients", "mrt.feedback", "mrt.transfer", "mrt.response", "mrt.light_map", "mrt.padding"];
+const PASSES: [&str; 9] = [
+    "mrt.direct",
+    "mrt.coefficients",
+    "mrt.feedback",
+    "mrt.transfer",
+    "mrt.response",
+    "mrt.light_map",
+    "mrt.padding",
+    "mrt.volume",
+    "mrt.dynamic",
+];
+
+/// Passes of a level without dynamic meshes: the volume would light nothing, so its two passes
+/// are not recorded.
+const STATIC_PASSES: usize = 7;
 
 impl Technique for Mrt {
     fn name(&self) -> &'static str {
@@ -130,22 +179,39 @@ impl Technique for Mrt {
     }
 
     fn passes(&self) -> &'static [&'static str] {
-        &PASSES
+        match self.push.dynamic_count {
+            0 => &PASSES[..STATIC_PASSES],
+            _ => &PASSES,
+        }
     }
 
     fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        let dispatch =
-            [&self.direct, &self.coefficients, &self.feedback, &self.transfer, &self.response, &self.light_map_pass, &self.padding];
+        let dispatch = [
+            &self.direct,
+            &self.coefficients,
+            &self.feedback,
+            &self.transfer,
+            &self.response,
+            &self.light_map_pass,
+            &self.padding,
+            &self.volume,
+            &self.dynamic,
+        ];
         dispatch[pass].record(rec, tracker, &self.push);
     }
 
     fn term(&self) -> Option<Term<'_>> {
-        Some(Term::Irradiance { source: Source::Texel(&self.light_map), times_occlusion: false, occluded_direct: false })
+        let source = match self.push.dynamic_count {
+            0 => Source::Texel(&self.light_map),
+            _ => Source::TexelOrVertex(&self.light_map, &self.buffers.vertex_light),
+        };
+        Some(Term::Irradiance { source, times_occlusion: false, occluded_direct: false })
     }
 
     /// `b0` and `b` (blocks x k_max vec4: before and after the feedback), `r` (receivers x
     /// k_r vec4), `indirect` and `direct` (samples x vec4, rgb the indirect and direct irradiance) and `light_map` (alpha 1 at sample texels,
-    /// -1 at padded ones, 0 elsewhere), as the last frame left them.
+    /// -1 at padded ones, 0 elsewhere), `volume` (blocks x 64 probes x 9 vec4: rgb radiance
+    /// coefficients) and `vertex_light` (a vec4 per scene vertex), as the last frame left them.
     fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
         vec![
             ("b0", Resource::Buffer(&self.buffers.b0)),
@@ -154,6 +220,8 @@ impl Technique for Mrt {
             ("indirect", Resource::Buffer(&self.buffers.indirect)),
             ("direct", Resource::Buffer(&self.buffers.direct)),
             ("light_map", Resource::Image(&self.light_map)),
+            ("volume", Resource::Buffer(&self.buffers.volume)),
+            ("vertex_light", Resource::Buffer(&self.buffers.vertex_light)),
         ]
     }
 }
@@ -168,7 +236,9 @@ impl MakeTechnique for MrtData<'_> {
         let ctx = shared.ctx;
         let t = Tables::new(self.dictionary, self.level).map_err(|e| VkError::Invalid(format!("mrt: {e}")))?;
         t.check(ctx.info.max_storage_buffer_range).map_err(|e| VkError::Invalid(format!("mrt: {e} on {}", ctx.info.name)))?;
-        let [samples, shapes, operators, blocks, rows, receivers, sources, matrices, feedback, sample_rows, texel_samples, copies] =
+        let dynamic = dynamic_vertices(shared, self.level);
+        let vertex_count = shared.gpu_scene.vertex_count();
+        let [samples, shapes, operators, blocks, rows, receivers, sources, matrices, feedback, sample_rows, texel_samples, copies, volume_blocks, dynamic_vertices, vertex_light] =
             upload_buffers_blocking(
                 ctx,
                 [
@@ -184,11 +254,16 @@ impl MakeTechnique for MrtData<'_> {
                     ("mrt sample rows", bytemuck::cast_slice(&t.sample_rows)),
                     ("mrt texel samples", bytemuck::cast_slice(&t.texel_samples)),
                     ("mrt copies", bytemuck::cast_slice(&t.copies)),
+                    ("mrt volume blocks", bytemuck::cast_slice(&t.volume_blocks)),
+                    ("mrt dynamic vertices", bytemuck::cast_slice(&dynamic)),
+                    // Zero (alpha 0: read the light map) but where the dynamic pass writes.
+                    ("mrt vertex light", bytemuck::cast_slice(&vec![Vec4::ZERO; vertex_count.max(1)])),
                 ],
             )?;
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let vec4s = |name: &str, count: u32| Buffer::new(ctx, name, count.max(1) as u64 * 16, per_frame, MemoryLocation::GpuOnly);
-        let push = MrtPush { feedback: self.feedback as u32, ..t.push };
+        let dynamic_count = if self.level.dynamic.is_empty() { 0 } else { dynamic.len() as u32 };
+        let push = MrtPush { feedback: self.feedback as u32, dynamic_count, ..t.push };
         let buffers = Buffers {
             samples,
             shapes,
@@ -202,12 +277,16 @@ impl MakeTechnique for MrtData<'_> {
             sample_rows,
             texel_samples,
             copies,
+            volume_blocks,
+            dynamic_vertices,
+            vertex_light,
             light: vec4s("mrt light", push.sample_count)?,
             indirect: vec4s("mrt indirect", push.sample_count)?,
             direct: vec4s("mrt direct", push.sample_count)?,
             b0: vec4s("mrt b0", push.block_count * push.k_max)?,
             b: vec4s("mrt b", push.block_count * push.k_max)?,
             r: vec4s("mrt r", push.receiver_count * push.k_r)?,
+            volume: vec4s("mrt volume", push.block_count * ROWS as u32)?,
         };
         let layout = self.level.layout;
         let light_map = Image::new(
@@ -232,6 +311,8 @@ impl MakeTechnique for MrtData<'_> {
             response: response::new(shared, &buffers, push.sample_count)?,
             light_map_pass: light_map::new(shared, &buffers, &light_map, push.texel_count)?,
             padding: padding::new(shared, &buffers, &light_map, push.copy_count)?,
+            volume: volume::new(shared, &buffers, push.block_count * ROWS as u32)?,
+            dynamic: dynamic::new(shared, &buffers, push.dynamic_count)?,
             buffers,
             light_map,
             push,

@@ -2,9 +2,21 @@
 //! flattened on the CPU once, at creation.
 
 use super::MrtPush;
-use glam::{UVec2, UVec4, Vec4};
+use glam::{UVec2, UVec4, Vec3, Vec4};
 use relume_bake::mrt::dictionary::Dictionary;
 use relume_bake::mrt::level_data::{LevelData, NONE};
+use relume_bake::mrt::volume::{self, OUTSIDE, ROWS};
+
+/// One block as the volume passes read it (shaders/mrt/volume.glsl's VolumeBlock).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct VolumeBlock {
+    info: UVec4,
+    receivers: UVec4,
+    lo: Vec4,
+    hi: Vec4,
+    corners: [Vec4; 8],
+}
 
 pub(super) struct Tables {
     pub samples: Vec<Vec4>,
@@ -18,6 +30,7 @@ pub(super) struct Tables {
     pub sample_rows: Vec<UVec4>,
     pub texel_samples: Vec<u32>,
     pub copies: Vec<UVec2>,
+    pub volume_blocks: Vec<VolumeBlock>,
     pub push: MrtPush,
     feedback_bytes: usize,
 }
@@ -46,6 +59,17 @@ impl Tables {
         }
         let u_r = operators.len() as u32;
         operators.extend_from_slice(&dictionary.interfaces.u_r);
+        let u_bvol: Vec<u32> = dictionary
+            .blocks
+            .iter()
+            .map(|block| {
+                let at = operators.len() as u32;
+                operators.extend_from_slice(&block.u_bvol);
+                at
+            })
+            .collect();
+        let u_rvol = operators.len() as u32;
+        dictionary.interfaces.u_rvol.iter().for_each(|u| operators.extend_from_slice(u));
         let k_max = dictionary.blocks.iter().map(|b| b.modes as u32).max().unwrap_or(1);
         let (k_r, n_r) =
             (dictionary.interfaces.response_modes as u32, (dictionary.interfaces.u_r.len() / dictionary.interfaces.response_modes) as u32);
@@ -80,6 +104,7 @@ impl Tables {
         for (s, sample) in level.samples.iter().enumerate() {
             texel_samples[sample.texel as usize] = s as u32;
         }
+        let volume_blocks = volume_blocks(dictionary, level, &u_bvol)?;
         let samples = level.samples.iter().flat_map(|s| [s.position.extend(1.0), s.normal.extend(0.0), s.albedo.extend(0.0)]).collect();
         let push = MrtPush {
             sample_count: sample_count as u32,
@@ -93,6 +118,8 @@ impl Tables {
             width: level.layout.width,
             feedback: 1,
             u_r,
+            u_rvol,
+            dynamic_count: 0,
         };
         Ok(Tables {
             samples: non_empty(samples),
@@ -106,6 +133,7 @@ impl Tables {
             sample_rows: non_empty(sample_rows.into_iter().flatten().collect()),
             texel_samples,
             copies: non_empty(level.copies.iter().map(|c| UVec2::from(*c)).collect()),
+            volume_blocks: non_empty(volume_blocks),
             push,
             feedback_bytes: level.feedback.len() * 4,
         })
@@ -122,6 +150,36 @@ impl Tables {
         }
         Ok(())
     }
+}
+
+/// Each block's volume table: where its shape's U_bvol starts (`u_bvol`, per shape), its modes
+/// and turns, its receivers with the side each enters through in the shape's frame, its corners
+/// and bounds widened by OUTSIDE of its mean edge.
+fn volume_blocks(dictionary: &Dictionary, level: &LevelData, u_bvol: &[u32]) -> Result<Vec<VolumeBlock>, String> {
+    let mut out: Vec<VolumeBlock> = level
+        .blocks
+        .iter()
+        .zip(&level.corners)
+        .map(|(block, corners)| {
+            let edges = (0..8).flat_map(|i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| (i, i | (1 << a))));
+            let mean = edges.map(|(i, j)| corners[i].distance(corners[j])).sum::<f32>() / 12.0;
+            let (lo, hi) = corners.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| (lo.min(*c), hi.max(*c)));
+            let shape = block.shape as usize;
+            VolumeBlock {
+                info: UVec4::new(u_bvol[shape], dictionary.blocks[shape].modes as u32, block.turns, 0),
+                receivers: UVec4::splat(NONE),
+                lo: (lo - OUTSIDE * mean).extend(0.0),
+                hi: (hi + OUTSIDE * mean).extend(0.0),
+                corners: corners.map(|c| c.extend(1.0)),
+            }
+        })
+        .collect();
+    for (i, receiver) in level.receivers.iter().enumerate() {
+        let at = &mut out[receiver.block as usize].receivers;
+        let slot = (0..4).find(|&k| at[k] == NONE).ok_or_else(|| format!("block {} has more than four receivers", receiver.block))?;
+        at[slot] = 4 * i as u32 + level.canonical_side(receiver) as u32;
+    }
+    Ok(out)
 }
 
 /// Whether the level's tables index the dictionary's operators and its own samples in range:
@@ -143,11 +201,18 @@ fn fits(dictionary: &Dictionary, level: &LevelData) -> Result<(), String> {
             .iter()
             .all(|(s, m)| level.blocks.get(*s as usize).is_some_and(|b| m.len() == k_r * dictionary.blocks[b.shape as usize].modes));
         if !sizes
+            || receiver.block as usize >= level.blocks.len()
             || receiver.rows.len() * k_r != dictionary.interfaces.u_r.len()
             || receiver.rows.iter().any(|&s| s != NONE && s as usize >= samples)
         {
             return Err(format!("receiver {i}'s rows or transfer do not fit the dictionary and the level"));
         }
+    }
+    if level.corners.len() != level.blocks.len()
+        || dictionary.blocks.iter().any(|b| b.u_bvol.len() != ROWS * b.modes)
+        || dictionary.interfaces.u_rvol.len() != volume::SIDES.len()
+    {
+        return Err("the level's corners or the dictionary's volume operators do not fit its blocks".into());
     }
     if level.feedback.len() != 3 * d * d {
         return Err(format!(
