@@ -1,7 +1,8 @@
 //! Modular radiance transfer (Loos et al. 2011, 002): indirect light of moving lights in a
 //! level of blocks (the scene's `extras.relume.mrt` grid) from a dictionary of six block shapes
-//! made for every scene; at run time seven passes (§7.3's steps 1-7; the light volume of steps
-//! 8-9 aside) relight a padded light map on the blocks' faces, every bounce fed back.
+//! made for every scene; at run time seven passes (§7.3's steps 1-7) relight a padded light map
+//! on the blocks' faces, every bounce fed back, and two more (steps 8-9) light the meshes the
+//! scene declares dynamic from the blocks' light volume.
 
 use super::params::{Default, Param, Values};
 use super::{Bake, Loaded, Method, Stages};
