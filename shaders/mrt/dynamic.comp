@@ -3,7 +3,9 @@
 // stands deepest in (within OUTSIDE of a block), by Newton's inverse of the block's trilinear
 // warp as relume_bake::mrt::proxy undoes it; the probes read trilinearly in the dictionary
 // shape's frame; the normal carried there as a covector (J^T n); the radiance convolved with
-// the clamped cosine (Ramamoorthi and Hanrahan). Alpha 1 marks the vertex as lit per vertex.
+// the clamped cosine (Ramamoorthi and Hanrahan), clamped at zero. Alpha 1 marks the vertex as
+// lit per vertex. Newton works relative to the block's corner 0, so that f32 keeps its
+// precision far from the origin.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
@@ -24,11 +26,13 @@ const uint VERTEX_FLOATS = 10u;
 const float OUTSIDE = 0.05;
 const float INSIDE = 1e-3;
 
+// The warp relative to corner 0 (weights sum to 1, so corner 0 drops out of the sum).
 vec3 warp(uint b, vec3 q) {
     vec3 p = vec3(0.0);
-    for (uint i = 0u; i < 8u; ++i) {
+    vec3 origin = volume_blocks[b].corners[0].xyz;
+    for (uint i = 1u; i < 8u; ++i) {
         vec3 t = mix(1.0 - q, q, vec3(uvec3(i, i >> 1u, i >> 2u) & 1u));
-        p += volume_blocks[b].corners[i].xyz * (t.x * t.y * t.z);
+        p += (volume_blocks[b].corners[i].xyz - origin) * (t.x * t.y * t.z);
     }
     return p;
 }
@@ -36,11 +40,12 @@ vec3 warp(uint b, vec3 q) {
 // d(world)/d(local): columns along local x, y, z.
 mat3 jacobian(uint b, vec3 q) {
     mat3 j = mat3(0.0);
-    for (uint i = 0u; i < 8u; ++i) {
+    vec3 origin = volume_blocks[b].corners[0].xyz;
+    for (uint i = 1u; i < 8u; ++i) {
         vec3 high = vec3(uvec3(i, i >> 1u, i >> 2u) & 1u);
         vec3 t = mix(1.0 - q, q, high);
         vec3 slope = 2.0 * high - 1.0;
-        vec3 c = volume_blocks[b].corners[i].xyz;
+        vec3 c = volume_blocks[b].corners[i].xyz - origin;
         j[0] += c * (slope.x * t.y * t.z);
         j[1] += c * (t.x * slope.y * t.z);
         j[2] += c * (t.x * t.y * slope.z);
@@ -64,8 +69,8 @@ bool newton(uint b, vec3 p, vec3 seed, float size, out vec3 q) {
     return length(warp(b, q) - p) <= 1e-4 * size;
 }
 
-// The local point of block b at p: from the centre, then near each corner; the first root
-// inside the cube, else the first found.
+// The local point of block b at p (relative to its corner 0): from the centre, then near each
+// corner; the first root inside the cube, else the first found.
 bool local_point(uint b, vec3 p, out vec3 q) {
     VolumeBlock at = volume_blocks[b];
     float size = length(at.hi.xyz - at.lo.xyz);
@@ -128,7 +133,8 @@ void main() {
         VolumeBlock at = volume_blocks[b];
         if (any(lessThan(p, at.lo.xyz)) || any(greaterThan(p, at.hi.xyz))) continue;
         vec3 q;
-        if (local_point(b, p, q) && depth(q) >= best && (block == NONE || depth(q) > best)) {
+        // The deepest block; the first of equal depth (as relume_bake::mrt::volume's locate).
+        if (local_point(b, p - at.corners[0].xyz, q) && depth(q) >= -OUTSIDE && (block == NONE || depth(q) > best)) {
             best = depth(q);
             block = b;
             local = q;
@@ -137,9 +143,10 @@ void main() {
     vec3 e = vec3(0.0);
     if (block != NONE) {
         uint back = (4u - volume_blocks[block].info.z % 4u) % 4u;
-        vec3 normal = normalize(transpose(jacobian(block, local)) * n);
+        vec3 covector = transpose(jacobian(block, local)) * n;
+        vec3 normal = dot(covector, covector) > 0.0 ? normalize(covector) : vec3(0.0);
         vec3 q = turn(clamp(local, 0.0, 1.0) - 0.5, back) + 0.5;
-        e = irradiance(block, q, turn(normal, back));
+        e = max(irradiance(block, q, turn(normal, back)), vec3(0.0));
     }
     vertex_light[v] = vec4(e, 1.0);
 }

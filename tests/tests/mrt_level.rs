@@ -327,6 +327,18 @@ fn a_corrupt_level_is_refused_by_item() {
         section.files[0].1 = bytes;
         says(&level_refusal(&scene, &dictionary, section, "corrupt"), &["mrt-level.bin", named]);
     }
+    // Tables no bake makes, written as they are: a receiver entering through a block's top,
+    // dynamic meshes out of order.
+    let corridor = load_scene("mrt-corridor");
+    let (_, level) = relume_bake::mrt::baker::bake_level(&corridor, &dictionary, 8).unwrap();
+    let mut through_the_top = level.clone();
+    through_the_top.receivers[0].entry = Face::ALL[3];
+    let mut unordered = level.clone();
+    unordered.dynamic = vec![1, 0];
+    for (bad, named) in [(through_the_top, "receiver 0"), (unordered, "2 dynamic meshes, not ascending")] {
+        let section = level_data::section(&bad, serde_json::json!({}));
+        says(&level_refusal(&corridor, &dictionary, section, "tables"), &["mrt-level.bin", named]);
+    }
 }
 
 /// The level's tables, the solved feedback included, are the same bytes at 1 and 2 threads.

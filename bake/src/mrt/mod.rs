@@ -3,8 +3,9 @@
 //! scenes. This part holds the dictionary's shapes; its section (`dictionary`: the blocks' and
 //! the interfaces' operators); the scene's block proxy (`proxy`, `extras.relume.mrt`); a
 //! level's blocks (`level`); the scene's geometry mapped onto them with the padded light map
-//! (`map`); and the level's tables as the run time takes them, with the CPU evaluator the GPU
-//! is checked against (`level_data`, section `mrt-level`). Behind `baking`: one block's reduced
+//! (`map`); the level's tables as the run time takes them, with the CPU evaluator the GPU is
+//! checked against (`level_data`, section `mrt-level`); and the light volume for dynamic meshes
+//! with its CPU evaluator (`volume`: §6.5, §7.3 steps 8-9). Behind `baking`: one block's reduced
 //! direct-to-indirect operators (`block`: §4 with the enrichment of App. A), the interface
 //! operators between blocks (`interface`: §5.1), T_b->r by traversal and a CPU evaluator on the
 //! operators themselves (`evaluate`: §6.3, §7.3), and the level's bake with its solved feedback

@@ -118,8 +118,9 @@ impl LevelData {
 
     /// §7.3 step 9: the indirect irradiance the volume `volume` gives a surface at world point
     /// `p` with world normal `n`: the block it stands in (or within [`OUTSIDE`] of), its probes
-    /// read there, the normal carried into the block's frame as a covector (J^T n). Zero
-    /// outside every block.
+    /// read there, the normal carried into the block's frame as a covector (J^T n), clamped at
+    /// zero (nine coefficients ring below zero facing away from a bright opening). Zero outside
+    /// every block.
     pub fn volume_irradiance(&self, volume: &[[Vec3; SH]], p: Vec3, n: Vec3) -> Vec3 {
         let Some((block, q)) = self.locate(p) else { return Vec3::ZERO };
         let corners = self.corners[block].map(|c| c.as_dvec3());
@@ -127,9 +128,11 @@ impl LevelData {
         let turns = 4 - self.blocks[block].turns % 4;
         let probes = &volume[block * PROBE_COUNT..(block + 1) * PROBE_COUNT];
         irradiance(&interpolate(probes, turn_point(q.clamp(Vec3::ZERO, Vec3::ONE), turns)), turn_direction(local_normal, turns))
+            .max(Vec3::ZERO)
     }
 
-    /// The block `p` stands deepest in, within [`OUTSIDE`] of its cube, and its local point.
+    /// The block `p` stands deepest in, within [`OUTSIDE`] of its cube (the first of equal
+    /// depth, as the GPU takes it), and its local point.
     fn locate(&self, p: Vec3) -> Option<(usize, Vec3)> {
         let p = p.as_dvec3();
         let outside = OUTSIDE as f64;
@@ -144,7 +147,7 @@ impl LevelData {
                 inside.then(|| proxy::local(&c, p)).flatten().map(|q| (b, q))
             })
             .filter(|(_, q)| proxy::depth(*q) >= -outside)
-            .max_by(|a, b| proxy::depth(a.1).total_cmp(&proxy::depth(b.1)))
+            .reduce(|best, next| if proxy::depth(next.1) > proxy::depth(best.1) { next } else { best })
             .map(|(b, q)| (b, q.as_vec3()))
     }
 }

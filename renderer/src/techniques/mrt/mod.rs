@@ -53,8 +53,12 @@ use relume_bake::mrt::volume::ROWS;
 use tables::Tables;
 
 /// The scene's vertex indices (the vertex buffer's order: mesh by mesh) of the level's
-/// dynamic meshes; one zero when there are none (a buffer cannot be empty).
-fn dynamic_vertices(shared: &Shared, level: &LevelData) -> Vec<u32> {
+/// dynamic meshes; refused when the level names a mesh the scene lacks.
+fn dynamic_vertices(shared: &Shared, level: &LevelData) -> VkResult<Vec<u32>> {
+    let meshes = shared.scene.meshes.len();
+    if let Some(m) = level.dynamic.iter().find(|&&m| m as usize >= meshes) {
+        return Err(VkError::Invalid(format!("mrt: the level's dynamic mesh {m} is not one of the scene's {meshes}")));
+    }
     let mut first = 0u32;
     let mut out = Vec::new();
     for (m, mesh) in shared.scene.meshes.iter().enumerate() {
@@ -64,10 +68,7 @@ fn dynamic_vertices(shared: &Shared, level: &LevelData) -> Vec<u32> {
         }
         first += count;
     }
-    if out.is_empty() {
-        out.push(0);
-    }
-    out
+    Ok(out)
 }
 
 /// What the technique is made from: a dictionary, a level made with it, and whether every
@@ -150,8 +151,9 @@ pub struct Mrt {
     response: Dispatch,
     light_map_pass: Dispatch,
     padding: Dispatch,
-    volume: Dispatch,
-    dynamic: Dispatch,
+    /// `volume` and `dynamic`, made only for a level with dynamic vertices (the dynamic pass
+    /// binds the scene's whole vertex buffer as storage).
+    volume_passes: Option<[Dispatch; 2]>,
     push: MrtPush,
     // Held so the sampler lives as long as the descriptor set that names it.
     _shadow_sampler: Sampler,
@@ -186,18 +188,13 @@ impl Technique for Mrt {
     }
 
     fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        let dispatch = [
-            &self.direct,
-            &self.coefficients,
-            &self.feedback,
-            &self.transfer,
-            &self.response,
-            &self.light_map_pass,
-            &self.padding,
-            &self.volume,
-            &self.dynamic,
-        ];
-        dispatch[pass].record(rec, tracker, &self.push);
+        let dispatch =
+            [&self.direct, &self.coefficients, &self.feedback, &self.transfer, &self.response, &self.light_map_pass, &self.padding];
+        match (dispatch.get(pass), &self.volume_passes) {
+            (Some(d), _) => d.record(rec, tracker, &self.push),
+            (None, Some(volume)) => volume[pass - STATIC_PASSES].record(rec, tracker, &self.push),
+            (None, None) => unreachable!("passes() lists the volume's passes only when they were made"),
+        }
     }
 
     fn term(&self) -> Option<Term<'_>> {
@@ -236,7 +233,7 @@ impl MakeTechnique for MrtData<'_> {
         let ctx = shared.ctx;
         let t = Tables::new(self.dictionary, self.level).map_err(|e| VkError::Invalid(format!("mrt: {e}")))?;
         t.check(ctx.info.max_storage_buffer_range).map_err(|e| VkError::Invalid(format!("mrt: {e} on {}", ctx.info.name)))?;
-        let dynamic = dynamic_vertices(shared, self.level);
+        let dynamic = dynamic_vertices(shared, self.level)?;
         let vertex_count = shared.gpu_scene.vertex_count();
         let [samples, shapes, operators, blocks, rows, receivers, sources, matrices, feedback, sample_rows, texel_samples, copies, volume_blocks, dynamic_vertices, vertex_light] =
             upload_buffers_blocking(
@@ -255,14 +252,14 @@ impl MakeTechnique for MrtData<'_> {
                     ("mrt texel samples", bytemuck::cast_slice(&t.texel_samples)),
                     ("mrt copies", bytemuck::cast_slice(&t.copies)),
                     ("mrt volume blocks", bytemuck::cast_slice(&t.volume_blocks)),
-                    ("mrt dynamic vertices", bytemuck::cast_slice(&dynamic)),
+                    ("mrt dynamic vertices", bytemuck::cast_slice(if dynamic.is_empty() { &[0u32] } else { &dynamic })),
                     // Zero (alpha 0: read the light map) but where the dynamic pass writes.
                     ("mrt vertex light", bytemuck::cast_slice(&vec![Vec4::ZERO; vertex_count.max(1)])),
                 ],
             )?;
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         let vec4s = |name: &str, count: u32| Buffer::new(ctx, name, count.max(1) as u64 * 16, per_frame, MemoryLocation::GpuOnly);
-        let dynamic_count = if self.level.dynamic.is_empty() { 0 } else { dynamic.len() as u32 };
+        let dynamic_count = dynamic.len() as u32;
         let push = MrtPush { feedback: self.feedback as u32, dynamic_count, ..t.push };
         let buffers = Buffers {
             samples,
@@ -311,8 +308,10 @@ impl MakeTechnique for MrtData<'_> {
             response: response::new(shared, &buffers, push.sample_count)?,
             light_map_pass: light_map::new(shared, &buffers, &light_map, push.texel_count)?,
             padding: padding::new(shared, &buffers, &light_map, push.copy_count)?,
-            volume: volume::new(shared, &buffers, push.block_count * ROWS as u32)?,
-            dynamic: dynamic::new(shared, &buffers, push.dynamic_count)?,
+            volume_passes: match dynamic_count {
+                0 => None,
+                _ => Some([volume::new(shared, &buffers, push.block_count * ROWS as u32)?, dynamic::new(shared, &buffers, dynamic_count)?]),
+            },
             buffers,
             light_map,
             push,

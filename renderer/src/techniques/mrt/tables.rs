@@ -211,6 +211,8 @@ fn fits(dictionary: &Dictionary, level: &LevelData) -> Result<(), String> {
     if level.corners.len() != level.blocks.len()
         || dictionary.blocks.iter().any(|b| b.u_bvol.len() != ROWS * b.modes)
         || dictionary.interfaces.u_rvol.len() != volume::SIDES.len()
+        || dictionary.interfaces.u_rvol.iter().any(|u| u.len() != ROWS * k_r)
+        || level.receivers.iter().any(|r| volume::side(r.entry).is_none())
     {
         return Err("the level's corners or the dictionary's volume operators do not fit its blocks".into());
     }
