@@ -399,26 +399,7 @@ fn a_maze_s_indirect_light_beats_the_best_constant_against_a_brute_force_bounce(
     let transfer = LevelTransfer::new(&level, &dictionary, &ops, 8).unwrap();
     let grid = dictionary[0].samples.grid;
     let samples: Vec<Samples> = (0..cells.len()).map(|i| Samples::new(level.shape(i), grid)).collect();
-    let light = Vec3::new(0.4, 0.6, 0.45);
-    let l_d: Vec<DVector<f64>> = samples
-        .iter()
-        .enumerate()
-        .map(|(block, own)| {
-            DVector::from_iterator(
-                own.len(),
-                (0..own.len()).map(|i| {
-                    let (_, x, n) = own.sample(i);
-                    let world = Vec3::new(cells[block].0 as f32 + x.x, x.y, cells[block].1 as f32 + x.z);
-                    let to = light - world;
-                    let cos = n.dot(to.normalize());
-                    if cos <= 0.0 || !oracle::sees(&cells, block, x, light) {
-                        return 0.0;
-                    }
-                    (cos / to.length_squared().max(0.0025)) as f64
-                }),
-            )
-        })
-        .collect();
+    let l_d = oracle::point_light(&cells, &samples, Vec3::new(0.4, 0.6, 0.45));
     let estimate = transfer.indirect(&dictionary, &ops, &l_d).unwrap();
     let truth = oracle::bounce(&cells, &samples, &l_d, 2048);
     let per_block: Vec<f64> = estimate.iter().zip(&truth).map(|(e, t)| relative(e, t)).collect();
@@ -482,25 +463,7 @@ fn the_light_volume_matches_a_brute_force_gather_in_the_lit_block_and_beyond_its
     // The maze's 2 m cells in the oracle's unit cells.
     let cells: Vec<(i32, i32)> = level.corners.iter().map(|c| ((c[0].x / 2.0).round() as i32, (c[0].z / 2.0).round() as i32)).collect();
     let samples: Vec<Samples> = (0..cells.len()).map(|b| Samples::new(blocks.shape(b), 8)).collect();
-    let light = Vec3::new(0.4, 0.6, 0.45);
-    let l_d: Vec<DVector<f64>> = samples
-        .iter()
-        .enumerate()
-        .map(|(block, own)| {
-            DVector::from_iterator(
-                own.len(),
-                (0..own.len()).map(|i| {
-                    let (_, x, n) = own.sample(i);
-                    let to = light - Vec3::new(cells[block].0 as f32 + x.x, x.y, cells[block].1 as f32 + x.z);
-                    let cos = n.dot(to.normalize());
-                    match cos > 0.0 && oracle::sees(&cells, block, x, light) {
-                        true => (cos / to.length_squared().max(0.0025)) as f64,
-                        false => 0.0,
-                    }
-                }),
-            )
-        })
-        .collect();
+    let l_d = oracle::point_light(&cells, &samples, Vec3::new(0.4, 0.6, 0.45));
     // Level samples are the blocks' own samples, block by block.
     let radiosity: Vec<Vec3> = l_d.iter().flat_map(|l| l.iter().map(|&v| Vec3::splat(v as f32))).collect();
     let b = level.coefficients(&dictionary, &radiosity);

@@ -168,7 +168,7 @@ impl GpuScene {
         let per_frame = storage | vk::BufferUsageFlags::TRANSFER_DST;
         let device_buffer = |name, count: usize| Buffer::new(ctx, name, 64 * count.max(1) as u64, per_frame, MemoryLocation::GpuOnly);
         let mut gpu = GpuScene {
-            // Storage too: a technique may read moving vertices in compute (mrt's dynamic meshes).
+            // Storage too: a technique may read where moving meshes stand now in compute.
             vertices: Buffer::with_data(ctx, "vertices", vk::BufferUsageFlags::VERTEX_BUFFER | storage, &vertices)?,
             indices: Buffer::with_data(ctx, "indices", vk::BufferUsageFlags::INDEX_BUFFER, &indices)?,
             index_count: indices.len() as u32,

@@ -34,8 +34,8 @@ pub enum Source<'t> {
     /// fragment's pixel.
     Pixel(&'t Image),
     /// The atlas image, except at vertices whose vec4 in the buffer has alpha 1 (one per
-    /// vertex of the scene's vertex buffer): meshes lit per vertex, off the atlas (mrt's
-    /// dynamic meshes under its light volume). Alpha is 0 or 1 across each mesh.
+    /// vertex of the scene's vertex buffer): meshes lit per vertex, off the atlas (moving
+    /// meshes lit from a volume, say). Alpha is 0 or 1 across each mesh.
     TexelOrVertex(&'t Image, &'t Buffer),
 }
 

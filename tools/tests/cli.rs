@@ -430,7 +430,9 @@ fn light_cloud_refuses_spot_lights_and_warns_on_flat_meshes() {
 }
 
 /// An mrt bake reuses the dictionary of an earlier one (`--dictionary`), byte for byte, and
-/// refuses one made with other parameters, naming the file, the parameter and the fix.
+/// refuses one made with other parameters, naming the file, the parameter and the fix; without
+/// `--dictionary` it reads the one kept for its parameters (`--dictionary-cache`), and makes
+/// again one that no longer reads.
 #[test]
 fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
     let dir = temp_dir("mrt-dictionary");
@@ -470,5 +472,29 @@ fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
         "{error}"
     );
     assert!(!dir.join("other").exists(), "nothing written");
+    // The first bake kept its dictionary under the working folder's out/mrt-dictionary.
+    let kept = bake("mrt-corridor", "kept", &[]);
+    let said = String::from_utf8_lossy(&kept.stderr).to_string();
+    assert!(kept.status.success() && said.contains("the dictionary made with these parameters, from out/mrt-dictionary/v3-"), "{said}");
+    assert!(!said.contains("mrt:   block shape") && bytes("kept") == bytes("cube"), "{said}");
+    // Other parameters: another entry, made and kept beside it.
+    let other = bake("mrt-cube", "other-kept", &["--no-enrich"]);
+    assert!(String::from_utf8_lossy(&other.stderr).contains("mrt:   block shape"));
+    let cache = dir.join("out/mrt-dictionary");
+    let entries: Vec<std::path::PathBuf> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(entries.len(), 2, "one kept dictionary per parameter set: {entries:?}");
+    // A kept dictionary cut short is made again, with a warning naming the file.
+    let kept_bytes = |folder: &Path| std::fs::read(folder.join("mrt-dictionary.bin")).unwrap_or_default();
+    let entry = entries.iter().find(|e| kept_bytes(e) == bytes("cube")).expect("the cube's dictionary is kept");
+    let bin = entry.join("mrt-dictionary.bin");
+    let length = std::fs::metadata(&bin).unwrap().len();
+    std::fs::OpenOptions::new().write(true).open(&bin).unwrap().set_len(length / 2).unwrap();
+    let remade = bake("mrt-cube", "remade", &[]);
+    let said = String::from_utf8_lossy(&remade.stderr).to_string();
+    assert!(
+        remade.status.success() && said.contains("warning: mrt: the kept dictionary does not read") && said.contains("mrt-dictionary.bin"),
+        "{said}"
+    );
+    assert!(said.contains("mrt:   block shape") && bytes("remade") == bytes("cube") && kept_bytes(entry) == bytes("cube"), "{said}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -111,6 +111,13 @@ pub fn section(dictionary: &Dictionary, summary: serde_json::Value) -> Section {
     Section { name: SECTION.into(), version: SECTION_VERSION, key: Key::Nothing, summary, files: vec![(BIN.into(), w.bytes)] }
 }
 
+/// The name a dictionary made with these parameters is kept under (threads aside): the
+/// section's version and the FNV-1a 64 of the parameters as stored, in hex.
+pub fn key(settings: &BlockSettings, interface: &InterfaceSettings) -> String {
+    let bytes: Vec<u8> = parameters(settings, interface).iter().flat_map(|(_, v)| v.to_le_bytes()).collect();
+    format!("v{SECTION_VERSION}-{}", crate::artifact::checksum(&bytes).trim_start_matches("fnv1a64:"))
+}
+
 /// The checksum of the dictionary's file, as `read` gives it and a level names it.
 pub fn checksum(dictionary: &Dictionary) -> String {
     crate::artifact::checksum(&section(dictionary, serde_json::Value::Null).files[0].1)

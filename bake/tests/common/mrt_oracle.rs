@@ -56,6 +56,29 @@ pub fn sees(cells: &[(i32, i32)], block: usize, x: Vec3, light: Vec3) -> bool {
     (world(hit_block, point) - from).length() >= (light - from).length() - 1e-4
 }
 
+/// The direct irradiance of a unit point light at `light` (world, in cells) on every block's
+/// samples, seen through the level (an inverse square, not below 5 cm).
+pub fn point_light(cells: &[(i32, i32)], samples: &[Samples], light: Vec3) -> Vec<DVector<f64>> {
+    samples
+        .iter()
+        .enumerate()
+        .map(|(block, own)| {
+            DVector::from_iterator(
+                own.len(),
+                (0..own.len()).map(|i| {
+                    let (_, x, n) = own.sample(i);
+                    let to = light - Vec3::new(cells[block].0 as f32 + x.x, x.y, cells[block].1 as f32 + x.z);
+                    let cos = n.dot(to.normalize());
+                    match cos > 0.0 && sees(cells, block, x, light) {
+                        true => (cos / to.length_squared().max(0.0025)) as f64,
+                        false => 0.0,
+                    }
+                }),
+            )
+        })
+        .collect()
+}
+
 /// Brute-force one bounce over a whole level: for every block's samples, the mean over
 /// cosine rays of the direct light `l_d` (per block, its own samples) where each ray lands.
 pub fn bounce(cells: &[(i32, i32)], samples: &[Samples], l_d: &[DVector<f64>], rays: u32) -> Vec<DVector<f64>> {

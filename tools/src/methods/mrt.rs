@@ -8,7 +8,7 @@ use super::params::{Default, Param, Values};
 use super::{Bake, Loaded, Method, Stages};
 use anyhow::Result;
 use glam::Vec3;
-use relume_bake::artifact::Artifact;
+use relume_bake::artifact::{Artifact, BakeOutput};
 use relume_bake::atlas::AtlasSection;
 use relume_bake::mrt::baker::bake_level;
 use relume_bake::mrt::dictionary::{self, Dictionary};
@@ -51,6 +51,14 @@ const DICTIONARY: Param = Param::path(
     "an artifact folder whose dictionary to reuse (an earlier mrt bake of any scene, made with the same dictionary parameters: refused otherwise, naming the first that differs)",
     "made by the bake",
 );
+const DICTIONARY_CACHE: Param = Param::path(
+    "dictionary-cache",
+    "the folder where dictionaries are kept by their parameters: a bake without --dictionary reads the one made with its parameters there, or makes it and keeps it there (one that no longer reads is made again)",
+    DICTIONARY_CACHE_DEFAULT,
+);
+/// Where dictionaries are kept when `--dictionary-cache` is not given (relative to the
+/// working folder, as the bake's own default `--out`).
+const DICTIONARY_CACHE_DEFAULT: &str = "out/mrt-dictionary";
 const FEEDBACK: Param = Param::choice(
     "feedback",
     "every bounce (solved: the fixed point of 002 §7.3's frame-to-frame feedback, at once) or the first only (off)",
@@ -59,7 +67,7 @@ const FEEDBACK: Param = Param::choice(
 )
 .at_render();
 
-const PARAMS: [&Param; 11] = [
+const PARAMS: [&Param; 12] = [
     &SAMPLES_PER_FACE,
     &GATHER_RAYS,
     &MODES,
@@ -70,6 +78,7 @@ const PARAMS: [&Param; 11] = [
     &LIGHTFIELD,
     &D_MAX,
     &DICTIONARY,
+    &DICTIONARY_CACHE,
     &FEEDBACK,
 ];
 
@@ -100,19 +109,39 @@ fn settings(values: &Values, work: &WorkOptions) -> (BlockSettings, InterfaceSet
     (block, interface)
 }
 
-/// The dictionary of `--dictionary`, checked against the parameters asked for; else one made
-/// now (printing its stages).
+/// The dictionary of `--dictionary`, checked against the parameters asked for; else the one
+/// the cache keeps for these parameters; else one made now (printing its stages) and kept.
 fn dictionary(values: &Values, block: &BlockSettings, interface: &InterfaceSettings) -> Result<Dictionary> {
-    match values.given_path(&DICTIONARY) {
-        Some(dir) => {
-            let artifact = Artifact::read(&dir)?;
-            Ok(dictionary::read(&artifact, Some((block, interface)))?.0)
-        }
-        None => {
-            eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
-            Ok(Dictionary::build(block, interface, |stage| eprintln!("mrt:   {stage}")))
+    if let Some(dir) = values.given_path(&DICTIONARY) {
+        let artifact = Artifact::read(&dir)?;
+        return Ok(dictionary::read(&artifact, Some((block, interface)))?.0);
+    }
+    let cache = values.given_path(&DICTIONARY_CACHE).unwrap_or_else(|| DICTIONARY_CACHE_DEFAULT.into());
+    let dir = cache.join(dictionary::key(block, interface));
+    if dir.exists() {
+        let kept = Artifact::read(&dir).and_then(|artifact| dictionary::read(&artifact, Some((block, interface))));
+        match kept {
+            Ok((kept, _)) => {
+                eprintln!("mrt: the dictionary made with these parameters, from {}", dir.display());
+                return Ok(kept);
+            }
+            Err(e) => eprintln!("warning: mrt: the kept dictionary does not read, so it is made again: {e}"),
         }
     }
+    eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
+    let made = Dictionary::build(block, interface, |stage| eprintln!("mrt:   {stage}"));
+    let kept = BakeOutput {
+        method: "mrt",
+        scene: None,
+        parameters: json!({ "kept": "the dictionary alone, by its parameters" }),
+        sections: vec![dictionary::section(&made, json!({ "shapes": made.blocks.len() }))],
+        stats: json!({}),
+    };
+    match kept.write(&dir) {
+        Ok(()) => eprintln!("mrt: the dictionary kept in {}", dir.display()),
+        Err(e) => eprintln!("warning: mrt: the dictionary is not kept: {e}"),
+    }
+    Ok(made)
 }
 
 pub(crate) struct MrtMethod;
@@ -167,7 +196,7 @@ impl Method for MrtMethod {
         Proxy::of(scene).map_err(at)?;
         let (block, interface) = settings(values, &work);
         if work.time_limit.is_some() {
-            eprintln!("mrt: --time-limit does not cut the bake short (its dictionary takes 5-11 s on 2 cores, its level a few seconds); fewer --gather-rays shorten the dictionary, --dictionary DIR skips it");
+            eprintln!("mrt: --time-limit does not cut the bake short (a dictionary not yet kept takes 5-11 s on 2 cores, its level a few seconds); fewer --gather-rays shorten the dictionary, --dictionary DIR skips it");
         }
         let dictionary = stages.timed("dictionary", || dictionary(values, &block, &interface))?;
         let d_max = values.count(&D_MAX) as usize;
