@@ -38,7 +38,7 @@ trap 'rm -rf "$work"' EXIT
 "$relume" bake scenes/cornell.gltf --method light-path-maps --patches 2000 --rays 16 --entry-points 256 --clusters 4 --basis 2 --out "$work/lpm" >/dev/null
 "$relume" bake scenes/fiv-blobs.gltf --method fiv --grid 32x17x15 --difmap-width 16 --out "$work/fiv" >/dev/null
 "$relume" bake scenes/cornell-cloud.gltf --method light-cloud --samples 1 --clusters 4 --vectors 2 --out "$work/lc" >/dev/null
-"$relume" bake scenes/mrt-cube.gltf --method mrt --samples-per-face 4 --gather-rays 64 --modes 4 --prior-modes 8 --lightfield 2 --lightfield-modes 4 --response-modes 4 --out "$work/mrt" >/dev/null
+"$relume" bake scenes/mrt-cube.gltf --method mrt --samples-per-face 4 --gather-rays 64 --modes 4 --prior-modes 8 --lightfield 2 --lightfield-modes 4 --response-modes 4 --dictionary-cache "$work/kept" --out "$work/mrt" >/dev/null
 "$relume" reference scenes/cornell.gltf --width 16 --height 16 --spp 1 --out "$work/small.exr" >/dev/null
 { printf '\x01'; cat "$work/small.png"; } > "$corpus/image/small.png"
 python3 - "$work" "$corpus/artifact" <<'PY'
