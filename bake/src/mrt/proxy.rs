@@ -426,7 +426,7 @@ pub(super) fn depth(q: DVec3) -> f64 {
 }
 
 /// The mean length of a block's 12 edges.
-pub(super) fn mean_edge(c: &[DVec3; 8]) -> f64 {
+pub fn mean_edge(c: &[DVec3; 8]) -> f64 {
     edges(c).sum::<f64>() / 12.0
 }
 

@@ -5,6 +5,7 @@ use super::MrtPush;
 use glam::{UVec2, UVec4, Vec3, Vec4};
 use relume_bake::mrt::dictionary::Dictionary;
 use relume_bake::mrt::level_data::{LevelData, NONE};
+use relume_bake::mrt::proxy;
 use relume_bake::mrt::volume::{self, OUTSIDE, ROWS};
 
 /// One block as the volume passes read it (shaders/mrt/volume.glsl's VolumeBlock).
@@ -161,8 +162,7 @@ fn volume_blocks(dictionary: &Dictionary, level: &LevelData, u_bvol: &[u32]) -> 
         .iter()
         .zip(&level.corners)
         .map(|(block, corners)| {
-            let edges = (0..8).flat_map(|i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| (i, i | (1 << a))));
-            let mean = edges.map(|(i, j)| corners[i].distance(corners[j])).sum::<f32>() / 12.0;
+            let mean = proxy::mean_edge(&corners.map(|c| c.as_dvec3())) as f32;
             let (lo, hi) = corners.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| (lo.min(*c), hi.max(*c)));
             let shape = block.shape as usize;
             VolumeBlock {
