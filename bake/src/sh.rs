@@ -1,6 +1,7 @@
-//! Real spherical harmonics of bands l <= 3 (16 functions), orthonormal over the sphere, in
-//! world space: the basis in which the light cloud stores a glossy vertex's exitant radiance
-//! (004 eq. 7-8, "third order", n_b = 16). `shaders/sh.glsl` evaluates the same polynomials.
+//! Real spherical harmonics of bands l <= 3 (16 functions), orthonormal over the sphere: the
+//! basis in which the light cloud stores a glossy vertex's exitant radiance in world space
+//! (004 eq. 7-8, "third order", n_b = 16), and whose first nine (l <= 2) hold the radiance of
+//! modular radiance transfer's light-volume probes in each block's own frame (002 §6.5). `shaders/sh.glsl` evaluates the same polynomials.
 //!
 //! Index l (l + 1) + m; the constants are sqrt((2l + 1) / 4 pi (l - |m|)! / (l + |m|)!) times
 //! sqrt(2) for m != 0, folded into the Cartesian forms, with z the polar axis.

@@ -429,7 +429,7 @@ fn the_light_volume_of_a_closed_cube_under_uniform_radiosity_gives_it_everywhere
     use relume_bake::mrt::volume::{self, PROBE_COUNT, ROWS, SH};
     let ops = closed_cube();
     let b = &ops.t_d_b * DVector::from_element(ops.samples.len(), 1.0);
-    let probes = volume::own(&ops) * b;
+    let probes = &ops.u_bvol * b;
     assert_eq!(probes.len(), ROWS);
     let sh: Vec<[Vec3; SH]> = (0..PROBE_COUNT).map(|p| std::array::from_fn(|s| Vec3::splat(probes[p * SH + s] as f32))).collect();
     let normals = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::new(1.0, 1.0, -1.0).normalize()];

@@ -262,7 +262,8 @@ impl GpuScene {
         self.write_mesh(mesh)
     }
 
-    fn range_of(&self, mesh: usize) -> VkResult<std::ops::Range<usize>> {
+    /// Mesh `mesh`'s vertices in the vertex buffer; refused for a mesh the scene lacks.
+    pub fn range_of(&self, mesh: usize) -> VkResult<std::ops::Range<usize>> {
         self.mesh_ranges
             .get(mesh)
             .cloned()

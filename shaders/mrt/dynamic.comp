@@ -71,9 +71,7 @@ bool newton(uint b, vec3 p, vec3 seed, float size, out vec3 q) {
 
 // The local point of block b at p (relative to its corner 0): from the centre, then near each
 // corner; the first root inside the cube, else the first found.
-bool local_point(uint b, vec3 p, out vec3 q) {
-    VolumeBlock at = volume_blocks[b];
-    float size = length(at.hi.xyz - at.lo.xyz);
+bool local_point(uint b, vec3 p, float size, out vec3 q) {
     bool found = false;
     vec3 first = vec3(0.0);
     for (uint s = 0u; s < 9u; ++s) {
@@ -101,21 +99,21 @@ vec3 irradiance(uint b, vec3 q, vec3 n) {
     vec3 t = clamp(q * float(VOLUME_PROBES) - 0.5, vec3(0.0), vec3(float(VOLUME_PROBES - 1u)));
     vec3 lo = min(floor(t), vec3(float(VOLUME_PROBES - 2u)));
     vec3 f = t - lo;
+    vec3 sh[9];
+    for (uint s = 0u; s < 9u; ++s) sh[s] = vec3(0.0);
+    for (uint c = 0u; c < 8u; ++c) {
+        vec3 pick = vec3(uvec3(c, c >> 1u, c >> 2u) & 1u);
+        vec3 w3 = mix(1.0 - f, f, pick);
+        uvec3 at = uvec3(lo + pick);
+        uint base = (b * 64u + at.x + VOLUME_PROBES * (at.y + VOLUME_PROBES * at.z)) * 9u;
+        for (uint s = 0u; s < 9u; ++s) sh[s] += volume[base + s].rgb * (w3.x * w3.y * w3.z);
+    }
     float y[16];
     sh_eval(n, y);
     const float lobe[9] = float[9](3.14159265, 2.0943951, 2.0943951, 2.0943951, 0.78539816, 0.78539816, 0.78539816,
                                    0.78539816, 0.78539816);
     vec3 e = vec3(0.0);
-    for (uint c = 0u; c < 8u; ++c) {
-        vec3 pick = vec3(uvec3(c, c >> 1u, c >> 2u) & 1u);
-        vec3 w3 = mix(1.0 - f, f, pick);
-        uvec3 at = uvec3(lo + pick);
-        uint probe = at.x + VOLUME_PROBES * (at.y + VOLUME_PROBES * at.z);
-        uint base = (b * 64u + probe) * 9u;
-        vec3 sum = vec3(0.0);
-        for (uint s = 0u; s < 9u; ++s) sum += volume[base + s].rgb * (lobe[s] * y[s]);
-        e += sum * (w3.x * w3.y * w3.z);
-    }
+    for (uint s = 0u; s < 9u; ++s) e += sh[s] * (lobe[s] * y[s]);
     return e;
 }
 
@@ -134,7 +132,8 @@ void main() {
         if (any(lessThan(p, at.lo.xyz)) || any(greaterThan(p, at.hi.xyz))) continue;
         vec3 q;
         // The deepest block; the first of equal depth (as relume_bake::mrt::volume's locate).
-        if (local_point(b, p - at.corners[0].xyz, q) && depth(q) >= -OUTSIDE && (block == NONE || depth(q) > best)) {
+        if (local_point(b, p - at.corners[0].xyz, length(at.hi.xyz - at.lo.xyz), q) && depth(q) >= -OUTSIDE
+            && (block == NONE || depth(q) > best)) {
             best = depth(q);
             block = b;
             local = q;

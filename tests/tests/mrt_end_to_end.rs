@@ -25,12 +25,22 @@ fn reference_indirect(scene: &Scene) -> Image {
     render_reference(scene, &SceneBvh::new(scene), &settings).indirect
 }
 
-/// NRMSE of `shape` scaled by the least-squares factor against `reference`.
-fn best_scaled(name: &str, shape: &Image, reference: &Image) -> f64 {
-    let dot = |a: &Image, b: &Image| a.pixels.iter().zip(&b.pixels).map(|(x, y)| x.dot(*y) as f64).sum::<f64>();
+/// `shape` scaled by the least-squares factor against `reference` over the pixels `mask`
+/// marks (every pixel: None).
+fn best_scaled(shape: &Image, reference: &Image, mask: Option<&[bool]>) -> Image {
+    let kept = |i: usize| mask.is_none_or(|m| m[i]);
+    let dot = |a: &Image, b: &Image| {
+        a.pixels.iter().zip(&b.pixels).enumerate().filter(|(i, _)| kept(*i)).map(|(_, (x, y))| x.dot(*y) as f64).sum::<f64>()
+    };
     let s = (dot(shape, reference) / dot(shape, shape)) as f32;
-    let scaled = Image { width: shape.width, height: shape.height, pixels: shape.pixels.iter().map(|p| *p * s).collect() };
-    nrmse_with_artifacts(name, &scaled, reference)
+    Image { width: shape.width, height: shape.height, pixels: shape.pixels.iter().map(|p| *p * s).collect() }
+}
+
+/// The scene's camera moved by 2-3 mm: the maze's edges lie on round coordinates, and at the
+/// scene's own camera some project exactly onto a pixel centre, where the rasteriser's tie rule
+/// and the path tracer's can pick different surfaces (one pixel off by the whole direct light).
+fn off_the_ties(scene: &mut Scene) {
+    scene.camera.world_from_camera = Mat4::from_translation(Vec3::new(0.0011, 0.0013, 0.0017)) * scene.camera.world_from_camera;
 }
 
 /// Checks MRT's indirect NRMSE per frame, as light 0 of scene `name` visits `path`, against
@@ -38,10 +48,7 @@ fn best_scaled(name: &str, shape: &Image, reference: &Image) -> f64 {
 fn along_path(name: &str, path: &[Vec3], bar: f64) {
     let scene = load_scene(name);
     let (dictionary, _, level, mut applied) = mrt_quick_bake(&scene);
-    // The camera moved by 2-3 mm: the maze's edges lie on round coordinates, and at the scene's own
-    // camera some project exactly onto a pixel centre, where the rasteriser's tie rule and the
-    // path tracer's can pick different surfaces (one pixel off by the whole direct light).
-    applied.camera.world_from_camera = Mat4::from_translation(Vec3::new(0.0011, 0.0013, 0.0017)) * applied.camera.world_from_camera;
+    off_the_ties(&mut applied);
     let ctx = validated_context();
     let settings = RenderSettings { width: WIDTH, height: HEIGHT, ..RenderSettings::default() };
     let data = MrtData { dictionary: &dictionary, level: &level, feedback: true };
@@ -61,7 +68,7 @@ fn along_path(name: &str, path: &[Vec3], bar: f64) {
         let reference = reference_indirect(&moved);
         let id = name.replace('-', "_");
         errors.push(nrmse_with_artifacts(&format!("{id}_path_{k}"), &image, &reference));
-        constants.push(best_scaled(&format!("{id}_path_constant_{k}"), &constant, &reference));
+        constants.push(nrmse_with_artifacts(&format!("{id}_path_constant_{k}"), &best_scaled(&constant, &reference, None), &reference));
     }
     eprintln!("{name} indirect NRMSE along the light path: MRT {errors:.3?}, best constant {constants:.3?}");
     drop((with_mrt, direct, ambient));
@@ -110,13 +117,10 @@ fn figures_lit_by_the_light_volume_follow_the_reference_better_than_mapped_onto_
     mapped_scene.settings.blocks.get_mut("mrt").and_then(|b| b.as_object_mut()).expect("an mrt block").remove("dynamic");
     let ctx = validated_context();
     let settings = RenderSettings { width: W, height: H, ..RenderSettings::default() };
-    let camera_moved = |applied: &mut Scene| {
-        applied.camera.world_from_camera = Mat4::from_translation(Vec3::new(0.0011, 0.0013, 0.0017)) * applied.camera.world_from_camera;
-    };
     let (dictionary, _, level, mut applied) = mrt_quick_bake(&scene);
     let (_, _, mapped_level, mut mapped_applied) = mrt_quick_bake(&mapped_scene);
-    camera_moved(&mut applied);
-    camera_moved(&mut mapped_applied);
+    off_the_ties(&mut applied);
+    off_the_ties(&mut mapped_applied);
     // The pixels whose centre sees a figure first.
     let bvh = SceneBvh::new(&applied);
     let mask: Vec<bool> = (0..W * H)
@@ -148,17 +152,7 @@ fn figures_lit_by_the_light_volume_follow_the_reference_better_than_mapped_onto_
             ReferenceSettings { samples_per_pixel: 1024, width: W, height: H, pixel_centres: true, ..ReferenceSettings::default() };
         let reference = render_reference(&moved, &SceneBvh::new(&moved), &settings).indirect;
         nrmse_with_artifacts(&format!("mrt_figures_{k}"), &volume, &reference);
-        let only = |image: &Image| Image {
-            width: W,
-            height: H,
-            pixels: image.pixels.iter().zip(&mask).map(|(p, m)| if *m { *p } else { Vec3::ZERO }).collect(),
-        };
-        let scale = {
-            let (c, r) = (only(&constant), only(&reference));
-            let dot = |a: &Image, b: &Image| a.pixels.iter().zip(&b.pixels).map(|(x, y)| x.dot(*y) as f64).sum::<f64>();
-            (dot(&c, &r) / dot(&c, &c)) as f32
-        };
-        let best_constant = Image { width: W, height: H, pixels: constant.pixels.iter().map(|p| *p * scale).collect() };
+        let best_constant = best_scaled(&constant, &reference, Some(&mask));
         rows.push([
             masked_nrmse(&volume, &reference, &mask),
             masked_nrmse(&mapped, &reference, &mask),

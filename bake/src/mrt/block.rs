@@ -30,6 +30,9 @@ pub struct BlockOperators {
     pub m_sigma: Vec<f64>,
     /// Sigma_d: the singular values of the (unenriched) prior L_d (above the rank cut).
     pub prior_sigma: Vec<f64>,
+    /// U_bvol (volume::ROWS x k): the light volume's probes for coefficients b (§6.5); empty
+    /// from `reduce` alone, gathered by `build`.
+    pub u_bvol: DMatrix<f64>,
 }
 
 impl BlockOperators {
@@ -38,8 +41,7 @@ impl BlockOperators {
         &self.u_b * (&self.t_d_b * l_d)
     }
 
-    /// The operators as the dictionary stores them (f32, column-major), with the light
-    /// volume's U_bvol gathered from L_imp.
+    /// The operators as the dictionary stores them (f32, column-major).
     pub fn data(&self) -> BlockData {
         let f32s = |m: &DMatrix<f64>| m.iter().map(|&v| v as f32).collect();
         BlockData {
@@ -49,7 +51,7 @@ impl BlockOperators {
             u_b: f32s(&self.u_b),
             t_d_b: f32s(&self.t_d_b),
             l_imp: f32s(&self.l_imp),
-            u_bvol: f32s(&super::volume::own(self)),
+            u_bvol: f32s(&self.u_bvol),
         }
     }
 }
@@ -67,12 +69,15 @@ pub fn transfer_error(ops: &BlockOperators, f: &DMatrix<f64>, lights: &[Vec3], r
     (squared / total).sqrt()
 }
 
-/// The block's operators: F, the prior, and the reduction (with enrichment when asked).
+/// The block's operators: F, the prior, the reduction (with enrichment when asked) and the
+/// light volume's U_bvol.
 pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
     let samples = Samples::new(shape, settings.samples_per_face);
     let f = with_threads(settings.threads, || gather(shape, &samples, settings.gather_rays, settings.seed));
     let l_d = prior(shape, &samples, settings.prior_grid, settings.light_radius);
-    reduce(shape, samples, &f, &l_d, settings)
+    let mut ops = reduce(shape, samples, &f, &l_d, settings);
+    ops.u_bvol = with_threads(settings.threads, || super::volume::own(&ops));
+    ops
 }
 
 /// F (n x n): row i averages, over cosine-weighted directions from sample i, the bilinear
@@ -197,7 +202,7 @@ pub fn reduce(shape: Shape, samples: Samples, f: &DMatrix<f64>, l_d: &DMatrix<f6
         reduced = from_prior(f, &p, &s, settings.modes);
     }
     let (u_b, t_d_b, l_imp, m_sigma) = reduced;
-    BlockOperators { shape, samples, u_b, t_d_b, l_imp, m_sigma, prior_sigma: prior_svd.sigma }
+    BlockOperators { shape, samples, u_b, t_d_b, l_imp, m_sigma, prior_sigma: prior_svd.sigma, u_bvol: DMatrix::zeros(0, 0) }
 }
 
 /// P (the first `k` left singular vectors) and S (their singular values).

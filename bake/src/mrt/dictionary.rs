@@ -307,6 +307,7 @@ mod built {
                     u_b: matrix(b.samples, b.modes, &b.u_b),
                     t_d_b: matrix(b.modes, b.samples, &b.t_d_b),
                     l_imp: matrix(b.samples, b.modes, &b.l_imp),
+                    u_bvol: matrix(volume::ROWS, b.modes, &b.u_bvol),
                     m_sigma: Vec::new(),
                     prior_sigma: Vec::new(),
                 })

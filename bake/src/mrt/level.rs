@@ -119,7 +119,7 @@ impl Level {
     /// `Shape::dictionary`, the face before the block's turn).
     pub fn dictionary_face(&self, block: usize, face: Face) -> (usize, Face) {
         let (index, quarter_turns) = self.shape(block).canonical();
-        (index, face.turned(4 - quarter_turns % 4))
+        (index, face.turned(undo(quarter_turns)))
     }
 
     /// For each sample of the canonical receiver (`receiver`: open at -z, entered there), the
@@ -156,11 +156,20 @@ fn turned_rows(from: &Samples, quarter_turns: u32, to: &Samples) -> Vec<Option<u
 
 /// A point of the unit cube turned about its vertical axis as `Face::turned` turns faces.
 pub fn turn_point(p: Vec3, quarter_turns: u32) -> Vec3 {
-    let mut q = p - Vec3::splat(0.5);
+    turn_direction(p - Vec3::splat(0.5), quarter_turns) + Vec3::splat(0.5)
+}
+
+/// A direction turned `quarter_turns` about +y, as `Face::turned` turns faces.
+pub fn turn_direction(mut d: Vec3, quarter_turns: u32) -> Vec3 {
     for _ in 0..quarter_turns % 4 {
-        q = Vec3::new(q.z, q.y, -q.x);
+        d = Vec3::new(d.z, d.y, -d.x);
     }
-    q + Vec3::splat(0.5)
+    d
+}
+
+/// The quarter turns that undo `quarter_turns`.
+pub fn undo(quarter_turns: u32) -> u32 {
+    (4 - quarter_turns % 4) % 4
 }
 
 /// The three ways on from an interface across an empty block. Left and right are spec B10's

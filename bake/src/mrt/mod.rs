@@ -94,10 +94,7 @@ impl Face {
 
     /// The face after `quarter_turns` turns of 90 degrees about +y (x to -z, z to x).
     pub fn turned(self, quarter_turns: u32) -> Face {
-        let mut n = -self.inward();
-        for _ in 0..quarter_turns % 4 {
-            n = Vec3::new(n.z, n.y, -n.x);
-        }
+        let n = level::turn_direction(-self.inward(), quarter_turns);
         let axis = (0..3).find(|&a| n[a] != 0.0).expect("a unit axis");
         Face { axis, positive: n[axis] > 0.0 }
     }

@@ -11,7 +11,7 @@
 //! and normal of a turned block are turned into that frame before the probes are read.
 
 use super::dictionary::Dictionary;
-use super::level::turn_point;
+use super::level::{turn_direction, turn_point, undo};
 use super::level_data::LevelData;
 use super::{proxy, Face};
 use glam::{DVec3, Vec3};
@@ -76,14 +76,6 @@ pub fn interpolate(probes: &[[Vec3; SH]], q: Vec3) -> [Vec3; SH] {
     out
 }
 
-/// A direction turned `quarter_turns` about +y, as `Face::turned` turns faces.
-pub fn turn_direction(mut d: Vec3, quarter_turns: u32) -> Vec3 {
-    for _ in 0..quarter_turns % 4 {
-        d = Vec3::new(d.z, d.y, -d.x);
-    }
-    d
-}
-
 impl LevelData {
     /// §7.3 step 8: every block's probes (blocks x [`PROBE_COUNT`], each [`SH`] rgb
     /// coefficients of radiance, in its dictionary shape's frame): U_bvol b plus U_rvol r of
@@ -113,7 +105,7 @@ impl LevelData {
     /// dictionary shape's frame.
     pub fn canonical_side(&self, receiver: &super::level_data::LevelReceiver) -> usize {
         let turns = self.blocks[receiver.block as usize].turns;
-        side(receiver.entry.turned(4 - turns % 4)).expect("receivers enter through side faces")
+        side(receiver.entry.turned(undo(turns))).expect("receivers enter through side faces")
     }
 
     /// §7.3 step 9: the indirect irradiance the volume `volume` gives a surface at world point
@@ -125,7 +117,7 @@ impl LevelData {
         let Some((block, q)) = self.locate(p) else { return Vec3::ZERO };
         let corners = self.corners[block].map(|c| c.as_dvec3());
         let local_normal = (proxy::jacobian(&corners, q.as_dvec3()).as_mat3().transpose() * n).normalize_or_zero();
-        let turns = 4 - self.blocks[block].turns % 4;
+        let turns = undo(self.blocks[block].turns);
         let probes = &volume[block * PROBE_COUNT..(block + 1) * PROBE_COUNT];
         irradiance(&interpolate(probes, turn_point(q.clamp(Vec3::ZERO, Vec3::ONE), turns)), turn_direction(local_normal, turns))
             .max(Vec3::ZERO)

@@ -49,7 +49,7 @@ const D_MAX: Param =
 const DICTIONARY: Param = Param::path(
     "dictionary",
     "an artifact folder whose dictionary to reuse (an earlier mrt bake of any scene, made with the same dictionary parameters: refused otherwise, naming the first that differs)",
-    "made by the bake",
+    "the one kept for these parameters in --dictionary-cache, else made by the bake",
 );
 const DICTIONARY_CACHE: Param = Param::path(
     "dictionary-cache",

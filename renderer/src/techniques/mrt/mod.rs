@@ -20,7 +20,7 @@
 //!
 //! Uploaded at creation (device-local, never written again): `samples` (S x 3 vec4: position,
 //! normal, albedo), `shapes` (6 x uvec4: n, k, where T_d->b and U_b start), `operators` (f32:
-//! each shape's T_d->b and U_b, then U_r), `blocks` (B x uvec2: shape, first row), `rows`
+//! each shape's T_d->b and U_b, then U_r, each shape's U_bvol and U_rvol per side face), `blocks` (B x uvec2: shape, first row), `rows`
 //! (u32), `receivers` (R x uvec2: first source, count), `sources` (uvec2: block, first matrix
 //! value), `matrices` (f32), `feedback` (3 x D x D f32, D = B k_max), `sample_rows` (S x 3
 //! uvec4), `texel_samples` (u32 per texel), `copies` (uvec2), `volume_blocks` (B x
@@ -52,21 +52,12 @@ use relume_bake::mrt::level_data::LevelData;
 use relume_bake::mrt::volume::ROWS;
 use tables::Tables;
 
-/// The scene's vertex indices (the vertex buffer's order: mesh by mesh) of the level's
-/// dynamic meshes; refused when the level names a mesh the scene lacks.
+/// The scene's vertex indices of the level's dynamic meshes; refused when the level names a
+/// mesh the scene lacks.
 fn dynamic_vertices(shared: &Shared, level: &LevelData) -> VkResult<Vec<u32>> {
-    let meshes = shared.scene.meshes.len();
-    if let Some(m) = level.dynamic.iter().find(|&&m| m as usize >= meshes) {
-        return Err(VkError::Invalid(format!("mrt: the level's dynamic mesh {m} is not one of the scene's {meshes}")));
-    }
-    let mut first = 0u32;
     let mut out = Vec::new();
-    for (m, mesh) in shared.scene.meshes.iter().enumerate() {
-        let count = mesh.positions.len() as u32;
-        if level.dynamic.contains(&(m as u32)) {
-            out.extend(first..first + count);
-        }
-        first += count;
+    for &mesh in &level.dynamic {
+        out.extend(shared.gpu_scene.range_of(mesh as usize)?.map(|v| v as u32));
     }
     Ok(out)
 }
@@ -144,16 +135,9 @@ struct Buffers {
 pub struct Mrt {
     buffers: Buffers,
     light_map: Image,
-    direct: Dispatch,
-    coefficients: Dispatch,
-    feedback: Dispatch,
-    transfer: Dispatch,
-    response: Dispatch,
-    light_map_pass: Dispatch,
-    padding: Dispatch,
-    /// `volume` and `dynamic`, made only for a level with dynamic vertices (the dynamic pass
-    /// binds the scene's whole vertex buffer as storage).
-    volume_passes: Option<[Dispatch; 2]>,
+    /// The passes in `PASSES` order: the first seven, and the volume's two only for a level
+    /// with dynamic vertices (the dynamic pass binds the scene's whole vertex buffer as storage).
+    dispatches: Vec<Dispatch>,
     push: MrtPush,
     // Held so the sampler lives as long as the descriptor set that names it.
     _shadow_sampler: Sampler,
@@ -171,30 +155,17 @@ const PASSES: [&str; 9] = [
     "mrt.dynamic",
 ];
 
-/// Passes of a level without dynamic meshes: the volume would light nothing, so its two passes
-/// are not recorded.
-const STATIC_PASSES: usize = 7;
-
 impl Technique for Mrt {
     fn name(&self) -> &'static str {
         "mrt"
     }
 
     fn passes(&self) -> &'static [&'static str] {
-        match self.push.dynamic_count {
-            0 => &PASSES[..STATIC_PASSES],
-            _ => &PASSES,
-        }
+        &PASSES[..self.dispatches.len()]
     }
 
     fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        let dispatch =
-            [&self.direct, &self.coefficients, &self.feedback, &self.transfer, &self.response, &self.light_map_pass, &self.padding];
-        match (dispatch.get(pass), &self.volume_passes) {
-            (Some(d), _) => d.record(rec, tracker, &self.push),
-            (None, Some(volume)) => volume[pass - STATIC_PASSES].record(rec, tracker, &self.push),
-            (None, None) => unreachable!("passes() lists the volume's passes only when they were made"),
-        }
+        self.dispatches[pass].record(rec, tracker, &self.push);
     }
 
     fn term(&self) -> Option<Term<'_>> {
@@ -253,8 +224,9 @@ impl MakeTechnique for MrtData<'_> {
                     ("mrt copies", bytemuck::cast_slice(&t.copies)),
                     ("mrt volume blocks", bytemuck::cast_slice(&t.volume_blocks)),
                     ("mrt dynamic vertices", bytemuck::cast_slice(if dynamic.is_empty() { &[0u32] } else { &dynamic })),
-                    // Zero (alpha 0: read the light map) but where the dynamic pass writes.
-                    ("mrt vertex light", bytemuck::cast_slice(&vec![Vec4::ZERO; vertex_count.max(1)])),
+                    // Zero (alpha 0: read the light map) but where the dynamic pass writes; one
+                    // value, unread, without dynamic meshes.
+                    ("mrt vertex light", bytemuck::cast_slice(&vec![Vec4::ZERO; if dynamic.is_empty() { 1 } else { vertex_count }])),
                 ],
             )?;
         let per_frame = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -283,7 +255,7 @@ impl MakeTechnique for MrtData<'_> {
             b0: vec4s("mrt b0", push.block_count * push.k_max)?,
             b: vec4s("mrt b", push.block_count * push.k_max)?,
             r: vec4s("mrt r", push.receiver_count * push.k_r)?,
-            volume: vec4s("mrt volume", push.block_count * ROWS as u32)?,
+            volume: vec4s("mrt volume", if dynamic_count > 0 { push.block_count * ROWS as u32 } else { 1 })?,
         };
         let layout = self.level.layout;
         let light_map = Image::new(
@@ -300,22 +272,19 @@ impl MakeTechnique for MrtData<'_> {
         )?;
         // The lighting pass's shadow sampler: the same filtering, so the same visibility.
         let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
-        Ok(Box::new(Mrt {
-            direct: direct::new(shared, &buffers, &shadow_sampler, push.sample_count)?,
-            coefficients: coefficients::new(shared, &buffers, push.block_count * push.k_max)?,
-            feedback: feedback::new(shared, &buffers, push.block_count * push.k_max)?,
-            transfer: transfer::new(shared, &buffers, push.receiver_count * push.k_r)?,
-            response: response::new(shared, &buffers, push.sample_count)?,
-            light_map_pass: light_map::new(shared, &buffers, &light_map, push.texel_count)?,
-            padding: padding::new(shared, &buffers, &light_map, push.copy_count)?,
-            volume_passes: match dynamic_count {
-                0 => None,
-                _ => Some([volume::new(shared, &buffers, push.block_count * ROWS as u32)?, dynamic::new(shared, &buffers, dynamic_count)?]),
-            },
-            buffers,
-            light_map,
-            push,
-            _shadow_sampler: shadow_sampler,
-        }))
+        let mut dispatches = vec![
+            direct::new(shared, &buffers, &shadow_sampler, push.sample_count)?,
+            coefficients::new(shared, &buffers, push.block_count * push.k_max)?,
+            feedback::new(shared, &buffers, push.block_count * push.k_max)?,
+            transfer::new(shared, &buffers, push.receiver_count * push.k_r)?,
+            response::new(shared, &buffers, push.sample_count)?,
+            light_map::new(shared, &buffers, &light_map, push.texel_count)?,
+            padding::new(shared, &buffers, &light_map, push.copy_count)?,
+        ];
+        if dynamic_count > 0 {
+            dispatches.push(volume::new(shared, &buffers, push.block_count * ROWS as u32)?);
+            dispatches.push(dynamic::new(shared, &buffers, dynamic_count)?);
+        }
+        Ok(Box::new(Mrt { dispatches, buffers, light_map, push, _shadow_sampler: shadow_sampler }))
     }
 }
