@@ -10,7 +10,10 @@
 //   I'_S     = beta * sum_j E_j             001 eq. (7): every light's unshadowed irradiance on a
 //              surface facing it, with the same range window and spot cone but no cosine and
 //              no visibility (the lux of a directional light);
-//   I_A      = the ambient irradiance (lux), constant over the scene (001 eq. (5));
+//   I_A      = the ambient irradiance (lux), constant over the scene (001 eq. (5)), plus, when
+//              frame.environment_ambient, the environment's unoccluded irradiance at the
+//              normal from nine spherical harmonics (Ramamoorthi and Hanrahan 2001), clamped
+//              at zero: the ambient light a game lights by an environment;
 //   O        = the occlusion term (rgb), bilinear from its atlas image through uv1; 1 without
 //              one (OCCLUSION_TERM false): W of 001 eq. (5);
 //   E_term   = the irradiance term (lux) of kind IRRADIANCE_TERM: bilinear through uv1 (texel),
@@ -19,12 +22,13 @@
 //              frame.irradiance_times_occlusion; plus O * E_direct when frame.occluded_direct
 //              (000 §3.4's readings of "the two texture values are multiplied").
 //
-// I_A = beta = 0 skips the ambient term. k_A = k_D = albedo; the /pi turns irradiance into
+// I_A = beta = 0 without the environment's skips the ambient term. k_A = k_D = albedo; the /pi turns irradiance into
 // Lambertian radiance. With SH_RADIANCE the indirect term is exitant radiance instead, added as
 // max(0, y(to camera) . a) (004 eq. 8), a the interpolated coefficients (16 rgb).
 #include "lights.glsl"
 #include "lighting_interface.glsl"
 #include "bilinear.glsl"
+#include "sh.glsl"
 
 struct Material {
     vec4 base_color;
@@ -51,7 +55,6 @@ layout(location = 2) in vec2 uv0;
 layout(location = 3) in vec2 uv1;
 #ifdef SH_RADIANCE
 layout(location = 4) in vec4 radiance_sh[12];
-#include "sh.glsl"
 #else
 layout(location = 4) in vec4 vertex_term;
 #endif
@@ -78,6 +81,13 @@ vec3 phong_lobe(vec4 phong, vec3 n, vec3 to_camera, vec3 to_light) {
     // pow(0, 0) is undefined in GLSL; the lobe of exponent 0 is the constant (e + 2) / 2 pi.
     float lobe = phong.w == 0.0 ? 1.0 : pow(c, phong.w);
     return phong.rgb * ((phong.w + 2.0) / (2.0 * PI) * lobe);
+}
+
+// The environment's unoccluded irradiance at normal n, clamped at zero.
+vec3 environment_irradiance(vec3 n) {
+    vec3 radiance[9];
+    for (int k = 0; k < 9; ++k) radiance[k] = frame.environment_sh[k].rgb;
+    return max(sh_irradiance(n, radiance), vec3(0.0));
 }
 
 #ifdef SH_RADIANCE
@@ -130,8 +140,9 @@ void main() {
         result += (albedo / PI + phong_lobe(m.phong, n, to_camera, to_light)) * irradiance * cos_theta * v;
         direct += irradiance * cos_theta * v;
     }
-    if (frame.ambient_beta != vec4(0.0)) {
+    if (frame.ambient_beta != vec4(0.0) || frame.environment_ambient != 0u) {
         vec3 ambient = frame.ambient_beta.rgb + frame.ambient_beta.w * unshadowed;   // I_A + I'_S
+        if (frame.environment_ambient != 0u) ambient += environment_irradiance(n);
         vec3 o = OCCLUSION_TERM ? atlas_sample(occlusion, uv1) : vec3(1.0);
         result += albedo / PI * ambient * o;
     }

@@ -20,3 +20,16 @@ void sh_eval(vec3 d, out float y[16]) {
     y[14] = 1.4453057 * z * (x2 - y2);
     y[15] = 0.5900436 * x * (x2 - 3.0 * y2);
 }
+
+// The irradiance on a surface of unit normal n under radiance of bands l <= 2 (rgb per
+// coefficient): the radiance convolved with the clamped cosine (Ramamoorthi and Hanrahan), not
+// clamped; bake/src/sh.rs `irradiance`.
+vec3 sh_irradiance(vec3 n, vec3 radiance[9]) {
+    float y[16];
+    sh_eval(n, y);
+    const float lobe[9] = float[9](3.14159265, 2.0943951, 2.0943951, 2.0943951, 0.78539816, 0.78539816, 0.78539816,
+                                   0.78539816, 0.78539816);
+    vec3 e = vec3(0.0);
+    for (uint s = 0u; s < 9u; ++s) e += radiance[s] * (lobe[s] * y[s]);
+    return e;
+}

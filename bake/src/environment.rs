@@ -223,6 +223,22 @@ impl Environment {
         Environment { source, face, radiance, direction, solid_angle, cdf, select, clamped_texels: 0 }
     }
 
+    /// The radiance's spherical-harmonic coefficients of bands l <= 2 (`crate::sh`), summed
+    /// over the working cube's texels by their solid angles: with `sh::irradiance`, the
+    /// unoccluded irradiance the environment gives a surface of any normal (Ramamoorthi &
+    /// Hanrahan 2001), the ambient light of the ambient methods on a scene lit by one. Exact
+    /// for radiance of bands l <= 2; a sun rings (docs/BENCHMARKS.md measures how much).
+    pub fn radiance_sh(&self) -> [Vec3; crate::sh::IRRADIANCE_COEFFICIENTS] {
+        let mut sums = [glam::DVec3::ZERO; crate::sh::IRRADIANCE_COEFFICIENTS];
+        for ((l, d), w) in self.radiance.iter().zip(&self.direction).zip(&self.solid_angle) {
+            let y = crate::sh::eval(*d);
+            for (sum, y) in sums.iter_mut().zip(y) {
+                *sum += l.as_dvec3() * (y as f64 * *w as f64);
+            }
+        }
+        sums.map(|s| s.as_vec3())
+    }
+
     /// Whether any texel is lit (a black environment lights nothing and is never sampled).
     pub fn is_lit(&self) -> bool {
         !self.cdf.is_empty()

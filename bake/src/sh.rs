@@ -11,6 +11,27 @@ use glam::Vec3;
 /// Functions of bands 0..=3.
 pub const COEFFICIENTS: usize = 16;
 
+/// Functions of bands 0..=2: all irradiance needs (Ramamoorthi & Hanrahan 2001).
+pub const IRRADIANCE_COEFFICIENTS: usize = 9;
+
+/// The clamped cosine's factor per band l <= 2 (Ramamoorthi & Hanrahan 2001, eq. 8): pi,
+/// 2 pi / 3, pi / 4.
+const COSINE_BANDS: [f32; 3] = [std::f32::consts::PI, 2.0 * std::f32::consts::PI / 3.0, std::f32::consts::PI / 4.0];
+
+/// The irradiance on a surface of unit normal `n` under radiance of bands l <= 2 (`radiance`:
+/// rgb per coefficient): the radiance convolved with the clamped cosine (Ramamoorthi &
+/// Hanrahan 2001), not clamped (nine coefficients ring below zero facing away from a bright
+/// source; callers clamp). `sh_irradiance` in `shaders/sh.glsl` is the same.
+pub fn irradiance(radiance: &[Vec3; IRRADIANCE_COEFFICIENTS], n: Vec3) -> Vec3 {
+    let y = eval(n);
+    (0..IRRADIANCE_COEFFICIENTS).map(|i| radiance[i] * (COSINE_BANDS[band(i)] * y[i])).sum()
+}
+
+/// The band l of coefficient `i` (index l (l + 1) + m).
+fn band(i: usize) -> usize {
+    (i as f32).sqrt() as usize
+}
+
 /// y_i(d) for the 16 functions at unit direction `d`.
 pub fn eval(d: Vec3) -> [f32; COEFFICIENTS] {
     let (x, y, z) = (d.x, d.y, d.z);

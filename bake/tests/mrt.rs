@@ -436,7 +436,7 @@ fn the_light_volume_of_a_closed_cube_under_uniform_radiosity_gives_it_everywhere
     let mut worst = 0.0f32;
     for q in scattered_points(32, 0.0, 1.0) {
         for n in normals {
-            worst = worst.max((volume::irradiance(&volume::interpolate(&sh, q), n).x - 1.0).abs());
+            worst = worst.max((relume_bake::sh::irradiance(&volume::interpolate(&sh, q), n).x - 1.0).abs());
         }
     }
     eprintln!("closed cube's light volume under uniform radiosity: worst |E - 1| {worst:.4}");

@@ -17,7 +17,7 @@ use crate::vk::{
     transition, vk, Access, CommandRecorder, Context, Image, ImageDesc, ImageRef, ImageState, Readback, TimestampQueries, Tracker,
 };
 use crate::vk::{VkError, VkResult};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use relume_bake::scene::{Camera, Light, Scene};
 use relume_bake::settings::first_failed_check;
 use std::any::Any;
@@ -49,6 +49,12 @@ pub struct RenderSettings {
     /// cosine, no visibility; a directional light's lux), added to I_A. Default 0. With
     /// ambient and beta both 0 the ambient term is skipped.
     pub beta: f32,
+    /// I_A gains the scene's environment's unoccluded irradiance at each surface's normal
+    /// (`extras.relume.environment`: nine spherical harmonics of its working cube,
+    /// `Environment::radiance_sh`), scaled by the occlusion term as I_A is: the ambient light of
+    /// the ambient methods on a scene lit by an environment. Nothing on a scene without one.
+    /// Default off.
+    pub environment_ambient: bool,
 }
 
 impl Default for RenderSettings {
@@ -64,6 +70,7 @@ impl Default for RenderSettings {
             exposure: 1.0,
             ambient: Vec3::ZERO,
             beta: 0.0,
+            environment_ambient: false,
         }
     }
 }
@@ -151,6 +158,8 @@ pub struct Renderer {
     /// The passes the last frame recorded (its timestamps' names).
     recorded: FrameTimings,
     tracker: Tracker,
+    /// The scene's environment's radiance in spherical harmonics (zero without one).
+    environment_sh: [Vec4; 9],
 }
 
 impl Renderer {
@@ -210,6 +219,7 @@ impl Renderer {
             display,
             recorded: FrameTimings::default(),
             tracker: Tracker::default(),
+            environment_sh: scene.environment.as_ref().map_or([Vec4::ZERO; 9], |e| e.radiance_sh().map(|c| c.extend(0.0))),
         };
         renderer.forget_states();
         Ok(renderer)
@@ -418,7 +428,9 @@ impl Renderer {
             bleeding_reduction: s.bleeding_reduction,
             irradiance_times_occlusion: times_occlusion as u32,
             occluded_direct: occluded_direct as u32,
-            _pad: [0; 2],
+            environment_ambient: (s.environment_ambient && self.environment_sh != [Vec4::ZERO; 9]) as u32,
+            _pad: 0,
+            environment_sh: self.environment_sh,
         }
     }
 

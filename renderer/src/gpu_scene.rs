@@ -78,10 +78,16 @@ pub struct FrameUniforms {
     pub irradiance_times_occlusion: u32,
     /// 1: the occlusion term also scales the direct irradiance, added again.
     pub occluded_direct: u32,
-    pub _pad: [u32; 2],
+    /// 1: the ambient light adds the environment's unoccluded irradiance at the normal,
+    /// `environment_sh` (`RenderSettings::environment_ambient`).
+    pub environment_ambient: u32,
+    pub _pad: u32,
+    /// The environment's radiance in spherical harmonics of bands l <= 2, rgb per coefficient
+    /// (`Environment::radiance_sh`; zero without one).
+    pub environment_sh: [Vec4; 9],
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 128);
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 272);
 
 /// vkCmdUpdateBuffer writes at most 64 KiB: 1024 lights or shadow layers of 64 bytes.
 const MAX_LIGHTS: usize = 1024;

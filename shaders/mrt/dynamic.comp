@@ -108,13 +108,7 @@ vec3 irradiance(uint b, vec3 q, vec3 n) {
         uint base = (b * 64u + at.x + VOLUME_PROBES * (at.y + VOLUME_PROBES * at.z)) * 9u;
         for (uint s = 0u; s < 9u; ++s) sh[s] += volume[base + s].rgb * (w3.x * w3.y * w3.z);
     }
-    float y[16];
-    sh_eval(n, y);
-    const float lobe[9] = float[9](3.14159265, 2.0943951, 2.0943951, 2.0943951, 0.78539816, 0.78539816, 0.78539816,
-                                   0.78539816, 0.78539816);
-    vec3 e = vec3(0.0);
-    for (uint s = 0u; s < 9u; ++s) e += sh[s] * (lobe[s] * y[s]);
-    return e;
+    return sh_irradiance(n, sh);
 }
 
 void main() {

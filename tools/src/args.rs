@@ -199,7 +199,15 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
 
 /// The frame's settings from the flags over the method's ambient light `defaults` (I_A and
 /// beta; None: the method models none, as with --direct-only).
-pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, defaults: Option<(Vec3, f32)>) -> Result<RenderSettings> {
+/// The frame's settings from the flags, with a method's ambient light: `defaults` its I_A and
+/// beta (None: it models no ambient light), `environment` whether it adds the scene's
+/// environment to them (`Method::environment_ambient`); `--direct-only` drops all three.
+pub(crate) fn render_settings(
+    scene: &SceneArgs,
+    gpu: &GpuArgs,
+    defaults: Option<(Vec3, f32)>,
+    environment: bool,
+) -> Result<RenderSettings> {
     let defaults = defaults.filter(|_| !gpu.direct_only);
     let given = gpu.ambient.as_deref().map(parse_ambient).transpose()?;
     let (ambient, beta) = crate::methods::frame_ambient(defaults, given, gpu.beta);
@@ -214,6 +222,7 @@ pub(crate) fn render_settings(scene: &SceneArgs, gpu: &GpuArgs, defaults: Option
         exposure: gpu.exposure,
         ambient,
         beta,
+        environment_ambient: environment && !gpu.direct_only,
     };
     settings.validate().map_err(|e| anyhow::anyhow!("render settings: {e}"))?;
     Ok(settings)

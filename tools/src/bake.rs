@@ -83,6 +83,10 @@ pub(crate) fn bake_scene(
 ) -> Result<String> {
     // Refused before the work, not after it (the write checks again).
     relume_bake::artifact::refuse_foreign_folder(out)?;
+    methods::refuse(method, scene)?;
+    if let Some(missed) = methods::misses(method, scene) {
+        eprintln!("warning: {}: {missed}", scene.source.display());
+    }
     let mut stages = Stages::default();
     let bake = method.bake(scene, values, work, &mut stages)?;
     let mut stats = bake.stats;

@@ -51,7 +51,10 @@ pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Render))?;
     let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
-    let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
+    if let Some(missed) = methods::misses(method, &scene) {
+        eprintln!("warning: {}: {missed}", scene.source.display());
+    }
+    let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene), method.environment_ambient())?;
     let (renders, device) = render_on_gpu(&[GpuJob { loaded: loaded.as_ref(), settings, frames }], &args.gpu)?;
     let mut outputs = Outputs::new();
     write_render_outputs(&mut outputs, &args.out, &renders[0])?;

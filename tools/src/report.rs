@@ -53,7 +53,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
 
     let mut models = Vec::new();
     let mut bake_summary = String::new();
-    for method in methods::METHODS.into_iter().filter(|m| m.suits(&scene)) {
+    for method in methods::METHODS.into_iter().filter(|m| methods::suits(*m, &scene)) {
         let values = methods::parse_values(method, &method.main_job_values(args.rays), None)?;
         let artifact = match method.bakes() {
             true => {
@@ -67,7 +67,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
             false => None,
         };
         let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
-        let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene))?;
+        let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene), method.environment_ambient())?;
         models.push(Model { method, loaded, settings });
     }
 
@@ -75,7 +75,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     println!("rendering with Vulkan: {} ({frames} timed frames each)", names.join(", "));
     // Direct light alone, with the same shadow maps: what each method's indirect part is measured against.
     let direct_only = Plain(scene.clone());
-    let direct_settings = render_settings(&args.scene, &args.gpu, None)?;
+    let direct_settings = render_settings(&args.scene, &args.gpu, None, false)?;
     let mut jobs = vec![GpuJob { loaded: &direct_only, settings: direct_settings, frames: 1 }];
     jobs.extend(models.iter().map(|m| GpuJob { loaded: m.loaded.as_ref(), settings: m.settings.clone(), frames }));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;

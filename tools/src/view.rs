@@ -3,7 +3,7 @@
 //! bake and suits the scene, then each bake's method; the viewer itself knows no method.
 
 use crate::args::{load_scene_noting, render_settings, GpuArgs, SceneArgs};
-use crate::methods::{self, Loaded};
+use crate::methods::{self, Loaded, Method};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use relume_bake::artifact::Artifact;
@@ -49,8 +49,8 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
     let (scene, notes) = load_scene_noting(&args.scene)?;
     let mut methods = Vec::new();
     let none = methods::params::Values::default();
-    for method in methods::METHODS.iter().filter(|m| !m.bakes() && m.suits(&scene)) {
-        methods.push(view_method(method.name(), methods::load(*method, None, &scene, &none)?, method.ambient(&scene), args)?);
+    for method in methods::METHODS.iter().filter(|m| !m.bakes() && methods::suits(**m, &scene)) {
+        methods.push(view_method(*method, methods::load(*method, None, &scene, &none)?, &scene, args)?);
     }
     for bake in &args.bake {
         let artifact = Artifact::read(bake)?;
@@ -58,12 +58,12 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
             .with_context(|| format!("{}: the bake names a method this relume lacks; bake it again with `relume bake`", bake.display()))?;
         let values = methods::parse_values(method, &[], Some(methods::params::Stage::Render))?;
         let loaded = methods::load(method, Some(&artifact), &scene, &values).with_context(|| format!("--bake {}", bake.display()))?;
-        methods.push(view_method(method.name(), loaded, method.ambient(&scene), args)?);
+        methods.push(view_method(method, loaded, &scene, args)?);
     }
     if methods.is_empty() {
         bail!("{}: no method renders this scene without a bake; give one with --bake", args.scene.scene.display());
     }
-    let settings = render_settings(&args.scene, &args.gpu, None)?;
+    let settings = render_settings(&args.scene, &args.gpu, None, false)?;
     let options = ViewOptions {
         settings,
         validation: args.gpu.validation,
@@ -82,7 +82,12 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
     Ok(())
 }
 
-fn view_method(name: &str, loaded: Box<dyn Loaded>, defaults: Option<(glam::Vec3, f32)>, args: &ViewArgs) -> Result<ViewMethod> {
-    let settings = render_settings(&args.scene, &args.gpu, defaults)?;
-    Ok(ViewMethod { name: name.to_string(), source: Box::new(Source(loaded)), ambient: (settings.ambient, settings.beta) })
+fn view_method(method: &dyn Method, loaded: Box<dyn Loaded>, scene: &Scene, args: &ViewArgs) -> Result<ViewMethod> {
+    let settings = render_settings(&args.scene, &args.gpu, method.ambient(scene), method.environment_ambient())?;
+    Ok(ViewMethod {
+        name: method.name().to_string(),
+        source: Box::new(Source(loaded)),
+        ambient: (settings.ambient, settings.beta),
+        environment_ambient: settings.environment_ambient,
+    })
 }

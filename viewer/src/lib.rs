@@ -41,6 +41,8 @@ pub struct ViewMethod {
     pub source: Box<dyn MethodSource>,
     /// The frame's ambient light with this method: I_A (lux) and beta.
     pub ambient: (Vec3, f32),
+    /// Whether I_A adds the scene's environment (`RenderSettings::environment_ambient`).
+    pub environment_ambient: bool,
 }
 
 pub struct ViewOptions {

@@ -15,14 +15,13 @@ use super::level::{turn_direction, turn_point, undo};
 use super::level_data::LevelData;
 use super::{proxy, Face};
 use glam::{DVec3, Vec3};
-use std::f32::consts::PI;
 
 /// Probes per block edge.
 pub const PROBES: usize = 4;
 /// Probes per block.
 pub const PROBE_COUNT: usize = PROBES * PROBES * PROBES;
 /// Spherical-harmonic coefficients per probe (bands l <= 2).
-pub const SH: usize = 9;
+pub const SH: usize = crate::sh::IRRADIANCE_COEFFICIENTS;
 /// Rows of U_bvol and U_rvol: probe-major, coefficient-minor.
 pub const ROWS: usize = PROBE_COUNT * SH;
 /// The side faces through which light enters a block, in the order U_rvol is stored.
@@ -39,23 +38,6 @@ pub fn probe(i: usize) -> Vec3 {
 /// The index of side face `face` in [`SIDES`].
 pub fn side(face: Face) -> Option<usize> {
     SIDES.iter().position(|f| *f == face)
-}
-
-/// Ramamoorthi and Hanrahan's clamped-cosine convolution per band: irradiance from radiance.
-const LOBE: [f32; 3] = [PI, 2.0 * PI / 3.0, PI / 4.0];
-
-/// The irradiance on a surface of unit normal `n` under the radiance `sh` (rgb per coefficient).
-pub fn irradiance(sh: &[Vec3; SH], n: Vec3) -> Vec3 {
-    let y = crate::sh::eval(n);
-    (0..SH).map(|i| sh[i] * (LOBE[band(i)] * y[i])).sum()
-}
-
-fn band(i: usize) -> usize {
-    match i {
-        0 => 0,
-        1..=3 => 1,
-        _ => 2,
-    }
 }
 
 /// The probes of one block read at local point `q` (the dictionary shape's frame): trilinear
@@ -119,7 +101,7 @@ impl LevelData {
         let local_normal = (proxy::jacobian(&corners, q.as_dvec3()).as_mat3().transpose() * n).normalize_or_zero();
         let turns = undo(self.blocks[block].turns);
         let probes = &volume[block * PROBE_COUNT..(block + 1) * PROBE_COUNT];
-        irradiance(&interpolate(probes, turn_point(q.clamp(Vec3::ZERO, Vec3::ONE), turns)), turn_direction(local_normal, turns))
+        crate::sh::irradiance(&interpolate(probes, turn_point(q.clamp(Vec3::ZERO, Vec3::ONE), turns)), turn_direction(local_normal, turns))
             .max(Vec3::ZERO)
     }
 

@@ -2,7 +2,7 @@
 //! no bake. The floor every other method adds to.
 
 use super::params::Param;
-use super::Method;
+use super::{Method, Models};
 use glam::Vec3;
 use relume_bake::scene::Scene;
 
@@ -19,6 +19,10 @@ impl Method for Direct {
 
     fn params(&self) -> Vec<&'static Param> {
         Vec::new()
+    }
+
+    fn models(&self) -> Models {
+        Models::LocalLights
     }
 
     fn ambient(&self, _: &Scene) -> Option<(Vec3, f32)> {

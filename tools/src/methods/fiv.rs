@@ -5,7 +5,7 @@
 //! its occluders.
 
 use super::params::{Default, Param, Values};
-use super::{Bake, Loaded, Method, Stages};
+use super::{Bake, Loaded, Method, Models, Stages};
 use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::Artifact;
@@ -149,13 +149,13 @@ impl Method for Fiv {
         true
     }
 
-    fn lights_environment(&self) -> bool {
-        true
+    fn models(&self) -> Models {
+        Models::Environment
     }
 
     /// A scene with an environment and occluders.
     fn suits(&self, scene: &Scene) -> bool {
-        scene.environment.is_some() && FivSceneSettings::of(scene).is_ok()
+        FivSceneSettings::of(scene).is_ok()
     }
 
     /// It models the environment's direct light and nothing else.

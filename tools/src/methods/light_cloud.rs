@@ -5,7 +5,7 @@
 //! nearest visible cloud lights (§6.1) and one pass sums their transfer per vertex.
 
 use super::params::{Default, Param, Values};
-use super::{Bake, Loaded, Method, Stages};
+use super::{Bake, Loaded, Method, Models, Stages};
 use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::Artifact;
@@ -175,9 +175,12 @@ impl Method for LightCloudMethod {
         true
     }
 
-    /// A scene lit by point lights only, without an environment.
+    fn models(&self) -> Models {
+        Models::LocalLights
+    }
+
     fn suits(&self, scene: &Scene) -> bool {
-        scene.environment.is_none() && !scene.lights.is_empty() && checked(scene).is_ok()
+        checked(scene).is_ok()
     }
 
     /// It models all indirect light: an ambient term would count it twice.

@@ -7,7 +7,7 @@
 
 use super::obscurance::{self, OnAtlas};
 use super::params::{Default, Param, Values};
-use super::{atlas, Bake, Loaded, Method, Stages};
+use super::{atlas, Bake, Loaded, Method, Models, Stages};
 use anyhow::{bail, Result};
 use relume_bake::artifact::Artifact;
 use relume_bake::atlas::Atlas;
@@ -201,10 +201,8 @@ impl Method for LightPathMaps {
         true
     }
 
-    /// A scene that declares where its lights move: without a region the light path maps
-    /// serve only the lights where they stand.
-    fn suits(&self, scene: &Scene) -> bool {
-        scene.environment.is_none() && LightPathMapsSceneSettings::of(scene).is_ok_and(|s| s.region.is_some())
+    fn models(&self) -> Models {
+        Models::LocalLights
     }
 
     /// 000 §3.2.3's sizes: C = 32 clusters, D = 2 eigen-textures.

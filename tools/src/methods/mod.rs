@@ -52,18 +52,15 @@ pub(crate) trait Method: Sync {
         false
     }
 
-    /// Whether it renders a distant environment's light (`extras.relume.environment`); a
-    /// method that does not is refused on a scene that declares one (its image would lack
-    /// that light).
-    fn lights_environment(&self) -> bool {
-        false
-    }
+    /// The light it models beside every punctual light's direct light, which every frame
+    /// renders: a scene without any of it is refused (`refusal`), and a scene with light it
+    /// does not model renders with a warning that its image lacks that light (`misses`).
+    fn models(&self) -> Models;
 
-    /// Whether the main job runs it on `scene`: a method that needs what the scene does not
-    /// declare, or misses light the scene has, is left out (relume models no more than a
-    /// scene needs).
-    fn suits(&self, scene: &Scene) -> bool {
-        scene.environment.is_none()
+    /// Whether what it needs from `scene` is there or can be derived from it (the main job
+    /// runs it where `suits` says so: see the function).
+    fn suits(&self, _scene: &Scene) -> bool {
+        true
     }
 
     /// Parameter values the main job gives it instead of the defaults.
@@ -78,6 +75,13 @@ pub(crate) trait Method: Sync {
         Some((Vec3::ZERO, 0.0))
     }
 
+    /// Whether its ambient light adds the scene's environment (`extras.relume.environment`):
+    /// the environment's unoccluded irradiance at each normal, scaled as I_A is
+    /// (`RenderSettings::environment_ambient`).
+    fn environment_ambient(&self) -> bool {
+        false
+    }
+
     /// Bakes `scene` with `values` into sections, timing its stages in `stages`.
     fn bake(&self, _scene: &Scene, _values: &Values, _work: WorkOptions, _stages: &mut Stages) -> Result<Bake> {
         anyhow::bail!("{} has no bake", self.name())
@@ -88,6 +92,51 @@ pub(crate) trait Method: Sync {
     /// is and no technique.
     fn load(&self, _artifact: Option<&Artifact>, scene: &Scene, _values: &Values) -> Result<Box<dyn Loaded>> {
         Ok(Box::new(Plain(scene.clone())))
+    }
+}
+
+/// The light a method models beside the punctual lights' direct light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Models {
+    /// Punctual (point, spot, directional) lights: their light alone, or their indirect light.
+    LocalLights,
+    /// A distant environment's light (`extras.relume.environment`).
+    Environment,
+    /// Ambient light: the scene's I_A and beta, and its environment where it has one.
+    Ambient,
+}
+
+/// Whether the main job runs `method` on `scene`: the scene has light it models, and what it
+/// needs from the scene is there or can be derived (relume models no more than a scene needs).
+pub(crate) fn suits(method: &dyn Method, scene: &Scene) -> bool {
+    refusal(method, scene).is_none() && method.suits(scene)
+}
+
+/// Why `method` cannot render `scene`: the scene has none of the light it models.
+pub(crate) fn refusal(method: &dyn Method, scene: &Scene) -> Option<String> {
+    let lit = scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    match method.models() {
+        Models::LocalLights if scene.lights.is_empty() => Some(format!(
+            "{} models the light of point, spot and directional lights; this scene has none (give some with --lights FILE)",
+            method.name()
+        )),
+        Models::Environment if !lit => Some(format!(
+            "{} models a distant environment's light; this scene has none (declare extras.relume.environment or give --environment FILE)",
+            method.name()
+        )),
+        _ => None,
+    }
+}
+
+/// The light the scene has that `method` does not model (its image lacks it), for a warning.
+pub(crate) fn misses(method: &dyn Method, scene: &Scene) -> Option<String> {
+    let lit = scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    match method.models() {
+        Models::LocalLights if lit => Some(format!("{} models no environment light: its image lacks the environment's", method.name())),
+        Models::Environment if !scene.lights.is_empty() => {
+            Some(format!("{} models no indirect light of the punctual lights: its image lacks it", method.name()))
+        }
+        _ => None,
     }
 }
 
@@ -193,18 +242,18 @@ pub(crate) fn find(name: &str) -> Result<&'static dyn Method> {
 }
 
 /// What `method` renders from: its bake `artifact` read for `scene` with the run-time
-/// `values`; refused when the scene holds light the method does not render.
+/// `values`; refused when the scene has none of the light the method models.
 pub(crate) fn load(method: &dyn Method, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
-    if scene.environment.is_some() && !method.lights_environment() {
-        let lit_by: Vec<&str> = METHODS.iter().filter(|m| m.lights_environment()).map(|m| m.name()).collect();
-        anyhow::bail!(
-            "{}: the scene is lit by an environment (extras.relume.environment), which {} does not render; use {} (or `relume reference`)",
-            scene.source.display(),
-            method.name(),
-            lit_by.join(", ")
-        );
-    }
+    refuse(method, scene)?;
     method.load(artifact, scene, values)
+}
+
+/// Refuses, naming the scene, a method that models none of the scene's light.
+pub(crate) fn refuse(method: &dyn Method, scene: &Scene) -> Result<()> {
+    match refusal(method, scene) {
+        Some(why) => anyhow::bail!("{}: {why}", scene.source.display()),
+        None => Ok(()),
+    }
 }
 
 /// The methods that take the parameter `name`.

@@ -5,7 +5,7 @@
 //! scene declares dynamic from the blocks' light volume.
 
 use super::params::{Default, Param, Values};
-use super::{Bake, Loaded, Method, Stages};
+use super::{Bake, Loaded, Method, Models, Stages};
 use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::{Artifact, BakeOutput};
@@ -181,9 +181,12 @@ impl Method for MrtMethod {
         true
     }
 
-    /// A scene that declares its blocks, without an environment.
+    fn models(&self) -> Models {
+        Models::LocalLights
+    }
+
     fn suits(&self, scene: &Scene) -> bool {
-        scene.environment.is_none() && Proxy::of(scene).is_ok()
+        Proxy::of(scene).is_ok()
     }
 
     /// It models all indirect light: an ambient term would count it twice.

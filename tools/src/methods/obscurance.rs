@@ -5,7 +5,7 @@
 //! small-scale term is the spectral obscurance.
 
 use super::params::{Default, Param, Values};
-use super::{atlas, Bake, Loaded, Method, Stages};
+use super::{atlas, Bake, Loaded, Method, Models, Stages};
 use anyhow::Result;
 use glam::{Vec3, Vec4};
 use relume_bake::artifact::{Artifact, PageLayout};
@@ -157,8 +157,18 @@ impl Method for Obscurance {
         vec![(RAYS.name.into(), rays.to_string())]
     }
 
+    fn models(&self) -> Models {
+        Models::Ambient
+    }
+
     fn ambient(&self, scene: &Scene) -> Option<(Vec3, f32)> {
         super::scene_ambient(scene)
+    }
+
+    /// W times the environment's irradiance at the normal: the game baseline an environment's
+    /// light is rendered by without a method of its own.
+    fn environment_ambient(&self) -> bool {
+        true
     }
 
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {

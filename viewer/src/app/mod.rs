@@ -224,6 +224,7 @@ impl App {
             height: extent.height,
             ambient: method.ambient.0,
             beta: method.ambient.1,
+            environment_ambient: method.environment_ambient,
             ..self.options.settings.clone()
         };
         let techniques = method.source.techniques();
