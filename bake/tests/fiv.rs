@@ -304,3 +304,23 @@ fn sections_round_trip_and_values_out_of_range_are_refused() {
     assert!(error.contains("fiv_occluder_0.bin") && error.contains("not a finite number"), "{error}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene that names no occluders takes its closed meshes under half its footprint: on the
+/// shipped FIV scenes, exactly the ones they name; a scene with none is refused naming the key.
+#[test]
+fn occluders_are_derived_from_the_closed_meshes_apart_from_the_ground() {
+    use relume_bake::fiv::FivSceneSettings;
+    for name in ["fiv-blobs", "fiv-garden", "fiv-crowd-10"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.gltf"));
+        let mut scene = relume_bake::gltf_load::load(&path).unwrap().scene;
+        let declared = FivSceneSettings::of(&scene).unwrap();
+        scene.settings.blocks.remove("fiv");
+        let derived = FivSceneSettings::of(&scene).unwrap();
+        assert!(derived.derived && !declared.derived);
+        assert_eq!(derived.occluders, declared.occluders, "{name}");
+    }
+    let mut bare = occluders_over_ground(&[], |_| Vec3::ONE, 8);
+    bare.settings.blocks.remove("fiv");
+    let refused = FivSceneSettings::of(&bare).unwrap_err();
+    assert!(refused.contains("none could be derived") && refused.contains("extras.relume.fiv.occluders"), "{refused}");
+}

@@ -25,22 +25,46 @@ use serde_json::Value;
 
 const KEY: &str = "fiv";
 
-/// The scene's `extras.relume.fiv` block: the names of the meshes that occlude.
+/// The scene's `extras.relume.fiv` block: the names of the meshes that occlude; or, for a
+/// scene without one, those derived from it (`derived`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FivSceneSettings {
     pub occluders: Vec<String>,
+    pub derived: bool,
 }
 
 pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| from_block(block).map(|_| ()) };
 
 impl FivSceneSettings {
-    /// The scene's block; refused when the scene has none (the method needs its occluders).
+    /// The scene's block; without one, the occluders derived from the scene: every closed mesh
+    /// (it has an inside, as a table's mask needs) whose footprint, the area of its bounds
+    /// seen from above, is under half the scene's (a ground slab or a room around everything
+    /// receives light, it does not move over receivers), each name once. Refused when none is.
     pub fn of(scene: &Scene) -> Result<Self, String> {
         match scene.settings.block(KEY) {
             Some(block) => from_block(block),
-            None => Err("the scene names no occluders (extras.relume.fiv.occluders: the meshes that move over receivers)".into()),
+            None => derive(scene),
         }
     }
+}
+
+fn derive(scene: &Scene) -> Result<FivSceneSettings, String> {
+    let footprint = |(lo, hi): (Vec3, Vec3)| (hi.x - lo.x) * (hi.z - lo.z);
+    let whole = footprint(scene.settings.bounds);
+    let mut occluders: Vec<String> = Vec::new();
+    for mesh in &scene.meshes {
+        let apart = footprint(crate::scene::bounds_of(&mesh.positions)) < 0.5 * whole;
+        if apart && open_edges(mesh).is_none() && !occluders.contains(&mesh.name) {
+            occluders.push(mesh.name.clone());
+        }
+    }
+    if occluders.is_empty() {
+        return Err(format!(
+            "the scene names no occluders and none could be derived: none of its {} meshes is closed and under half its footprint; name the meshes that move over receivers in extras.relume.fiv.occluders",
+            scene.meshes.len()
+        ));
+    }
+    Ok(FivSceneSettings { occluders, derived: true })
 }
 
 fn from_block(block: &Value) -> Result<FivSceneSettings, String> {
@@ -52,7 +76,7 @@ fn from_block(block: &Value) -> Result<FivSceneSettings, String> {
         .iter()
         .map(|n| n.as_str().map(str::to_string).ok_or("extras.relume.fiv.occluders must hold mesh names (strings)"))
         .collect::<Result<_, _>>()?;
-    Ok(FivSceneSettings { occluders })
+    Ok(FivSceneSettings { occluders, derived: false })
 }
 
 /// Occluders of one shape (equal up to a translation) share a type and its table (003 §4:

@@ -180,7 +180,7 @@ impl Method for Fiv {
             settings.grid.name(),
             table_bytes as f64 / (1 << 20) as f64
         );
-        Ok(Bake {
+        let mut bake = Bake {
             sections: bake_fiv::sections(&fiv, &reps, facts.clone()),
             parameters: json!({
                 "grid": settings.grid.name(),
@@ -191,7 +191,13 @@ impl Method for Fiv {
             }),
             stats: json!({ "table_bytes": table_bytes, "samples_per_type": samples, "types": types.len() }),
             summary,
-        })
+        };
+        let declared = FivSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
+        if declared.derived {
+            let how = format!("{} (the closed meshes under half the scene's footprint)", declared.occluders.join(", "));
+            bake.derived("occluders", json!(declared.occluders), &how, "extras.relume.fiv.occluders");
+        }
+        Ok(bake)
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {

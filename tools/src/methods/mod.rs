@@ -187,6 +187,17 @@ pub(crate) struct Bake {
     pub summary: String,
 }
 
+impl Bake {
+    /// Records a setting derived from the scene because the scene does not declare it: under
+    /// `derived` in the manifest's parameters and in stats.json, and in one warning line naming
+    /// what was chosen, `how`, and the scene key or flag that overrides it, `key`.
+    pub fn derived(&mut self, name: &str, value: Value, how: &str, key: &str) {
+        self.parameters["derived"][name] = value.clone();
+        self.stats["derived"][name] = value;
+        self.summary.push_str(&format!("warning: derived {name}: {how}; {key} sets it instead\n"));
+    }
+}
+
 /// One bake stage's cost, as stats.json records it.
 pub(crate) struct TimedStage {
     pub name: &'static str,
