@@ -392,6 +392,11 @@ impl Artifact {
         self.manifest["method"].as_str().unwrap_or("")
     }
 
+    /// Whether the artifact holds section `name` (for a section a bake writes only sometimes).
+    pub fn has_section(&self, name: &str) -> bool {
+        self.sections.iter().any(|s| s.name == name)
+    }
+
     /// Section `name` at `version`, after checking its key against `scene` (needed for a
     /// section keyed to the scene or a mesh; a scene-independent one is read without).
     pub fn section(&self, name: &str, version: u32, scene: Option<&Scene>) -> Result<SectionData<'_>, ArtifactError> {

@@ -18,6 +18,7 @@ pub mod outputs;
 pub mod scene;
 pub mod settings;
 pub mod sh;
+pub mod tessellation;
 pub mod testing;
 
 pub mod fiv;

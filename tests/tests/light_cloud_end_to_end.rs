@@ -37,7 +37,7 @@ fn settings() -> RenderSettings {
 fn bake(scene: &Scene, effort: Effort) -> (LightCloud, Visibility) {
     let bvh = SceneBvh::new(scene);
     let grid = LightCloudSceneSettings::of(scene).unwrap().grid;
-    let settings = LightCloudBakeSettings { grid, samples: effort.gather, work: WorkOptions::default() };
+    let settings = LightCloudBakeSettings { grid, samples: effort.gather, emission: 1, work: WorkOptions::default() };
     let cloud = lc::bake(scene, &bvh, &settings).expect("bake");
     (cloud, Arc::new(move |a, b| bvh.visible(a, b)))
 }

@@ -72,7 +72,8 @@ fn a_light_through_and_past_the_window_pops_no_more_than_first_measured() {
     let scene = load_scene("cornell-window");
     let bvh = SceneBvh::new(&scene);
     let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
-    let gathered = lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 16, work: WorkOptions::default() }).expect("bake");
+    let gathered =
+        lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 16, emission: 1, work: WorkOptions::default() }).expect("bake");
     let cloud = light_cloud_by_defaults(&scene, &bvh, &gathered);
     let bvh = Arc::new(bvh);
     let largest = |f: &[f64]| f.iter().copied().fold(0.0, f64::max);

@@ -409,10 +409,12 @@ fn every_value_that_cannot_be_read_exits_with_2() {
     }
 }
 
-/// The light cloud refuses a spot-lit scene by the light's name, and bakes a flat-shaded scene
-/// lit by a point light with a warning that its vertices have nothing to interpolate.
+/// The light cloud bakes a spot-lit, flat-shaded scene with what it derives named in warning
+/// lines and in the manifest (emission bands for the spot, a tessellation for the flat
+/// meshes); refuses a directional light by its name; and, told not to tessellate, bakes a
+/// flat-shaded scene with a warning that its vertices have nothing to interpolate.
 #[test]
-fn light_cloud_refuses_spot_lights_and_warns_on_flat_meshes() {
+fn light_cloud_derives_bands_and_a_tessellation_and_refuses_directional_lights() {
     let dir = temp_dir("light-cloud");
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
     let bake = |extra: &[&str]| {
@@ -420,10 +422,23 @@ fn light_cloud_refuses_spot_lights_and_warns_on_flat_meshes() {
         command.args(["bake", "--method", "light-cloud", "--samples", "1", "--uncompressed"]).args(extra).arg("--out").arg(dir.join("lc"));
         command.arg(&cornell).output().unwrap()
     };
-    assert_one_error(&bake(&[]), &["CeilingSpot", "spot light", "point lights only"]);
+    let baked = bake(&[]);
+    let out = String::from_utf8_lossy(&baked.stdout).to_string() + &String::from_utf8_lossy(&baked.stderr);
+    assert!(baked.status.success(), "{out}");
+    assert!(out.contains("warning: derived emission_bands: 2") && out.contains("--emission-bands sets it instead"), "{out}");
+    assert!(out.contains("warning: derived max_edge") && out.contains("--max-edge sets it instead"), "{out}");
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("lc/manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["parameters"]["derived"]["emission_bands"], 2, "{manifest}");
+    assert!(manifest["parameters"]["derived"]["max_edge"].as_f64().is_some_and(|e| e > 0.0), "{manifest}");
+    let sun = r#"{ "format": "relume-lights", "version": 1, "lights": [{ "type": "directional", "name": "Sun", "direction": [0, -1, 0], "intensity": [1, 1, 1] }] }"#;
+    std::fs::write(dir.join("sun.json"), sun).unwrap();
+    assert_one_error(
+        &bake(&["--lights", dir.join("sun.json").to_str().unwrap()]),
+        &["Sun", "directional light", "point and spot lights only"],
+    );
     let lights = r#"{ "format": "relume-lights", "version": 1, "lights": [{ "type": "point", "position": [0, 0.4, -0.28], "intensity": [0.5, 0.5, 0.5] }] }"#;
     std::fs::write(dir.join("point.json"), lights).unwrap();
-    let baked = bake(&["--lights", dir.join("point.json").to_str().unwrap()]);
+    let baked = bake(&["--lights", dir.join("point.json").to_str().unwrap(), "--max-edge", "0"]);
     let out = String::from_utf8_lossy(&baked.stdout).to_string() + &String::from_utf8_lossy(&baked.stderr);
     assert!(baked.status.success(), "{out}");
     assert!(out.contains("warning: 90 of 90 vertices belong to one triangle only"), "{out}");

@@ -34,6 +34,8 @@ pub struct LightCloudBakeSettings {
     pub grid: CloudGrid,
     /// Gather paths per vertex.
     pub samples: u32,
+    /// Emission functions per cloud light (`LightCloud::emission`: 1, 4, 9 or 16).
+    pub emission: usize,
     pub work: WorkOptions,
 }
 
@@ -68,6 +70,9 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     if settings.samples == 0 {
         return Err("the gather needs at least one path per vertex".into());
     }
+    if !super::EMISSION_COUNTS.contains(&settings.emission) {
+        return Err(format!("{} emission functions a cloud light: one of {:?}", settings.emission, super::EMISSION_COUNTS));
+    }
     let points = cloud_points(bvh, &settings.grid);
     if points.is_empty() {
         return Err(format!(
@@ -81,10 +86,11 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     let supports = Supports::new(scene);
     let vertices = vertex_count(scene);
     let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { sh::COEFFICIENTS } else { 1 };
-    let row = lights.len() * 3 * coefficients;
+    let emission = settings.emission;
+    let row = lights.len() * 3 * coefficients * emission;
     let mut sums = vec![0f64; vertices * row];
     let progress = progress_bar(vertices as u64 * settings.samples as u64, "light cloud", settings.work.progress);
-    let gather = Gather { scene, bvh, lights: &lights, coefficients };
+    let gather = Gather { scene, bvh, lights: &lights, coefficients, emission };
     let taken = settings.work.in_passes(settings.samples, SAMPLES_PER_PASS, |samples| {
         sums.par_chunks_mut(row).enumerate().for_each(|(v, sums)| {
             let hemisphere = (coefficients > 1).then(|| Hemisphere::new(supports.normals[v]));
@@ -102,7 +108,7 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     if coefficients > 1 {
         rows.par_chunks_mut(row).enumerate().for_each(|(v, row)| Hemisphere::new(supports.normals[v]).fit(row));
     }
-    Ok(LightCloud::uncompressed(points, coefficients, taken, rows))
+    Ok(LightCloud::uncompressed(points, (coefficients, emission), taken, rows))
 }
 
 /// Directions over a vertex's hemisphere (uniform in solid angle: 16 bands of cos theta by 16
@@ -146,7 +152,7 @@ impl Hemisphere {
         t
     }
 
-    /// Turns a row of projections b (`[light][k][rgb]`) into least-squares coefficients
+    /// Turns a row of projections b (`[column][k][rgb]`) into least-squares coefficients
     /// a = G^-1 b, G = integral over the hemisphere of y y^T, ridge-regularised by 1e-6 of its
     /// mean diagonal: the hemisphere leaves G ill-conditioned (spec light-clouds.md B10 takes
     /// 1e-4, which misfits a function of the harmonics by 2.2e-3 of its peak; 1e-6 by 2e-5).
@@ -176,7 +182,7 @@ pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64
     let (mut error, mut total) = (0.0f64, 0.0f64);
     let (before, after) = (Columns::new(uncompressed), Columns::new(compressed));
     for v in 0..uncompressed.vertex_count() {
-        for j in 0..uncompressed.lights.len() {
+        for j in 0..uncompressed.lights.len() * uncompressed.emission {
             for k in 0..uncompressed.coefficients {
                 let (x, y) = (before.coefficient(v, j, k).as_dvec3(), after.coefficient(v, j, k).as_dvec3());
                 error += (x - y).length_squared();
@@ -363,6 +369,8 @@ struct Gather<'a> {
     lights: &'a [Light],
     /// n_b: 1, or the spherical harmonics' count.
     coefficients: usize,
+    /// Emission functions per cloud light.
+    emission: usize,
 }
 
 impl Gather<'_> {
@@ -397,10 +405,16 @@ impl Gather<'_> {
                 if let Some((e, wi)) = punctual_irradiance(self.bvh, light, hit.position, ns, ng, true) {
                     // Irradiance at the vertex by cosine sampling: L cos / pdf = pi L.
                     let c = PI * throughput * bsdf.eval(wi) * e;
-                    let at = j * 3 * self.coefficients;
-                    for (k, t) in projection[..self.coefficients].iter().enumerate() {
-                        for (sum, c) in sums[at + 3 * k..at + 3 * k + 3].iter_mut().zip((c * *t).to_array()) {
-                            *sum += c as f64;
+                    // Each emission function e_f(w) = y_f(w) / y_0 of the direction the light
+                    // left the cloud light by (e_0 = 1).
+                    let y = if self.emission > 1 { sh::eval(-wi) } else { [0.0; sh::COEFFICIENTS] };
+                    for f in 0..self.emission {
+                        let emitted = if f == 0 { c } else { c * (y[f] / y[0]) };
+                        let at = (j * self.emission + f) * 3 * self.coefficients;
+                        for (k, t) in projection[..self.coefficients].iter().enumerate() {
+                            for (sum, c) in sums[at + 3 * k..at + 3 * k + 3].iter_mut().zip((emitted * *t).to_array()) {
+                                *sum += c as f64;
+                            }
                         }
                     }
                 }

@@ -140,6 +140,13 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
 /// X_v ~ X^c + sum_{d <= D_c} z_vd B^c_d, each term a row of 3 x (the zone's lights) values
 /// (rgb per light, spec light-clouds.md B8). Uncompressed, every vertex is its own cluster and
 /// D_c = 0: the terms are the rows as gathered.
+///
+/// With emission bands (`emission` > 1), each cloud light holds one transfer per function of
+/// its emission, e_k(w) = y_k(w) / y_0 of the direction w light leaves it by (bands l <= B of
+/// `crate::sh`, e_0 = 1: the isotropic light): a spot light stands on the cloud lights with
+/// its cone's coefficients in those functions (004 §8's "spotlights with emission described
+/// by spherical harmonics"; `emission`). A cloud light's transfers are its `emission`
+/// columns, light after light; everything that weighs, sums or reconstructs works on columns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloud {
     /// Every zone's lights, zone after zone.
@@ -147,6 +154,9 @@ pub struct LightCloud {
     /// n_b: 1 (indirect irradiance, lux) or `sh::COEFFICIENTS` (exitant radiance in spherical
     /// harmonics).
     pub coefficients: usize,
+    /// Columns a cloud light has: its emission functions, (B + 1)^2 for bands l <= B (1: an
+    /// isotropic light alone).
+    pub emission: usize,
     /// Zone z's lights are `lights[zone_lights[z]..zone_lights[z + 1]]` (zones + 1 entries).
     pub zone_lights: Vec<u32>,
     /// Zone z's clusters are `zone_clusters[z]..zone_clusters[z + 1]` (zones + 1 entries).
@@ -158,32 +168,34 @@ pub struct LightCloud {
     /// D_c, each cluster's basis vectors: the same for every cluster, or shared out by
     /// eigenvalue (Sloan et al. 2003's variable allocation).
     pub vectors: Vec<u32>,
-    /// Cluster after cluster, `[term][zone light][coefficient][rgb]`: term 0 the cluster's mean
-    /// X^c, term d its B^c_d.
+    /// Cluster after cluster, `[term][zone light][emission function][coefficient][rgb]`: term 0
+    /// the cluster's mean X^c, term d its B^c_d.
     pub terms: Vec<f32>,
     /// Vertex after vertex, its cluster's D_c coordinates z_vd, d from 1.
     pub coords: Vec<f32>,
 }
 
-/// Where one cluster's terms lie and which lights they weigh.
+/// Where one cluster's terms lie and which columns (cloud light x emission function) they
+/// weigh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterLayout {
     /// The first value of its terms in `LightCloud::terms`.
     pub offset: usize,
     /// D_c: its terms are its mean and D_c basis vectors.
     pub vectors: u32,
-    /// Its zone's first light and light count.
-    pub first_light: u32,
-    pub lights: u32,
+    /// Its zone's first column and column count.
+    pub first_column: u32,
+    pub columns: u32,
 }
 
 impl LightCloud {
     /// Rows as gathered, `[vertex][light][coefficient][rgb]`: one zone, one cluster per vertex,
     /// no basis.
-    pub fn uncompressed(lights: Vec<Vec3>, coefficients: usize, samples: u32, rows: Vec<f32>) -> LightCloud {
-        let vertices = rows.len() / (3 * coefficients * lights.len()).max(1);
+    pub fn uncompressed(lights: Vec<Vec3>, (coefficients, emission): (usize, usize), samples: u32, rows: Vec<f32>) -> LightCloud {
+        let vertices = rows.len() / (3 * coefficients * emission * lights.len()).max(1);
         LightCloud {
             coefficients,
+            emission,
             zone_lights: vec![0, lights.len() as u32],
             zone_clusters: vec![0, vertices as u32],
             lights,
@@ -203,8 +215,14 @@ impl LightCloud {
         self.zone_lights.len().saturating_sub(1)
     }
 
-    /// Values a light has in one term: rgb per coefficient.
+    /// Values a light has in one term: rgb per coefficient per emission function.
     pub fn per_light(&self) -> usize {
+        3 * self.coefficients * self.emission
+    }
+
+    /// Values a column (one emission function of one light) has in one term: rgb per
+    /// coefficient.
+    pub fn per_column(&self) -> usize {
         3 * self.coefficients
     }
 
@@ -230,7 +248,7 @@ impl LightCloud {
 
     /// How many values the clusters' terms hold, by the layout.
     pub fn term_values(&self) -> usize {
-        self.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * self.per_light() * l.lights as usize)
+        self.layout().last().map_or(0, |l| l.offset + (1 + l.vectors as usize) * self.per_column() * l.columns as usize)
     }
 
     /// Every cluster's layout, in cluster order (clusters lie zone after zone).
@@ -239,10 +257,11 @@ impl LightCloud {
         let mut layout = Vec::with_capacity(self.cluster_count());
         for zone in 0..self.zone_count() {
             let lights = self.zone_light_range(zone);
+            let (first_column, columns) = ((lights.start * self.emission) as u32, (lights.len() * self.emission) as u32);
             for c in self.zone_clusters[zone]..self.zone_clusters[zone + 1] {
                 let vectors = self.vectors[c as usize];
-                layout.push(ClusterLayout { offset, vectors, first_light: lights.start as u32, lights: lights.len() as u32 });
-                offset += (1 + vectors as usize) * self.per_light() * lights.len();
+                layout.push(ClusterLayout { offset, vectors, first_column, columns });
+                offset += (1 + vectors as usize) * self.per_column() * columns as usize;
             }
         }
         layout
@@ -257,6 +276,9 @@ impl LightCloud {
                 self.coefficients,
                 sh::COEFFICIENTS
             ));
+        }
+        if !EMISSION_COUNTS.contains(&self.emission) {
+            return Err(format!("{} emission functions a light: one of {EMISSION_COUNTS:?} (bands 0 to 3)", self.emission));
         }
         if self.lights.is_empty() || self.lights.iter().any(|p| !p.is_finite()) {
             return Err(format!("{} cloud lights: must be at least one, each a finite point", self.lights.len()));
@@ -280,8 +302,9 @@ impl LightCloud {
         if self.coords.len() != coords {
             return Err(format!("{} coordinates for vertices whose clusters' vectors hold {coords}", self.coords.len()));
         }
-        // Basis vectors and spherical harmonics take both signs; irradiance does not.
-        let negative_allowed = self.basis() > 0 || self.coefficients > 1;
+        // Basis vectors and spherical harmonics (of exitance or emission) take both signs;
+        // irradiance does not.
+        let negative_allowed = self.basis() > 0 || self.coefficients > 1 || self.emission > 1;
         if let Some(i) = self.terms.iter().chain(&self.coords).position(|t| !(t.is_finite() && (negative_allowed || *t >= 0.0))) {
             return Err(format!(
                 "transfer value {i} is {} (must be finite, and >= 0 uncompressed)",
@@ -291,20 +314,19 @@ impl LightCloud {
         Ok(())
     }
 
-    /// Each cluster's terms weighed by cloud-light weights (per channel, candela), summed over
-    /// the weights of its zone's lights in their order: x^m and b_d of 004 eq. (12), cluster
-    /// after cluster, 1 + D terms each (zero past the cluster's D_c), coefficient after
-    /// coefficient.
+    /// Each cluster's terms weighed by column weights (per channel, candela), summed over the
+    /// weights of its zone's columns in their order: x^m and b_d of 004 eq. (12), cluster after
+    /// cluster, 1 + D terms each (zero past the cluster's D_c), coefficient after coefficient.
     pub fn cluster_sums(&self, weights: &[CloudWeight]) -> Vec<Vec3> {
-        let (n, basis) = (self.per_light(), self.basis());
+        let (n, basis) = (self.per_column(), self.basis());
         let mut sums = Vec::with_capacity(self.cluster_count() * (1 + basis) * self.coefficients);
         for at in self.layout() {
-            let row = n * at.lights as usize;
+            let row = n * at.columns as usize;
             for term in self.terms[at.offset..][..(1 + at.vectors as usize) * row].chunks_exact(row) {
                 for k in 0..self.coefficients {
-                    let zone = weights.iter().filter(|w| (at.first_light..at.first_light + at.lights).contains(&w.light));
+                    let zone = weights.iter().filter(|w| (at.first_column..at.first_column + at.columns).contains(&w.column));
                     sums.push(zone.fold(Vec3::ZERO, |sum, w| {
-                        sum + Vec3::from_slice(&term[n * (w.light - at.first_light) as usize + 3 * k..][..3]) * w.weight
+                        sum + Vec3::from_slice(&term[n * (w.column - at.first_column) as usize + 3 * k..][..3]) * w.weight
                     }));
                 }
             }
@@ -344,20 +366,21 @@ impl<'c> Columns<'c> {
         Columns { cloud, layout: cloud.layout(), starts: cloud.coord_starts() }
     }
 
-    /// The transfer from cloud light `light` to vertex `vertex`, reconstructed: the
-    /// irradiance, or the radiance's first coefficient; zero for a light of another zone.
-    pub fn column(&self, vertex: usize, light: usize) -> Vec3 {
-        self.coefficient(vertex, light, 0)
+    /// The transfer from column `column` (cloud light `column / emission`, emission function
+    /// `column % emission`) to vertex `vertex`, reconstructed: the irradiance, or the
+    /// radiance's first coefficient; zero for a column of another zone.
+    pub fn column(&self, vertex: usize, column: usize) -> Vec3 {
+        self.coefficient(vertex, column, 0)
     }
 
-    /// Coefficient `k` of the transfer from cloud light `light` to vertex `vertex`,
-    /// reconstructed; zero for a light of another zone.
-    pub fn coefficient(&self, vertex: usize, light: usize, k: usize) -> Vec3 {
+    /// Coefficient `k` of the transfer from column `column` to vertex `vertex`, reconstructed;
+    /// zero for a column of another zone.
+    pub fn coefficient(&self, vertex: usize, column: usize, k: usize) -> Vec3 {
         let cloud = self.cloud;
         let at = self.layout[cloud.assignment[vertex] as usize];
-        let Some(j) = light.checked_sub(at.first_light as usize).filter(|&j| j < at.lights as usize) else { return Vec3::ZERO };
-        let row = cloud.per_light() * at.lights as usize;
-        let value = |t: usize| Vec3::from_slice(&cloud.terms[at.offset + t * row + cloud.per_light() * j + 3 * k..][..3]);
+        let Some(j) = column.checked_sub(at.first_column as usize).filter(|&j| j < at.columns as usize) else { return Vec3::ZERO };
+        let row = cloud.per_column() * at.columns as usize;
+        let value = |t: usize| Vec3::from_slice(&cloud.terms[at.offset + t * row + cloud.per_column() * j + 3 * k..][..3]);
         let z = &cloud.coords[self.starts[vertex]..self.starts[vertex + 1]];
         z.iter().enumerate().fold(value(0), |sum, (d, z)| sum + value(d + 1) * *z)
     }
@@ -376,29 +399,18 @@ fn check_zones(zone_lights: &[u32], zone_clusters: &[u32], lights: usize, cluste
     Ok(())
 }
 
-/// The vertices that belong to one triangle only, and all vertices. Per-vertex transfer is
-/// interpolated across the triangles a vertex joins: where most vertices join one triangle
-/// (flat-shaded meshes, three vertices a triangle), it varies only within each triangle and
-/// the method has next to nothing to interpolate.
-pub fn lone_vertices(scene: &Scene) -> (usize, usize) {
-    let mut lone = 0;
-    for mesh in &scene.meshes {
-        let mut uses = vec![0u32; mesh.positions.len()];
-        mesh.indices.iter().for_each(|&i| uses[i as usize] += 1);
-        lone += uses.iter().filter(|&&n| n <= 1).count();
-    }
-    (lone, vertex_count(scene))
-}
-
 /// The scene's vertex count in the renderer's order.
 pub fn vertex_count(scene: &Scene) -> usize {
     scene.meshes.iter().map(|m| m.positions.len()).sum()
 }
 
 pub const SECTION: &str = "light-cloud";
-/// Version 5: basis vectors per cluster (version 4 had one D for all, version 3 irradiance
-/// only, version 2 one zone, version 1 rows only).
-pub const SECTION_VERSION: u32 = 5;
+/// Version 6: emission functions per cloud light (version 5 had isotropic lights only,
+/// version 4 one D for all, version 3 irradiance only, version 2 one zone, version 1 rows
+/// only).
+pub const SECTION_VERSION: u32 = 6;
+/// Emission functions a cloud light may have: bands 0 to 3 of spherical harmonics.
+pub const EMISSION_COUNTS: [usize; 4] = [1, 4, 9, 16];
 /// The most basis vectors a cluster may have.
 pub const MAX_VECTORS: usize = 1024;
 const BIN: &str = "light-cloud.bin";
@@ -416,6 +428,7 @@ pub fn section(cloud: &LightCloud, summary: Value) -> Section {
         cloud.basis() as u32,
         cloud.zone_count() as u32,
         cloud.coefficients as u32,
+        cloud.emission as u32,
     ]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
     w.u32s(&cloud.zone_lights);
@@ -429,10 +442,16 @@ pub fn section(cloud: &LightCloud, summary: Value) -> Section {
 
 /// The cloud of `artifact`, read for `scene`; refused when it does not hang together.
 pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactError> {
+    read_for(artifact, scene, vertex_count(scene))
+}
+
+/// The cloud of `artifact`, keyed to `scene` and made for `vertices` vertices (the scene's
+/// tessellation's, when the bake tessellated it).
+pub fn read_for(artifact: &Artifact, scene: &Scene, vertices_expected: usize) -> Result<LightCloud, ArtifactError> {
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "light cloud")?;
-    let [lights, vertices, samples, clusters, basis, zones, coefficients] = [
+    let [lights, vertices, samples, clusters, basis, zones, coefficients, emission] = [
         r.u32("the light count")?,
         r.u32("the vertex count")?,
         r.u32("the sample count")?,
@@ -440,8 +459,9 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
         r.u32("D")?,
         r.u32("the zone count")?,
         r.u32("the coefficient count")?,
+        r.u32("the emission function count")?,
     ];
-    if vertices as usize != vertex_count(scene)
+    if vertices as usize != vertices_expected
         || lights == 0
         || lights as u64 > MAX_CLOUD_LIGHTS as u64 * zones as u64
         || clusters == 0
@@ -450,10 +470,10 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
         || zones == 0
         || zones > clusters.min(lights)
         || (coefficients != 1 && coefficients as usize != sh::COEFFICIENTS)
+        || !EMISSION_COUNTS.contains(&(emission as usize))
     {
         let problem = format!(
-            "{lights} cloud lights of {coefficients} coefficients, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {} vertices",
-            vertex_count(scene)
+            "{lights} cloud lights of {emission} emission functions and {coefficients} coefficients, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {vertices_expected} vertices"
         );
         return Err(fail(&path, problem, REBAKE));
     }
@@ -472,6 +492,7 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<LightCloud, ArtifactEr
     let mut cloud = LightCloud {
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
         coefficients: coefficients as usize,
+        emission: emission as usize,
         zone_lights,
         zone_clusters,
         samples,

@@ -99,6 +99,7 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
     let cloud = LightCloud {
         lights,
         coefficients: gathered.coefficients,
+        emission: gathered.emission,
         zone_lights,
         zone_clusters,
         samples: gathered.samples,

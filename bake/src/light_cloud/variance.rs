@@ -37,10 +37,11 @@ pub fn explained_variance(
     let members = cpca::groups(&compressed.assignment, compressed.cluster_count());
     let (mut indirect_shares, mut direct_shares) = (Shares::new(components), Shares::new(components));
     for (vertices, at) in members.iter().zip(&layout).filter(|(m, _)| !m.is_empty()) {
-        let lights = at.first_light as usize..(at.first_light + at.lights) as usize;
-        let mut indirect = Vec::with_capacity(vertices.len() * lights.len() * reduced.per_light());
+        let cloud_columns = at.first_column as usize..(at.first_column + at.columns) as usize;
+        let lights = cloud_columns.start / reduced.emission..cloud_columns.end / reduced.emission;
+        let mut indirect = Vec::with_capacity(vertices.len() * cloud_columns.len() * reduced.per_column());
         for &v in vertices {
-            for j in lights.clone() {
+            for j in cloud_columns.clone() {
                 (0..reduced.coefficients).for_each(|k| indirect.extend(columns.coefficient(v as usize, j, k).to_array()));
             }
         }

@@ -7,31 +7,75 @@
 //! with the paper's r = d_(m) the m-th weight is always zero, and a light leaving the set
 //! would jump. With this r a light leaves the set at weight zero, so the weights are
 //! continuous as the light moves, except where visibility changes.
+//!
+//! A cloud of emission bands (`LightCloud::emission`) takes spot lights too: each cloud light's
+//! weight is shared out over its emission functions by the light's own coefficients in them
+//! (`emission`), so that the cone's light leaves the cloud lights where the spot points.
 
 use crate::scene::{Light, LightKind};
+use crate::sh;
 use glam::Vec3;
 
-/// One cloud light's weight (per channel, candela).
+/// One column's weight (per channel, candela): a cloud light's, or one emission function's of
+/// it (column = light x emission functions + function).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CloudWeight {
-    pub light: u32,
+    pub column: u32,
     pub weight: Vec3,
 }
 
 /// The most cloud lights one user light stands on.
 pub const MAX_NEAREST: usize = 16;
 
-/// Refuses what the cloud cannot stand in for: spot and directional lights (the paper's future
-/// work, §8: a cloud of isotropic points holds no direction).
+/// Refuses what the cloud cannot stand in for: directional lights, whose light comes from no
+/// point of a cloud (004 §4.1 says they would need a cloud of directions of their own).
 pub fn refuse_lights(lights: &[Light]) -> Result<(), String> {
-    match lights.iter().find(|l| l.kind != LightKind::Point) {
+    match lights.iter().find(|l| l.kind == LightKind::Directional) {
         Some(l) => Err(format!(
-            "light \"{}\" is a {} light; light clouds stand in for point lights only (004 §8 leaves spot and directional lights to future work): give point lights (--lights FILE)",
-            l.name,
-            if l.kind == LightKind::Directional { "directional" } else { "spot" }
+            "light \"{}\" is a directional light; light clouds stand in for point and spot lights only (a directional light comes from no point of the cloud; 004 §4.1): give point or spot lights (--lights FILE)",
+            l.name
         )),
         None => Ok(()),
     }
+}
+
+/// A light's intensity pattern as coefficients of the cloud's emission functions e_k(w) =
+/// y_k(w) / y_0 (`crate::sh`, the first `count`): I(w) ~ sum_k c_k e_k(w) times its rgb
+/// intensity. c_0 is the light's mean over the sphere (1 for a point light, whose other
+/// coefficients are 0). A spot's cone factor s depends on w . d alone, so by the Funk-Hecke
+/// theorem c_k = sqrt(pi) y_k(d) integral_-1^1 s(t) P_l(t) dt for k of band l: the cone's
+/// Legendre expansion turned to the spot's axis. The integral is exact: s is 0, a square of a
+/// linear function, then 1, and 3-point Gauss-Legendre integrates each piece times P_l
+/// (degree <= 5) exactly.
+pub fn emission(light: &Light, count: usize) -> [f32; sh::COEFFICIENTS] {
+    let mut c = [0.0; sh::COEFFICIENTS];
+    let LightKind::Spot { inner_cone, outer_cone } = light.kind else {
+        c[0] = 1.0;
+        return c;
+    };
+    let (cos_outer, cos_inner) = (outer_cone.cos() as f64, inner_cone.cos() as f64);
+    let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+    let cone = |t: f64| ((t - cos_outer) * scale).clamp(0.0, 1.0).powi(2);
+    let legendre = |l: usize, t: f64| match l {
+        0 => 1.0,
+        1 => t,
+        2 => (3.0 * t * t - 1.0) / 2.0,
+        _ => (5.0 * t * t * t - 3.0 * t) / 2.0,
+    };
+    let gauss = |a: f64, b: f64, f: &dyn Fn(f64) -> f64| {
+        let (m, h) = ((a + b) / 2.0, (b - a) / 2.0);
+        let x = (0.6f64).sqrt() * h;
+        h * (5.0 * f(m - x) + 8.0 * f(m) + 5.0 * f(m + x)) / 9.0
+    };
+    // The ramp ends where it reaches 1 (cos_inner, or later when the 1e-3 floor flattens it).
+    let top = (cos_outer + 1.0 / scale).min(1.0);
+    let y = sh::eval(light.direction);
+    for (k, c) in c.iter_mut().enumerate().take(count) {
+        let l = (k as f32).sqrt() as usize;
+        let band = gauss(cos_outer, top, &|t| cone(t) * legendre(l, t)) + gauss(top, 1.0, &|t| legendre(l, t));
+        *c = (std::f64::consts::PI.sqrt() * band) as f32 * y[k];
+    }
+    c
 }
 
 /// Computes weights without allocating once made: its scratch is sized for the cloud (and,
@@ -40,6 +84,8 @@ pub struct Weigher {
     nearest: usize,
     /// Zone z's cloud lights are `zone_lights[z]..zone_lights[z + 1]`.
     zone_lights: Vec<u32>,
+    /// Emission functions (columns) a cloud light has.
+    emission: usize,
     /// Seconds a cloud light takes to fade in or out as visibility changes; 0 (the default):
     /// at once.
     fade_seconds: f32,
@@ -47,6 +93,7 @@ pub struct Weigher {
     faded: Vec<f32>,
     order: Vec<(f32, u32)>,
     chosen: Vec<(f32, u32)>,
+    /// Per column.
     dense: Vec<Vec3>,
 }
 
@@ -67,12 +114,22 @@ impl Weigher {
         Ok(Weigher {
             nearest,
             zone_lights,
+            emission: 1,
             fade_seconds: 0.0,
             faded: Vec::new(),
             order: Vec::with_capacity(cloud_size),
             chosen: Vec::with_capacity(MAX_NEAREST + 1),
             dense: vec![Vec3::ZERO; cloud_size],
         })
+    }
+
+    /// The same, for cloud lights of `count` emission functions each (`LightCloud::emission`).
+    pub fn with_emission(self, count: usize) -> Result<Weigher, String> {
+        if !super::EMISSION_COUNTS.contains(&count) {
+            return Err(format!("{count} emission functions a cloud light: one of {:?}", super::EMISSION_COUNTS));
+        }
+        let columns = self.dense.len() * count / self.emission;
+        Ok(Weigher { emission: count, dense: vec![Vec3::ZERO; columns], ..self })
     }
 
     /// The same, with cloud lights fading in and out over `seconds` as visibility changes
@@ -84,8 +141,8 @@ impl Weigher {
         Ok(Weigher { fade_seconds: seconds, ..self })
     }
 
-    /// The weights of `lights` over `cloud`, settled (a cut: every fade done), in cloud order,
-    /// zero weights left out, written to `out`; `visible(from, to)` says whether a segment is
+    /// The weights of `lights` over `cloud`, settled (a cut: every fade done), in column
+    /// order, zero weights left out, written to `out`; `visible(from, to)` says whether a segment is
     /// unoccluded. Returns how many lights saw no cloud light of some zone (they add no
     /// indirect light there: spec B14).
     pub fn weigh(
@@ -128,7 +185,7 @@ impl Weigher {
         }
         out.clear();
         out.extend(
-            self.dense.iter().enumerate().filter(|(_, w)| **w != Vec3::ZERO).map(|(j, w)| CloudWeight { light: j as u32, weight: *w }),
+            self.dense.iter().enumerate().filter(|(_, w)| **w != Vec3::ZERO).map(|(j, w)| CloudWeight { column: j as u32, weight: *w }),
         );
         unseen
     }
@@ -168,15 +225,16 @@ impl Weigher {
         let kernel = |d: f32| if r > 0.0 { (1.0 - d / r).max(0.0).powi(4) } else { 1.0 };
         let weight = |j: usize| faded[j - zone.start] * kernel(cloud[j].distance(position));
         let total: f32 = zone.clone().map(weight).sum();
+        let coefficients = emission(light, self.emission);
+        let mut add = |j: usize, share: f32| {
+            let columns = &mut self.dense[j * self.emission..][..self.emission];
+            columns.iter_mut().zip(coefficients).for_each(|(w, c)| *w += light.intensity * (share * c));
+        };
         if total > 0.0 {
-            for j in zone.clone() {
-                self.dense[j] += light.intensity * (weight(j) / total);
-            }
+            zone.clone().for_each(|j| add(j, weight(j) / total));
         } else {
             // Every used light at distance r (ties): equal weights (spec B4).
-            for &(_, j) in used {
-                self.dense[j as usize] += light.intensity / used.len() as f32;
-            }
+            used.iter().for_each(|&(_, j)| add(j as usize, 1.0 / used.len() as f32));
         }
         true
     }

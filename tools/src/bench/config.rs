@@ -34,6 +34,7 @@ impl FrameParams {
             blur_radius: self.blur_radius.unwrap_or(base.blur_radius),
             min_variance: self.min_variance.unwrap_or(base.min_variance),
             bleeding_reduction: self.bleeding_reduction.unwrap_or(base.bleeding_reduction),
+            environment_ambient: method.environment_ambient(),
             ..base
         }
     }

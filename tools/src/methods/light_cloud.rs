@@ -11,7 +11,8 @@ use glam::Vec3;
 use relume_bake::artifact::Artifact;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::light_cloud::{self as lc, LightCloud, LightCloudBakeSettings, LightCloudSceneSettings};
-use relume_bake::scene::Scene;
+use relume_bake::scene::{LightKind, Scene};
+use relume_bake::tessellation::{self, Tessellation};
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::light_cloud::{LightCloudData, Visibility};
 use relume_renderer::MakeTechnique;
@@ -24,6 +25,19 @@ const SAMPLES: Param = Param::count(
     1,
     1 << 16,
     Default::Value("64"),
+);
+const EMISSION_BANDS: Param = Param::count(
+    "emission-bands",
+    "B: each cloud light holds its transfer for the emission functions of spherical-harmonic bands 0..=B ((B + 1)^2 columns), on which a spot light stands with its cone's coefficients (004 §8); 0: isotropic lights, a spot as its cone's share of one",
+    0,
+    3,
+    Default::From("0; 2 when the scene has a spot light"),
+);
+const MAX_EDGE: Param = Param::number(
+    "max-edge",
+    "metres: the scene's meshes welded and split until no edge is longer (per-vertex light needs vertices across surfaces); 0: the meshes as they are",
+    (0.0, 1e6, false),
+    Default::From("the scene's diagonal / 20 when its meshes are flat-shaded (most vertices on one triangle); 0 otherwise"),
 );
 const NEAREST: Param = Param::count(
     "nearest",
@@ -76,8 +90,10 @@ const EXPLAINED_VARIANCE: Param = Param::flag(
 );
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 12] = [
+const PARAMS: [&Param; 14] = [
     &SAMPLES,
+    &EMISSION_BANDS,
+    &MAX_EDGE,
     &ZONES,
     &W1,
     &W2,
@@ -120,6 +136,29 @@ fn compression(values: &Values) -> Result<Option<(usize, lc::Vectors)>> {
 }
 
 pub(crate) struct LightCloudMethod;
+
+/// Edges per scene diagonal of the tessellation a flat-shaded scene gets (cornell-cloud's
+/// welded grids: 20).
+const EDGES_PER_DIAGONAL: f32 = 20.0;
+
+/// The largest edge given, or the one the scene needs: its diagonal / 20 when it is
+/// flat-shaded, else none (0).
+fn max_edge(scene: &Scene, values: &Values) -> f32 {
+    let diagonal = relume_bake::settings::diagonal(scene.settings.bounds);
+    let derived = if tessellation::flat_shaded(scene) { diagonal / EDGES_PER_DIAGONAL } else { 0.0 };
+    values.given_number(&MAX_EDGE).map_or(derived, |e| e as f32)
+}
+
+/// The emission bands given, or those the scene's lights need: 0 (isotropic cloud lights) for
+/// point lights, `SPOT_BANDS` when any is a spot.
+fn emission_bands(scene: &Scene, values: &Values) -> usize {
+    let spots = scene.lights.iter().any(|l| matches!(l.kind, LightKind::Spot { .. }));
+    values.given_count(&EMISSION_BANDS).map_or(if spots { SPOT_BANDS } else { 0 }, |b| b as usize)
+}
+
+/// The emission bands a scene with spot lights gets when none are given (docs/BENCHMARKS.md
+/// measures 0 to 3 against the path tracer).
+const SPOT_BANDS: usize = 2;
 
 /// The scene's settings, or its lights refused, naming the scene.
 fn checked(scene: &Scene) -> Result<LightCloudSceneSettings> {
@@ -188,12 +227,18 @@ impl Method for LightCloudMethod {
         None
     }
 
-    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
-        let grid = checked(scene)?.grid;
+    fn bake(&self, source: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
+        let grid = checked(source)?.grid;
         let compression = compression(values)?;
         let reduction = reduction(values)?;
-        let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, work };
-        let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
+        let bands = emission_bands(source, values);
+        let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
+        let at = |e: String| anyhow::anyhow!("{}: {e}", source.source.display());
+        let edge = max_edge(source, values);
+        let tessellation =
+            (edge > 0.0).then(|| stages.timed("tessellation", || Tessellation::new(source, edge))).transpose().map_err(at)?;
+        let fine = tessellation.as_ref().map(|t| t.apply(source));
+        let scene = fine.as_ref().unwrap_or(source);
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
         let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
         let raw_bytes = gathered.terms.len() * 4;
@@ -251,16 +296,20 @@ impl Method for LightCloudMethod {
                 first(&v.direct)
             ));
         }
-        let (lone, vertices) = lc::lone_vertices(scene);
+        let (lone, vertices) = tessellation::lone_vertices(scene);
         if 2 * lone > vertices {
             summary.push_str(&format!(
-                "warning: {lone} of {vertices} vertices belong to one triangle only (flat-shaded meshes): per-vertex transfer has almost nothing to interpolate; weld and tessellate the meshes (as scenes/cornell-cloud is)\n"
+                "warning: {lone} of {vertices} vertices belong to one triangle only (flat-shaded meshes): per-vertex transfer has almost nothing to interpolate; weld and tessellate the meshes (--max-edge, or as scenes/cornell-cloud is)\n"
             ));
         }
-        Ok(Bake {
-            sections: vec![lc::section(&cloud, facts)],
+        let mut sections = vec![lc::section(&cloud, facts)];
+        sections.extend(tessellation.as_ref().map(tessellation::section));
+        let mut bake = Bake {
+            sections,
             parameters: json!({
                 "samples": settings.samples,
+                "emission_bands": bands,
+                "max_edge": edge,
                 "zones": reduction.zones,
                 "light_clustering": reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
                 "clusters": compression.map(|c| c.0),
@@ -287,16 +336,30 @@ impl Method for LightCloudMethod {
                 "transfer_bytes": bytes,
             }),
             summary,
-        })
+        };
+        if !values.given(&EMISSION_BANDS) && bands > 0 {
+            let how = format!("{bands} (the scene has spot lights: each cloud light holds {} emission functions)", settings.emission);
+            bake.derived("emission_bands", json!(bands), &how, "--emission-bands");
+        }
+        if let Some(t) = tessellation.as_ref().filter(|_| !values.given(&MAX_EDGE)) {
+            let how = format!(
+                "{edge:.4} m (the scene's meshes are flat-shaded: welded and split to {} vertices from {})",
+                t.vertex_count(),
+                lc::vertex_count(source)
+            );
+            bake.derived("max_edge", json!(edge), &how, "--max-edge");
+        }
+        Ok(bake)
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-cloud renders from a bake: give --bake"))?;
         checked(scene)?;
-        let cloud = lc::read(artifact, scene)?;
+        let fine = tessellation::read(artifact, scene)?.map_or_else(|| scene.clone(), |t| t.apply(scene));
+        let cloud = lc::read_for(artifact, scene, lc::vertex_count(&fine))?;
         Ok(Box::new(Baked {
-            visibility: visibility(scene),
-            scene: scene.clone(),
+            visibility: visibility(&fine),
+            scene: fine,
             cloud,
             nearest: values.count(&NEAREST) as usize,
             fade_seconds: values.number(&FADE) as f32,

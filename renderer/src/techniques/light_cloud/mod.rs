@@ -1,21 +1,23 @@
 //! Local radiance transfer with light clouds (Kristensen et al., 004 §6) at run time: each
-//! user point light stands on its nearest visible cloud lights (weights on the CPU, when the
-//! lights move: `Renderer::set_lights`), and two passes turn the weights into every vertex's
+//! user point or spot light stands on its nearest visible cloud lights (weights on the CPU, when
+//! the lights move: `Renderer::set_lights`; a spot's shared out over the cloud lights' emission
+//! functions by its cone), and two passes turn the weights into every vertex's
 //! indirect irradiance (diffuse scenes) or exitant radiance in spherical harmonics (glossy
 //! ones), handed to the lighting pass as a vertex term (interpolated across triangles: 004
 //! §5's blending, Gouraud-style).
 //!
 //! Uploaded at creation (device-local, never written again), the bake's layout:
-//! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's cloud light][coefficient]`
-//!   (term 0 the mean, d the basis vector B_d; n_b coefficients);
-//! - `clusters`: per cluster 4 u32, where its terms start, its zone's first light and light
+//! - `terms`: packed f32 rgb, cluster after cluster `[term][zone's column][coefficient]`
+//!   (term 0 the mean, d the basis vector B_d; a column is one emission function of one cloud
+//!   light; n_b coefficients);
+//! - `clusters`: per cluster 4 u32, where its terms start, its zone's first column and column
 //!   count, its D_c;
 //! - `vertices`: per vertex 2 u32, its cluster and where its coordinates start;
 //! - `coords`: D_c f32 per vertex, vertex after vertex.
 //!
 //! Written every frame:
-//! - `weights` (in the command stream, before the passes): up to one per cloud light (of every
-//!   zone), the weight (candela, rgb f32) and the light's index (u32);
+//! - `weights` (in the command stream, before the passes): up to one per column (of every
+//!   zone), the weight (candela, rgb f32) and the column's index (u32);
 //! - `cluster_sums` by `cluster_sums` (cluster_sums.rs): C (1 + D) n_b vec4, rgb x^m then b_d
 //!   (D the most vectors of any cluster; zero past a cluster's D_c);
 //! - `vertex_values` by `reconstruct` (reconstruct.rs): n_b vec4 per vertex, rgb lux (n_b = 1)
@@ -52,12 +54,12 @@ pub struct LightCloudData<'d> {
     pub visibility: Visibility,
 }
 
-/// A cloud light's weight as `cluster_sums.comp` reads it (std430: 16 bytes).
+/// A column's weight as `cluster_sums.comp` reads it (std430: 16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuWeight {
     weight: [f32; 3],
-    light: u32,
+    column: u32,
 }
 
 /// A cluster's layout as `cluster_sums.comp` reads it (std430: 16 bytes).
@@ -65,8 +67,8 @@ struct GpuWeight {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuCluster {
     offset: u32,
-    first_light: u32,
-    lights: u32,
+    first_column: u32,
+    columns: u32,
     vectors: u32,
 }
 
@@ -110,7 +112,7 @@ impl LightCloudTechnique {
         let visibility = &self.visibility;
         self.unseen = self.weigher.weigh_after(&self.cloud, lights, |a, b| visibility(a, b), elapsed, &mut self.weights);
         self.gpu_weights.clear();
-        self.gpu_weights.extend(self.weights.iter().map(|w| GpuWeight { weight: w.weight.to_array(), light: w.light }));
+        self.gpu_weights.extend(self.weights.iter().map(|w| GpuWeight { weight: w.weight.to_array(), column: w.column }));
     }
 }
 
@@ -164,7 +166,7 @@ impl Technique for LightCloudTechnique {
 impl MakeTechnique for LightCloudData<'_> {
     /// Uploads the transfer in one submission that is waited for and weighs the scene's
     /// lights. Refused, by name: a cloud that fails `validate` or is for another vertex count,
-    /// spot or directional lights, an m out of range, a transfer larger than one storage
+    /// directional lights, an m out of range, a transfer larger than one storage
     /// buffer, and more weights than one in-stream update holds (64 KiB, 4,096 weights).
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
         let ctx = shared.ctx;
@@ -172,12 +174,13 @@ impl MakeTechnique for LightCloudData<'_> {
         check(ctx, cloud, shared.gpu_scene.vertex_count(), (self.nearest, shared.scene.lights.len()))?;
         refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest)
+            .and_then(|w| w.with_emission(cloud.emission))
             .and_then(|w| w.with_fade(self.fade_seconds))
             .map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let clusters: Vec<GpuCluster> = cloud
             .layout()
             .iter()
-            .map(|c| GpuCluster { offset: c.offset as u32, first_light: c.first_light, lights: c.lights, vectors: c.vectors })
+            .map(|c| GpuCluster { offset: c.offset as u32, first_column: c.first_column, columns: c.columns, vectors: c.vectors })
             .collect();
         let vertices: Vec<[u32; 2]> = cloud.assignment.iter().zip(cloud.coord_starts()).map(|(&c, start)| [c, start as u32]).collect();
         // A storage buffer may not be empty: no vectors bind one unread coordinate.
@@ -224,7 +227,7 @@ impl MakeTechnique for LightCloudData<'_> {
             cloud: cloud.lights.clone(),
             weigher,
             visibility: Arc::clone(&self.visibility),
-            weights: Vec::with_capacity(cloud.lights.len()),
+            weights: Vec::with_capacity(weight_capacity(cloud)),
             gpu_weights: Vec::with_capacity(weight_capacity(cloud)),
             unseen: 0,
         };
@@ -269,10 +272,11 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene
             cloud.vertex_count()
         ));
     }
-    let most = cloud.zone_count() * nearest * scene_lights;
-    if cloud.lights.len().min(most) > MAX_WEIGHTS {
+    let most = cloud.zone_count() * nearest * scene_lights * cloud.emission;
+    if columns(cloud).min(most) > MAX_WEIGHTS {
         return refuse(format!(
-            "{scene_lights} lights standing on up to {nearest} cloud lights in each of {} zones make up to {most} weights; at most {MAX_WEIGHTS} fit one in-stream update: use fewer lights, zones or --nearest",
+            "{scene_lights} lights standing on up to {nearest} cloud lights of {} emission functions in each of {} zones make up to {most} weights; at most {MAX_WEIGHTS} fit one in-stream update: use fewer lights, zones, emission bands or --nearest",
+            cloud.emission,
             cloud.zone_count()
         ));
     }
@@ -282,8 +286,13 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene
 /// The most non-zero weights a frame uploads: 64 KiB, one in-stream update.
 const MAX_WEIGHTS: usize = 4096;
 
-/// Room for every weight a frame can have: one per cloud light, at most MAX_WEIGHTS (`check`
+/// Every column of the cloud: its lights times their emission functions.
+fn columns(cloud: &LightCloud) -> usize {
+    cloud.lights.len() * cloud.emission
+}
+
+/// Room for every weight a frame can have: one per column, at most MAX_WEIGHTS (`check`
 /// refused more).
 fn weight_capacity(cloud: &LightCloud) -> usize {
-    cloud.lights.len().min(MAX_WEIGHTS)
+    columns(cloud).min(MAX_WEIGHTS)
 }
