@@ -30,7 +30,8 @@ pub struct TessellatedMesh {
 /// Every mesh of a scene tessellated, in the scene's order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tessellation {
-    /// The largest edge asked for, metres.
+    /// The largest edge asked for, metres; 0 for a scene split along other lines (a derived
+    /// block proxy's boundaries, `mrt::split`).
     pub max_edge: f32,
     pub meshes: Vec<TessellatedMesh>,
 }
@@ -222,7 +223,7 @@ pub fn read(artifact: &Artifact, scene: &Scene) -> Result<Option<Tessellation>, 
     let mut r = Reader::new(&bin, &path, MAGIC, "tessellation")?;
     let max_edge = r.f32s(1, "the largest edge")?[0];
     let count = r.u32("the mesh count")?;
-    if count as usize != scene.meshes.len() || !(max_edge.is_finite() && max_edge > 0.0) {
+    if count as usize != scene.meshes.len() || !(max_edge.is_finite() && max_edge >= 0.0) {
         let problem = format!("{count} meshes of edges up to {max_edge} m for a scene of {} meshes", scene.meshes.len());
         return Err(fail(&path, problem, REBAKE));
     }

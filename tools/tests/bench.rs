@@ -78,10 +78,11 @@ fn the_tiny_sweep_runs_end_to_end_and_its_rerun_traces_no_reference() {
         assert_eq!(row["status"], "ok");
         for (column, cell) in row.iter().filter(|(c, _)| !TEXT_COLUMNS.contains(&c.as_str())) {
             if cell.is_empty() {
-                // Empty by definition: the first configuration's flicker, the occluder columns of a
-                // light path, and per-pass times on a device without timestamps.
+                // Empty by definition: the first configuration's flicker, the occluder and spot
+                // sweep columns of a light path, and per-pass times on a device without timestamps.
                 let allowed = (column == "flicker" && row["light"] == "0")
                     || column.starts_with("occluder_")
+                    || column.starts_with("spot_")
                     || (column.starts_with("gpu_") && column != "gpu_frame_ms");
                 assert!(allowed, "{column} is empty in {row:?}");
                 continue;

@@ -125,7 +125,13 @@ impl AtlasSection {
     /// applied to it): mesh and index counts, indices and source vertices in range, finite uv1,
     /// a possible page layout.
     pub fn read(artifact: &Artifact, scene: &Scene) -> Result<AtlasSection, ArtifactError> {
-        let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
+        Self::read_for(artifact, scene, scene)
+    }
+
+    /// The atlas of `artifact`, keyed to `keyed` (the scene as loaded) and made for `scene` (the
+    /// same, or its tessellation when the bake split it: the `tessellation` section).
+    pub fn read_for(artifact: &Artifact, keyed: &Scene, scene: &Scene) -> Result<AtlasSection, ArtifactError> {
+        let data = artifact.section(SECTION, SECTION_VERSION, Some(keyed))?;
         let (bytes, path) = data.file(FILE)?;
         let mut r = Reader::new(&bytes, &path, MAGIC, "atlas")?;
         let mesh_count = r.u32("the mesh count")?;

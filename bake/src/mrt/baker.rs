@@ -12,9 +12,21 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 use std::ops::AddAssign;
 
-/// The scene on its blocks and the level's tables, made with `dictionary` to `d_max` crossings.
+/// The scene on the blocks it declares and the level's tables, made with `dictionary` to
+/// `d_max` crossings.
 pub fn bake_level(scene: &Scene, dictionary: &Dictionary, d_max: usize) -> Result<(Mapped, LevelData), String> {
-    let proxy = Proxy::of(scene)?;
+    bake_on(scene, &Proxy::of(scene)?, &dynamic_meshes(scene)?, dictionary, d_max)
+}
+
+/// The scene on `proxy`'s blocks, the meshes `dynamic` (ascending) lit by the light volume,
+/// and the level's tables, made with `dictionary` to `d_max` crossings.
+pub fn bake_on(
+    scene: &Scene,
+    proxy: &Proxy,
+    dynamic: &[usize],
+    dictionary: &Dictionary,
+    d_max: usize,
+) -> Result<(Mapped, LevelData), String> {
     let level = proxy.level();
     let d = level.len() * k_max(dictionary);
     if d > MAX_FEEDBACK {
@@ -24,14 +36,13 @@ pub fn bake_level(scene: &Scene, dictionary: &Dictionary, d_max: usize) -> Resul
             k_max(dictionary)
         ));
     }
-    let dynamic = dynamic_meshes(scene)?;
-    let mapped = map(scene, &proxy, &level, dictionary.settings.samples_per_face, &dynamic)?;
+    let mapped = map(scene, proxy, &level, dictionary.settings.samples_per_face, dynamic)?;
     let (operators, interfaces) = dictionary.operators();
     let transfer = LevelTransfer::new(&level, &operators, &interfaces, d_max)?;
     let mut data = transfer.level_data(dictionary::checksum(dictionary), &mapped);
     data.feedback = solve_feedback(&data, dictionary)?;
     data.corners = proxy.corners.iter().map(|c| c.map(|p| p.as_vec3())).collect();
-    data.dynamic = dynamic.into_iter().map(|m| m as u32).collect();
+    data.dynamic = dynamic.iter().map(|&m| m as u32).collect();
     Ok((mapped, data))
 }
 

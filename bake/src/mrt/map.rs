@@ -25,8 +25,7 @@ pub struct Mapped {
     pub tiles: Tiles,
 }
 
-/// How far past its face's edges a vertex's face coordinates may go (in face widths); and how
-/// far a triangle's centroid is moved along its normal to find the block it faces, in the
+/// How far a triangle's centroid is moved along its normal to find the block it faces, in the
 /// proxy's shortest block edges.
 const SLACK: f32 = 1e-3;
 
@@ -154,6 +153,13 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize, dynamic: &[
     Ok(Mapped { meshes, layout: tiles.layout, texels, samples, copies, tiles })
 }
 
+/// The meshes (ascending) with a triangle that lies on no face of `proxy`: none stands in a
+/// block, or it reaches past its face by more than the proxy's reach.
+pub fn unplaced(scene: &Scene, proxy: &Proxy, level: &Level) -> Vec<usize> {
+    let fits = |m: &crate::scene::Mesh| m.indices.chunks_exact(3).all(|t| place(proxy, level, &m.positions, &m.normals, t).is_ok());
+    scene.meshes.iter().enumerate().filter(|(_, m)| !fits(m)).map(|(i, _)| i).collect()
+}
+
 /// The block and present face a triangle lies on, its vertices' face coordinates, and its
 /// centroid's distance off the face (in block sides).
 fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri: &[u32]) -> Result<(usize, Face, [Vec2; 3], f32), String> {
@@ -182,7 +188,8 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
         .max_by(|a, b| a.inward().dot(facing).total_cmp(&b.inward().dot(facing)))
         .expect("top and bottom");
     let uvs = local.map(|q| face.uv(q));
-    if uvs.iter().any(|uv| uv.min_element() < -SLACK || uv.max_element() > 1.0 + SLACK) {
+    let reach = proxy.reach();
+    if uvs.iter().any(|uv| uv.min_element() < -reach || uv.max_element() > 1.0 + reach) {
         return Err(outside());
     }
     let off = |q: Vec3| (q[face.axis] - face.positive as u32 as f32).abs();

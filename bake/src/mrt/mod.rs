@@ -15,6 +15,8 @@
 pub mod baker;
 #[cfg(feature = "baking")]
 pub mod block;
+#[cfg(feature = "baking")]
+pub mod derive;
 pub mod dictionary;
 #[cfg(feature = "baking")]
 pub mod evaluate;
@@ -24,6 +26,8 @@ pub mod level;
 pub mod level_data;
 pub mod map;
 pub mod proxy;
+#[cfg(feature = "baking")]
+pub mod split;
 pub mod volume;
 
 pub use proxy::SCENE_BLOCK;

@@ -7,7 +7,10 @@
 //!   map of its corners; two blocks are joined where a side face of one has the same four
 //!   corners as the opposite face of the other. Refused: an inverted or flat block, two blocks
 //!   that overlap, a face that touches another block without being joined to it (a dangling
-//!   opening), and a joined top or bottom (the 2D dictionary has none).
+//!   opening) unless both blocks list it under `closed` (a thin wall between them), and a
+//!   joined top or bottom (the 2D dictionary has none).
+//!
+//! A scene that declares neither is given a proxy derived from its geometry (`derive`).
 //!
 //! The dictionary's operators are reused under the warp unchanged (spec B12).
 
@@ -34,6 +37,9 @@ const SAME: f64 = 1e-4;
 /// The farthest a corner may lie from the origin along any axis, metres.
 const MAX_COORDINATE: f32 = 1e6;
 
+/// How far past its face a triangle of a declared proxy may reach, in face widths.
+const DECLARED_REACH: f32 = 1e-3;
+
 /// In a block's local coordinates: how far inside it a point must be to overlap it; how near
 /// one of its faces a point must be to touch it (a dangling face); and how far outside its
 /// cube Newton's root may fall and still be taken as the point's.
@@ -51,9 +57,29 @@ pub struct Proxy {
     /// The blocks whose bounds meet each cube of a uniform grid of side `bucket`.
     buckets: HashMap<[i64; 3], Vec<usize>>,
     bucket: f64,
+    /// How far past the face it lies on a triangle may reach and still be placed (clamped to
+    /// the face), in face widths: a hair for a declared proxy, more for a derived one, whose
+    /// faces stand at walls' middles and rooms' bounds.
+    reach: f32,
 }
 
 impl Proxy {
+    /// Whether the scene declares a proxy (`extras.relume.mrt`).
+    pub fn declared(scene: &Scene) -> bool {
+        scene.settings.block(KEY).is_some()
+    }
+
+    /// A proxy of these blocks, joined as `level` says (a derived one: `derive`), whose faces
+    /// take triangles reaching `reach` face widths past them.
+    pub(super) fn from_parts(corners: Vec<[DVec3; 8]>, level: Level, reach: f32) -> Proxy {
+        Proxy { reach, ..Proxy::new(corners, level) }
+    }
+
+    /// How far past its face a triangle may reach, in face widths.
+    pub fn reach(&self) -> f32 {
+        self.reach
+    }
+
     /// The scene's proxy; refused when it declares none (the method needs its blocks).
     pub fn of(scene: &Scene) -> Result<Proxy, String> {
         match scene.settings.block(KEY) {
@@ -125,7 +151,7 @@ impl Proxy {
                 }
             }
         }
-        Proxy { corners, level, side: shortest as f32, boxes, buckets, bucket }
+        Proxy { corners, level, side: shortest as f32, boxes, buckets, bucket, reach: DECLARED_REACH }
     }
 }
 
@@ -217,6 +243,7 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
         return Err(format!("{key} declares {} blocks; give 1..={MAX_BLOCKS}", blocks.len()));
     }
     let corners = blocks.iter().enumerate().map(|(i, block)| read_corners(block, &format!("{key}[{i}]"))).collect::<Result<Vec<_>, _>>()?;
+    let closed = blocks.iter().enumerate().map(|(i, block)| read_closed(block, &format!("{key}[{i}]"))).collect::<Result<Vec<_>, _>>()?;
     for (i, c) in corners.iter().enumerate() {
         check_shape(c).map_err(|e| format!("{key}[{i}] {e}"))?;
     }
@@ -244,15 +271,18 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
             if face.axis == 1 {
                 return Err(format!("{key}[{a}]'s {} face is joined to {key}[{b}]: the 2D dictionary's blocks have a closed top and bottom; stack no blocks", face.name()));
             }
+            if closed[a].contains(&face) && closed[b].contains(&other) {
+                continue;
+            }
             links[a][face.index()] = Some(b);
             links[b][other.index()] = Some(a);
         }
     }
     for (a, joins) in links.iter().enumerate() {
-        for face in Face::ALL.into_iter().filter(|f| joins[f.index()].is_none()) {
+        for face in Face::ALL.into_iter().filter(|f| joins[f.index()].is_none() && !closed[a].contains(f)) {
             if let Some(b) = touched(&corners, &boxes, &around[a], a, face) {
                 return Err(format!(
-                    "{key}[{a}]'s {} face touches {key}[{b}] without being joined to it (a dangling opening): joined faces share all four corners, +x with -x and +z with -z; give the faces the same corners or move the blocks apart",
+                    "{key}[{a}]'s {} face touches {key}[{b}] without being joined to it (a dangling opening): joined faces share all four corners, +x with -x and +z with -z; give the faces the same corners, move the blocks apart, or list the faces under `closed` on both blocks (a wall between them)",
                     face.name()
                 ));
             }
@@ -262,9 +292,17 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
     Ok(Proxy::new(corners, level))
 }
 
+/// A block's `closed` faces: side faces that touch a neighbour but are walls.
+fn read_closed(block: &Value, key: &str) -> Result<Vec<Face>, String> {
+    let Some(list) = block.get("closed") else { return Ok(Vec::new()) };
+    let bad = || format!("{key}.closed must be a list of side faces (\"-x\", \"+x\", \"-z\", \"+z\")");
+    let names = list.as_array().ok_or_else(bad)?;
+    names.iter().map(|n| Face::ALL.into_iter().find(|f| f.axis != 1 && Some(f.name()) == n.as_str()).ok_or_else(bad)).collect()
+}
+
 fn read_corners(block: &Value, key: &str) -> Result<[DVec3; 8], String> {
     let block = as_object(block, key)?;
-    known_keys(block, key, &["corners"])?;
+    known_keys(block, key, &["corners", "closed"])?;
     let list = block.get("corners").and_then(Value::as_array).filter(|c| c.len() == 8);
     let list = list
         .ok_or_else(|| format!("{key}.corners must be 8 points [x, y, z], corner i at the unit cube's (i & 1, i >> 1 & 1, i >> 2 & 1)"))?;
@@ -282,7 +320,7 @@ fn read_corners(block: &Value, key: &str) -> Result<[DVec3; 8], String> {
 /// Refuses a block inverted, flat or folded: at every point of a 5^3 lattice of its unit cube
 /// (its corners among them) the warp's three derivatives must span a right-handed frame (x, y
 /// up, z) at least 1 % of a box's volume.
-fn check_shape(corners: &[DVec3; 8]) -> Result<(), String> {
+pub(super) fn check_shape(corners: &[DVec3; 8]) -> Result<(), String> {
     for q in lattice(&[0.0, 0.25, 0.5, 0.75, 1.0]) {
         let j = jacobian(corners, q);
         if j.determinant() <= 0.01 * j.x_axis.length() * j.y_axis.length() * j.z_axis.length() {

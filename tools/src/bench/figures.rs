@@ -1,9 +1,11 @@
 //! A sweep's own charts of one method (`[[charts]]`, docs/BENCH.md): its error against one of
-//! its parameters (a paper's "error against vectors" figure), or a statistic its bakes
-//! recorded (a paper's spectrum).
+//! its parameters (a paper's "error against vectors" figure), against what a scene's light
+//! configurations vary (a spot sweep's cone or turn), or a statistic its bakes recorded (a
+//! paper's spectrum).
 
 use super::charts::{self, Chart, Series};
 use super::report::Summary;
+use super::results::Row;
 use super::sweep::SweepChart;
 use anyhow::Result;
 use relume_bake::outputs::Outputs;
@@ -21,6 +23,9 @@ pub(crate) fn write(
     for chart in charts {
         let of_method: Vec<&Summary> = of_scene.iter().copied().filter(|s| s.first().method == chart.method).collect();
         let (stem, drawn) = match (&chart.x, &chart.statistic) {
+            (Some(x), _) if CONFIGURATION_VARIABLES.contains(&x.as_str()) => {
+                (format!("{scene}_{}_indirect_error_vs_{x}", chart.method), against_configuration(&of_method, x))
+            }
             (Some(x), _) => (format!("{scene}_{}_indirect_error_vs_{x}", chart.method), against_parameter(&of_method, x)),
             (_, Some(statistic)) => (format!("{scene}_{}_{statistic}", chart.method), statistic_lines(&of_method, statistic)),
             (None, None) => continue,
@@ -64,6 +69,37 @@ fn against_parameter<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart<'a>
         title: format!("{} indirect error against {x}", of_method[0].first().method),
         x_label: x,
         y_label: "indirect NRMSE vs reference (mean over lights)",
+        series,
+        lines: true,
+        front: Vec::new(),
+    })
+}
+
+/// What a scene's light configurations vary, by the name a chart's `x` gives it.
+pub(crate) const CONFIGURATION_VARIABLES: [&str; 2] = ["spot_outer_degrees", "spot_turn_degrees"];
+
+/// Each light configuration's indirect NRMSE against the value it varies (`x`, one of
+/// [`CONFIGURATION_VARIABLES`]), a line per configuration of the method.
+fn against_configuration<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart<'a>> {
+    let value = |row: &Row| match x {
+        "spot_outer_degrees" => row.spot_outer_degrees,
+        _ => row.spot_turn_degrees,
+    };
+    let mut series = Vec::new();
+    for s in of_method {
+        let mut points: Vec<(f64, f64)> =
+            s.rows().iter().filter_map(|r| Some((value(r)? as f64, r.accuracy.as_ref()?.indirect_nrmse))).collect();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let label = if s.first().params.is_empty() { "defaults".to_string() } else { s.first().params.clone() };
+        // A line needs the configurations to vary what it is drawn against.
+        if points.windows(2).any(|w| w[0].0 != w[1].0) {
+            series.push(Series { label, points });
+        }
+    }
+    (!series.is_empty()).then(|| Chart {
+        title: format!("{} indirect error against {x}", of_method[0].first().method),
+        x_label: x,
+        y_label: "indirect NRMSE vs reference",
         series,
         lines: true,
         front: Vec::new(),

@@ -27,7 +27,7 @@ use relume_bake::image::{self, Image};
 use relume_bake::metrics;
 use relume_bake::outputs::Outputs;
 use relume_bake::reference::ReferenceSettings;
-use relume_bake::scene::{Light, Scene};
+use relume_bake::scene::{Light, LightKind, Scene};
 use relume_bake::work::WorkOptions;
 use relume_renderer::vk::{Context, ContextOptions};
 use relume_renderer::{Headless, RenderSettings, Renderer};
@@ -122,9 +122,16 @@ fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
     for (i, chart) in sweep.charts.iter().enumerate() {
         let Some(x) = &chart.x else { continue };
         let method = methods::find(&chart.method)?;
-        if !method.params().iter().any(|p| p.name == x) && !config::FRAME_KEYS.contains(&x.as_str()) {
-            let names: Vec<&str> = method.params().iter().map(|p| p.name).collect();
-            bail!("charts[{i}].x \"{x}\": not a parameter of {}; use one of {}", chart.method, names.join(", "));
+        let known = method.params().iter().any(|p| p.name == x)
+            || config::FRAME_KEYS.contains(&x.as_str())
+            || figures::CONFIGURATION_VARIABLES.contains(&x.as_str());
+        if !known {
+            let names: Vec<&str> = method.params().iter().map(|p| p.name).chain(figures::CONFIGURATION_VARIABLES).collect();
+            bail!(
+                "charts[{i}].x \"{x}\": not a parameter of {} nor what a spot sweep varies; use one of {}",
+                chart.method,
+                names.join(", ")
+            );
         }
     }
     Ok(configs)
@@ -345,6 +352,8 @@ impl<'s> SceneBench<'s> {
             light_position: configuration.light_position.map(|p| p.to_array()),
             occluder_translation: configuration.occluder.as_ref().map(|o| o.translation.to_array()),
             occluder_turn_degrees: configuration.occluder.as_ref().map(|o| o.turn_degrees),
+            spot_outer_degrees: configuration.spot.map(|s| s.0),
+            spot_turn_degrees: configuration.spot.map(|s| s.1),
             method: config.method.name().to_string(),
             params: config.label.clone(),
             params_table: config.table.clone(),
@@ -420,11 +429,13 @@ fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Resu
     }))
 }
 
-/// One configuration of a scene: its lights, and where the moving light or occluder is.
+/// One configuration of a scene: its lights, and where the moving light or occluder is, or
+/// the swept spot's outer cone and turn (degrees).
 struct Configuration {
     lights: Vec<Light>,
     light_position: Option<Vec3>,
     occluder: Option<MovedMesh>,
+    spot: Option<(f32, f32)>,
 }
 
 /// A mesh moved by an occluder path: turned about the vertical axis through its bounds'
@@ -494,7 +505,7 @@ impl Configuration {
 
 /// The scene as it is, or one light or one mesh moved along the sweep's path.
 fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration>> {
-    let at_rest = || Configuration { lights: scene.lights.clone(), light_position: None, occluder: None };
+    let at_rest = || Configuration { lights: scene.lights.clone(), light_position: None, occluder: None, spot: None };
     if let Some(path) = &entry.light_path {
         if path.light >= scene.lights.len() {
             bail!("{}: light_path.light {}: the scene has {} light(s)", entry.path.display(), path.light, scene.lights.len());
@@ -521,7 +532,42 @@ fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration
             .map(|(t, turn)| Configuration { occluder: Some(MovedMesh::new(scene, mesh, t, turn.x)), ..at_rest() })
             .collect());
     }
+    if let Some(sweep) = &entry.spot_sweep {
+        return spot_configurations(scene, entry, sweep, &at_rest);
+    }
     Ok(vec![at_rest()])
+}
+
+/// A spot sweep's configurations: the spot with each cone, or aimed at each target.
+fn spot_configurations(
+    scene: &Scene,
+    entry: &SweepScene,
+    sweep: &sweep::SpotSweep,
+    at_rest: &dyn Fn() -> Configuration,
+) -> Result<Vec<Configuration>> {
+    let Some(spot) = scene.lights.get(sweep.light).filter(|l| matches!(l.kind, LightKind::Spot { .. })) else {
+        bail!("{}: spot_sweep.light {}: not a spot light of the scene's {}", entry.path.display(), sweep.light, scene.lights.len());
+    };
+    let with = |kind: LightKind, direction: Vec3| {
+        let mut configuration = at_rest();
+        configuration.lights[sweep.light] = Light { kind, direction, ..spot.clone() };
+        let turn = direction.angle_between(spot.direction).to_degrees();
+        let outer = match kind {
+            LightKind::Spot { outer_cone, .. } => outer_cone.to_degrees(),
+            _ => 0.0,
+        };
+        configuration.spot = Some((outer, turn));
+        configuration
+    };
+    let cones = sweep.outer_degrees.iter().map(|&outer| {
+        let inner = (outer - sweep.softness_degrees).max(0.0);
+        with(LightKind::Spot { inner_cone: inner.to_radians(), outer_cone: outer.to_radians() }, spot.direction)
+    });
+    let aims = sweep.targets.iter().map(|t| {
+        let direction = (Vec3::from_array(*t) - spot.position).normalize_or(spot.direction);
+        with(spot.kind, direction)
+    });
+    Ok(cones.chain(aims).collect())
 }
 
 fn frame_image(renderer: &mut Headless) -> Result<Image> {
@@ -578,12 +624,38 @@ mod tests {
     }
 
     #[test]
+    fn a_spot_sweep_narrows_its_cone_or_turns_its_aim_where_it_stands() {
+        use relume_bake::testing::{look_at, point_light, scene, spot_light};
+        let spot = spot_light(Vec3::new(0.0, 2.0, 0.0), Vec3::NEG_Y, Vec3::ONE, 0.5, 0.7);
+        let s =
+            scene("spot", vec![], vec![], vec![point_light(Vec3::ONE, Vec3::ONE), spot], look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 0.8));
+        let entry = |text: &str| -> SweepScene { toml::from_str(&format!("path = 'a.gltf'\nspot_sweep = {text}")).unwrap() };
+        let cones = configurations(&s, &entry("{ light = 1, outer_degrees = [60, 5], softness_degrees = 10 }")).unwrap();
+        let kinds: Vec<LightKind> = cones.iter().map(|c| c.lights[1].kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                LightKind::Spot { inner_cone: 50f32.to_radians(), outer_cone: 60f32.to_radians() },
+                LightKind::Spot { inner_cone: 0.0, outer_cone: 5f32.to_radians() }
+            ]
+        );
+        assert_eq!(cones.iter().map(|c| c.spot.unwrap().0.round()).collect::<Vec<_>>(), [60.0, 5.0]);
+        let aims = configurations(&s, &entry("{ light = 1, targets = [[0, 0, 0], [2, 2, 0]] }")).unwrap();
+        assert!(aims.iter().all(|c| c.lights[1].position == Vec3::new(0.0, 2.0, 0.0) && c.lights[0].position == Vec3::ONE));
+        assert_eq!(aims.iter().map(|c| c.spot.unwrap().1.round()).collect::<Vec<_>>(), [0.0, 90.0]);
+        assert!(aims[1].lights[1].direction.distance(Vec3::X) < 1e-6);
+        let refused =
+            configurations(&s, &entry("{ light = 0, outer_degrees = [30] }")).err().expect("a point light is no spot").to_string();
+        assert!(refused.contains("spot_sweep.light 0: not a spot light"), "{refused}");
+    }
+
+    #[test]
     fn an_occluder_path_turns_its_mesh_about_its_bounds_centre_then_moves_it() {
         use relume_bake::testing::{closed_box, look_at, scene, Facing};
         let block = closed_box(Vec3::new(1.0, 0.0, 1.0), Vec3::new(3.0, 1.0, 2.0), 1, Facing::Outward, 0);
         let s = scene("block", vec![block], vec![], vec![], look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 0.8));
         let turned = MovedMesh::new(&s, 0, Vec3::new(0.0, 2.0, 0.0), 90.0);
-        let configuration = Configuration { lights: vec![], light_position: None, occluder: Some(turned) };
+        let configuration = Configuration { lights: vec![], light_position: None, occluder: Some(turned), spot: None };
         let moved = configuration.apply_to(&s).meshes.remove(0);
         let (lo, hi) = moved.bounds();
         // 2 x 1 x 1 about (2, 0.5, 1.5): turned a quarter, 1 x 1 x 2 about the same centre, 2 m up.

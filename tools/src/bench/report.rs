@@ -25,6 +25,10 @@ impl Summary<'_> {
     pub(super) fn first(&self) -> &Row {
         self.rows[0]
     }
+    /// Its points, one per light configuration.
+    pub(super) fn rows(&self) -> &[&Row] {
+        &self.rows
+    }
     fn artifact_mib(&self) -> f64 {
         self.first().bake.artifact_bytes as f64 / (1 << 20) as f64
     }
@@ -440,6 +444,8 @@ mod tests {
             light_position: None,
             occluder_translation: None,
             occluder_turn_degrees: None,
+            spot_outer_degrees: None,
+            spot_turn_degrees: None,
             method: "m".into(),
             params: params.into(),
             params_table: toml::Table::new(),

@@ -96,6 +96,10 @@ pub(crate) struct Row {
     pub occluder_translation: Option<[f32; 3]>,
     /// Its turn about the vertical axis, degrees (None without an occluder path).
     pub occluder_turn_degrees: Option<f32>,
+    /// A spot sweep's outer cone angle, degrees, and how far its aim turned from the spot's own
+    /// direction, degrees (None without a spot sweep).
+    pub spot_outer_degrees: Option<f32>,
+    pub spot_turn_degrees: Option<f32>,
     pub method: String,
     pub params: String,
     #[serde(skip)]
@@ -155,6 +159,8 @@ pub(crate) fn csv_header(passes: &[String]) -> Vec<String> {
         "occluder_dy",
         "occluder_dz",
         "occluder_turn_degrees",
+        "spot_outer_degrees",
+        "spot_turn_degrees",
         "method",
         "params",
         "status",
@@ -192,6 +198,8 @@ fn csv_cells(row: &Row, passes: &[String]) -> Vec<String> {
         translation(1),
         translation(2),
         row.occluder_turn_degrees.map(|t| t.to_string()).unwrap_or_default(),
+        row.spot_outer_degrees.map(|t| t.to_string()).unwrap_or_default(),
+        row.spot_turn_degrees.map(|t| t.to_string()).unwrap_or_default(),
         row.method.clone(),
         row.params.clone(),
         row.status.clone(),

@@ -78,6 +78,30 @@ pub(crate) struct SweepScene {
     pub light_path: Option<LightPath>,
     /// Or move one mesh (an occluder) along a path of translations; the bakes stay as made.
     pub occluder_path: Option<OccluderPath>,
+    /// Or change one spot light's cone or aim, one configuration a value.
+    pub spot_sweep: Option<SpotSweep>,
+}
+
+/// One spot light's cone or aim changed from configuration to configuration, where it stands.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SpotSweep {
+    /// Index of the scene's spot light (default 0).
+    #[serde(default)]
+    pub light: usize,
+    /// Outer cone angles, degrees (0, 90]: one configuration each, the inner angle
+    /// `softness_degrees` less (at least 0).
+    #[serde(default)]
+    pub outer_degrees: Vec<f32>,
+    #[serde(default = "default_softness")]
+    pub softness_degrees: f32,
+    /// Or points to aim the spot at, one configuration each, its cone as it is.
+    #[serde(default)]
+    pub targets: Vec<[f32; 3]>,
+}
+
+fn default_softness() -> f32 {
+    10.0
 }
 
 #[derive(Deserialize, Debug)]
@@ -191,8 +215,11 @@ impl Sweep {
                 ("light_path", scene.light_path.as_ref().map(|p| (&p.points, p.frames))),
                 ("occluder_path", scene.occluder_path.as_ref().map(|p| (&p.points, p.frames))),
             ];
-            if paths.iter().all(|(_, p)| p.is_some()) {
-                bail!("scenes[{i}]: give a light_path or an occluder_path, not both");
+            if paths.iter().filter(|(_, p)| p.is_some()).count() + usize::from(scene.spot_sweep.is_some()) > 1 {
+                bail!("scenes[{i}]: give one of light_path, occluder_path and spot_sweep, not both of any two");
+            }
+            if let Some(spot) = &scene.spot_sweep {
+                check_spot_sweep(spot).map_err(|e| anyhow::anyhow!("scenes[{i}].spot_sweep: {e}"))?;
             }
             for (key, path) in paths {
                 let Some((points, frames)) = path else { continue };
@@ -206,6 +233,25 @@ impl Sweep {
         }
         Ok(())
     }
+}
+
+fn check_spot_sweep(spot: &SpotSweep) -> Result<()> {
+    if spot.outer_degrees.is_empty() == spot.targets.is_empty() {
+        bail!("give outer_degrees (cone angles) or targets (points to aim at), one of them");
+    }
+    if spot.outer_degrees.len() + spot.targets.len() > 1000 {
+        bail!("at most 1000 configurations");
+    }
+    if spot.outer_degrees.iter().any(|d| !(d.is_finite() && *d > 0.0 && *d <= 90.0)) {
+        bail!("outer_degrees: each a finite angle in (0, 90] degrees");
+    }
+    if !(spot.softness_degrees.is_finite() && spot.softness_degrees >= 0.0) {
+        bail!("softness_degrees: a finite angle >= 0");
+    }
+    if spot.targets.iter().flatten().any(|v| !v.is_finite()) {
+        bail!("targets: every coordinate must be a finite number (metres)");
+    }
+    Ok(())
 }
 
 /// `frames` points evenly spread by length along the polyline through `points`, both ends
@@ -270,6 +316,8 @@ mod tests {
             ("name = 'x'\ncolour = 1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "colour"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [], frames = 3 }\n[[methods]]\nmethod = 'direct'", "light_path"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 1 }\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 1 }\n[[methods]]\nmethod = 'direct'", "not both"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nspot_sweep = { outer_degrees = [95] }\n[[methods]]\nmethod = 'direct'", "spot_sweep: outer_degrees"),
+            ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nspot_sweep = { outer_degrees = [45], targets = [[0, 0, 0]] }\n[[methods]]\nmethod = 'direct'", "one of them"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\noccluder_path = { mesh = 'Cube', points = [[0, 1, 0]], frames = 2, turn_degrees = nan }\n[[methods]]\nmethod = 'direct'", "turn_degrees must be a finite"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nlight_path = { points = [[0, 1, 0]], frames = 2, seconds = 0 }\n[[methods]]\nmethod = 'direct'", "light_path.seconds must be"),
         ] {

@@ -114,8 +114,13 @@ pub(crate) fn summary(atlas: &Atlas) -> String {
 
 /// The artifact's atlas and `scene` re-indexed by it.
 pub(crate) fn read(artifact: &Artifact, scene: &Scene) -> Result<(AtlasSection, Scene)> {
-    let atlas = AtlasSection::read(artifact, scene)?;
-    let mut applied = scene.clone();
+    read_for(artifact, scene, scene)
+}
+
+/// As `read`, for an atlas made on `scene`'s tessellation `fine` (keyed to `scene`).
+pub(crate) fn read_for(artifact: &Artifact, scene: &Scene, fine: &Scene) -> Result<(AtlasSection, Scene)> {
+    let atlas = AtlasSection::read_for(artifact, scene, fine)?;
+    let mut applied = fine.clone();
     atlas.apply_to(&mut applied);
     Ok((atlas, applied))
 }

@@ -10,12 +10,15 @@ use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::{Artifact, BakeOutput};
 use relume_bake::atlas::AtlasSection;
-use relume_bake::mrt::baker::bake_level;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::mrt::baker::bake_on;
+use relume_bake::mrt::derive::{self, Derived};
 use relume_bake::mrt::dictionary::{self, Dictionary};
 use relume_bake::mrt::level_data::{self, LevelData};
-use relume_bake::mrt::proxy::Proxy;
+use relume_bake::mrt::proxy::{dynamic_meshes, Proxy};
 use relume_bake::mrt::{BlockSettings, InterfaceSettings};
 use relume_bake::scene::Scene;
+use relume_bake::tessellation;
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::mrt::MrtData;
 use relume_renderer::MakeTechnique;
@@ -84,6 +87,16 @@ const PARAMS: [&Param; 12] = [
 
 /// The dictionary's parameters from `values` (the interface's gather: a quarter of the block's
 /// rays, 2^2 supersamples: docs/BENCHMARKS.md, "Between blocks").
+/// The scene's block proxy and the meshes its light volume lights: as declared, or derived
+/// from the scene (with what was derived).
+fn proxy(scene: &Scene) -> Result<(Proxy, Vec<usize>, Option<Derived>), String> {
+    if Proxy::declared(scene) {
+        return Ok((Proxy::of(scene)?, dynamic_meshes(scene)?, None));
+    }
+    let derived = derive::derive(scene, &SceneBvh::new(scene))?;
+    Ok((derived.proxy.clone(), derived.dynamic.clone(), Some(derived)))
+}
+
 fn settings(values: &Values, work: &WorkOptions) -> (BlockSettings, InterfaceSettings) {
     let gather_rays = values.count(&GATHER_RAYS) as u32;
     let block = BlockSettings {
@@ -185,8 +198,9 @@ impl Method for MrtMethod {
         Models::LocalLights
     }
 
+    /// A scene that declares its blocks, or whose blocks can be derived.
     fn suits(&self, scene: &Scene) -> bool {
-        Proxy::of(scene).is_ok()
+        proxy(scene).is_ok()
     }
 
     /// It models all indirect light: an ambient term would count it twice.
@@ -196,7 +210,11 @@ impl Method for MrtMethod {
 
     fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
         let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
-        Proxy::of(scene).map_err(at)?;
+        let (proxy, dynamic, derived) = stages.timed("proxy", || proxy(scene)).map_err(at)?;
+        let split = derived.as_ref().and_then(|d| d.split.as_ref());
+        let fine = split.map(|s| s.apply(scene));
+        let source = scene;
+        let scene = fine.as_ref().unwrap_or(source);
         let (block, interface) = settings(values, &work);
         if work.time_limit.is_some() {
             eprintln!("mrt: --time-limit does not cut the bake short (a dictionary not yet kept takes 5-11 s on 2 cores, its level a few seconds); fewer --gather-rays shorten the dictionary, --dictionary DIR skips it");
@@ -204,8 +222,9 @@ impl Method for MrtMethod {
         let dictionary = stages.timed("dictionary", || dictionary(values, &block, &interface))?;
         let d_max = values.count(&D_MAX) as usize;
         let threads = work.threads;
-        let (mapped, level_data) =
-            stages.timed("level", || relume_bake::work::with_threads(threads, || bake_level(scene, &dictionary, d_max))).map_err(at)?;
+        let (mapped, level_data) = stages
+            .timed("level", || relume_bake::work::with_threads(threads, || bake_on(scene, &proxy, &dynamic, &dictionary, d_max)))
+            .map_err(at)?;
         let matrices: usize = level_data.receivers.iter().flat_map(|r| r.sources.iter().map(|s| s.1.len())).sum();
         let facts = json!({
             "blocks": level_data.blocks.len(),
@@ -227,12 +246,14 @@ impl Method for MrtMethod {
         );
         let layout = mapped.layout;
         let atlas = AtlasSection { meshes: mapped.meshes, layout, texels: mapped.texels };
-        Ok(Bake {
-            sections: vec![
-                atlas.section(json!({ "width": layout.width, "height": layout.height })),
-                dictionary::section(&dictionary, json!({ "shapes": dictionary.blocks.len() })),
-                level_data::section(&level_data, facts.clone()),
-            ],
+        let mut sections = vec![
+            atlas.section(json!({ "width": layout.width, "height": layout.height })),
+            dictionary::section(&dictionary, json!({ "shapes": dictionary.blocks.len() })),
+            level_data::section(&level_data, facts.clone()),
+        ];
+        sections.extend(split.map(tessellation::section));
+        let mut bake = Bake {
+            sections,
             parameters: json!({
                 "samples_per_face": block.samples_per_face,
                 "gather_rays": block.gather_rays,
@@ -247,13 +268,31 @@ impl Method for MrtMethod {
             }),
             stats: facts,
             summary,
-        })
+        };
+        if let Some(derived) = &derived {
+            let names: Vec<&str> = dynamic.iter().map(|&m| scene.meshes[m].name.as_str()).collect();
+            let how = format!(
+                "{} blocks on {} x {} cells{}{} (the declaration is in manifest.json)",
+                proxy.corners.len(),
+                derived.cells[0],
+                derived.cells[1],
+                split.map_or(String::new(), |s| format!(
+                    "; triangles split at their boundaries: {} vertices from {}",
+                    s.vertex_count(),
+                    relume_bake::light_cloud::vertex_count(source)
+                )),
+                if names.is_empty() { String::new() } else { format!("; on no block face, lit by the light volume: {}", names.join(", ")) }
+            );
+            bake.derived("proxy", derived.declared.clone(), &how, "extras.relume.mrt");
+        }
+        Ok(bake)
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("mrt renders from a bake: give --bake"))?;
         let (dictionary, checksum) = dictionary::read(artifact, None)?;
-        let (_, applied) = super::atlas::read(artifact, scene)?;
+        let fine = tessellation::read(artifact, scene)?.map(|t| t.apply(scene));
+        let (_, applied) = super::atlas::read_for(artifact, scene, fine.as_ref().unwrap_or(scene))?;
         let level = level_data::read(artifact, scene, &dictionary, &checksum)?;
         Ok(Box::new(Baked { scene: applied, dictionary, level, feedback: values.choice(&FEEDBACK) == "solved" }))
     }

@@ -1,0 +1,54 @@
+//! Modular radiance transfer's block proxy derived from a scene that declares none: on the
+//! shipped levels without their declaration, against what they declare.
+#![cfg(feature = "baking")]
+
+use relume_bake::bvh::SceneBvh;
+use relume_bake::mrt::derive::derive;
+use relume_bake::mrt::proxy::Proxy;
+use relume_bake::scene::Scene;
+
+fn load(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.gltf"));
+    relume_bake::gltf_load::load(&path).unwrap().scene
+}
+
+/// The scene without its `extras.relume.mrt`, derived, beside its declared proxy.
+fn derived_and_declared(name: &str) -> (relume_bake::mrt::derive::Derived, Proxy) {
+    let mut scene = load(name);
+    let declared = Proxy::of(&scene).unwrap();
+    scene.settings.blocks.remove("mrt");
+    (derive(&scene, &SceneBvh::new(&scene)).unwrap(), declared)
+}
+
+/// A maze of grid cells (002 Table 3's levels) gives its grid back: the same blocks, the same
+/// joins, every mesh on a block face, and a grid declaration.
+#[test]
+fn a_maze_models_derived_proxy_is_its_grid() {
+    for name in ["mrt-cube", "mrt-corridor", "mrt-maze", "mrt-maze-large"] {
+        let (derived, declared) = derived_and_declared(name);
+        println!("{name}: {}", derived.declared);
+        assert_eq!(derived.proxy.corners, declared.corners, "{name}");
+        assert_eq!(derived.proxy.level(), declared.level(), "{name}");
+        assert!(derived.dynamic.is_empty() && derived.split.is_none(), "{name}: {:?}", derived.dynamic);
+        assert!(derived.declared.get("grid").is_some(), "{name}: {}", derived.declared);
+    }
+}
+
+#[test]
+fn the_caves_warped_blocks_are_found_on_its_walls() {
+    let (derived, declared) = derived_and_declared("mrt-cave");
+    println!("{}", derived.declared);
+    println!(
+        "derived {} blocks, declared {}; dynamic {:?}; split into {:?} vertices",
+        derived.proxy.corners.len(),
+        declared.corners.len(),
+        derived.dynamic,
+        derived.split.as_ref().map(|s| s.vertex_count())
+    );
+    let near = |p: glam::DVec3| declared.corners.iter().flatten().map(|q| q.distance(p)).fold(f64::INFINITY, f64::min);
+    let worst = derived.proxy.corners.iter().flatten().map(|p| near(*p)).fold(0.0, f64::max);
+    println!("largest distance of a derived corner from a declared one: {worst:.4} m");
+    let mut d: Vec<f64> = derived.proxy.corners.iter().flatten().map(|p| near(*p)).collect();
+    d.sort_by(f64::total_cmp);
+    println!("{:?}", d.iter().map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+}
