@@ -212,13 +212,35 @@ pub fn light_cloud_by_defaults(
 /// face, 1,024 rays; a coarse lightfield) and `scene`'s level to d_max 8; and the scene with
 /// the light map's uv1.
 pub fn mrt_quick_bake(scene: &Scene) -> (Dictionary, Mapped, LevelData, Scene) {
-    let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
-    let lightfield = InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
-    let dictionary = Dictionary::build(&block, &lightfield, |_| {});
+    let dictionary = quick_dictionary();
     let (mapped, level) = bake_level(scene, &dictionary, 8).expect("the level bakes");
     let mut applied = scene.clone();
     for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&mapped.meshes) {
         *mesh = atlas_mesh.apply(mesh);
     }
     (dictionary, mapped, level, applied)
+}
+
+/// As [`mrt_quick_bake`], on the block proxy derived from `scene` (its own declaration
+/// ignored): the scene as the derivation split it, with the light map's uv1.
+pub fn mrt_quick_bake_derived(scene: &Scene) -> (Dictionary, Mapped, LevelData, Scene) {
+    let mut bare = scene.clone();
+    bare.settings.blocks.remove("mrt");
+    let derived = relume_bake::mrt::derive::derive(&bare, &SceneBvh::new(&bare)).expect("a proxy derives");
+    let fine = derived.split.as_ref().map_or_else(|| bare.clone(), |s| s.apply(&bare));
+    let dictionary = quick_dictionary();
+    let (mapped, level) =
+        relume_bake::mrt::baker::bake_on(&fine, &derived.proxy, &derived.dynamic, &dictionary, 8).expect("the level bakes");
+    let mut applied = fine.clone();
+    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&mapped.meshes) {
+        *mesh = atlas_mesh.apply(mesh);
+    }
+    (dictionary, mapped, level, applied)
+}
+
+/// A small dictionary: 8 x 8 samples a face, 1,024 rays; a coarse lightfield.
+fn quick_dictionary() -> Dictionary {
+    let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
+    let lightfield = InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
+    Dictionary::build(&block, &lightfield, |_| {})
 }

@@ -46,7 +46,7 @@ const SAMPLES_PER_PASS: u32 = 8;
 
 /// Grid points inside closed geometry: at least 4 of the 6 axis rays from them first meet a
 /// surface from behind (spec light-clouds.md C).
-fn inside(bvh: &SceneBvh, point: Vec3) -> bool {
+pub(super) fn inside(bvh: &SceneBvh, point: Vec3) -> bool {
     let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
     let behind =
         axes.iter().filter(|&&dir| bvh.closest_hit(point, dir, f32::INFINITY).is_some_and(|h| h.geometric_normal.dot(dir) > 0.0)).count();

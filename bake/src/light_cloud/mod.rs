@@ -17,6 +17,8 @@ mod baker;
 #[cfg(feature = "baking")]
 mod reduce;
 #[cfg(feature = "baking")]
+pub mod region;
+#[cfg(feature = "baking")]
 mod variance;
 mod weights;
 #[cfg(feature = "baking")]
@@ -84,10 +86,12 @@ impl CloudGrid {
 }
 
 /// The scene's cloud, from `extras.relume.light_cloud`; without a block, 6 x 6 x 6 over the
-/// scene's bounds.
+/// scene's bounds (a bake derives a better one: `region::reachable`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloudSceneSettings {
     pub grid: CloudGrid,
+    /// Whether the scene declares its grid (else the bake derives one).
+    pub declared: bool,
 }
 
 impl LightCloudSceneSettings {
@@ -103,6 +107,7 @@ pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, bounds
 
 fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudSceneSettings, String> {
     let mut grid = CloudGrid::over(bounds);
+    let declared = block.is_some_and(|b| b.get("grid").is_some());
     if let Some(block) = block {
         let key = "extras.relume.light_cloud";
         let block = as_object(block, key)?;
@@ -129,7 +134,7 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
         }
     }
     grid.validate().map_err(|e| format!("extras.relume.{e}"))?;
-    Ok(LightCloudSceneSettings { grid })
+    Ok(LightCloudSceneSettings { grid, declared })
 }
 
 /// The baked transfer, by zone (004 §4.2): each zone has its own cloud lights (the cloud's,

@@ -6,17 +6,18 @@
 //! maze-like model gets a maze and a cave of tilted, bent walls its warped blocks.
 //!
 //! 1. The room height h: the median, over a 16 x 16 grid of points, of the distance from the
-//!    lowest surface up to the next that faces down (a ceiling); the bounds' height without
-//!    ceilings (a maze open to the sky).
+//!    lowest surface to the highest where that faces down (a ceiling), both found from outside
+//!    the bounds; the bounds' height without ceilings (a maze open to the sky).
 //! 2. The lattice: along x and z, round(extent / h) cells (at least 1) over the bounds.
-//! 3. A cell is free where at least 9 of 14 rays (the axes and the cube's diagonals) from its
-//!    middle first meet a surface facing them: inside a room, not inside a wall's or a solid
-//!    cell's back faces, not outside the model.
+//! 3. A cell is free where, at most of 5 points at its middle height, at least 9 of 14 rays
+//!    (the axes and the cube's diagonals) first meet a surface facing them: inside a room, not
+//!    inside a wall's or a solid cell's back faces, not outside the model.
 //! 4. Two free cells are joined unless most of 3 x 3 segments across their shared face are
 //!    blocked (a wall between them).
 //! 5. Each lattice point that a wall nearly meets moves onto it: every closed face of a free
-//!    cell takes the line (in plan) of the wall triangles near it, and a point goes to the
-//!    least-squares meeting of its faces' lines (at most 0.45 of a cell).
+//!    cell whose wall triangles near it cover at least half of it (a wall, not furniture)
+//!    takes their line in plan, and a point goes to the least-squares meeting of its faces'
+//!    lines (at most 0.45 of a cell).
 //! 6. Each free cell's floor and ceiling are planes through vertical ray hits at 3 x 3 points;
 //!    a lattice point's heights are the mean of its free cells' planes there.
 //!
@@ -91,7 +92,7 @@ pub fn derive(scene: &Scene, bvh: &SceneBvh) -> Result<Derived, String> {
         .filter(|&(a, b)| free[b] && lattice.open_between(bvh, a, b))
         .collect();
     let joined = |a: usize, b: usize| joins.contains(&(a.min(b), a.max(b)));
-    let columns = lattice.snapped_columns(scene, &free, &joined);
+    let columns = lattice.snapped_columns(scene, &free, &joined, h);
     let heights = lattice.column_heights(bvh, &columns, &free);
     let corners: Vec<[DVec3; 8]> = blocks.iter().map(|&c| lattice.corners(c, &columns, &heights)).collect();
     for (b, c) in corners.iter().enumerate() {
@@ -103,7 +104,8 @@ pub fn derive(scene: &Scene, bvh: &SceneBvh) -> Result<Derived, String> {
         joined(blocks[b], next).then(|| index(next)).flatten()
     })?;
     let proxy = Proxy::from_parts(corners, level, REACH);
-    let split = split(scene, &|p| lattice.sides(p, &columns), 1e-6 * lattice.size.min_element());
+    // A corner within a hundredth of a cell of a boundary is on it (a wall's lean, a crease).
+    let split = split(scene, &|p| lattice.sides(p, &columns), 1e-2 * lattice.size.min_element());
     let dynamic = match &split {
         Some(s) => unplaced(&s.apply(scene), &proxy, &proxy.level()),
         None => unplaced(scene, &proxy, &proxy.level()),
@@ -134,13 +136,14 @@ fn room_height(bvh: &SceneBvh, lo: DVec3, hi: DVec3) -> f64 {
 }
 
 /// At plan point `p`: the lowest surface's height (a ray up from below the bounds), and the
-/// next surface above it that faces down (a ceiling), if any.
+/// highest's if it faces down (a ceiling, seen from above from behind; a surface facing up
+/// there is a floor open to the sky). From outside, so furniture is never taken for either.
 fn vertical(bvh: &SceneBvh, lo: DVec3, hi: DVec3, p: DVec2) -> (Option<f64>, Option<f64>) {
-    let below = Vec3::new(p.x as f32, (lo.y - 0.01 * (hi.y - lo.y) - 1e-3) as f32, p.y as f32);
-    let Some(floor) = bvh.closest_hit(below, Vec3::Y, f32::INFINITY) else { return (None, None) };
-    let start = bvh.offset_origin(floor.position, floor.geometric_normal, Vec3::Y);
-    let ceiling = bvh.closest_hit(start, Vec3::Y, f32::INFINITY).filter(|c| c.geometric_normal.y < 0.0);
-    (Some(floor.position.y as f64), ceiling.map(|c| c.position.y as f64))
+    let margin = 0.01 * (hi.y - lo.y) + 1e-3;
+    let at = |y: f64| Vec3::new(p.x as f32, y as f32, p.y as f32);
+    let floor = bvh.closest_hit(at(lo.y - margin), Vec3::Y, f32::INFINITY);
+    let ceiling = bvh.closest_hit(at(hi.y + margin), Vec3::NEG_Y, f32::INFINITY).filter(|c| c.geometric_normal.y < 0.0);
+    (floor.map(|f| f.position.y as f64), ceiling.map(|c| c.position.y as f64))
 }
 
 /// The plan's lattice: `cells` cells of `size` over the bounds, x then z; column (i, j) is
@@ -189,10 +192,17 @@ impl Lattice {
         (p(0, 0) * (1.0 - u) + p(1, 0) * u) * (1.0 - v) + (p(0, 1) * (1.0 - u) + p(1, 1) * u) * v
     }
 
-    /// Whether cell `c`'s middle is inside a room: at least `FRONT_RAYS` of 14 rays first meet
-    /// a surface facing them.
+    /// Whether most of 5 points at cell `c`'s middle height (its middle and the middles of its
+    /// quarters' diagonals) are inside a room: something standing in the middle of a room is
+    /// not a solid cell.
     fn is_free(&self, bvh: &SceneBvh, c: usize) -> bool {
-        let p = self.at(c, &self.plain, (0.5, 0.5));
+        let points = [(0.5, 0.5), (0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+        points.iter().filter(|&&uv| self.inside_a_room(bvh, self.at(c, &self.plain, uv))).count() >= 3
+    }
+
+    /// Whether the point over plan point `p` halfway between floor and ceiling is inside a room:
+    /// at least `FRONT_RAYS` of 14 rays first meet a surface facing them.
+    fn inside_a_room(&self, bvh: &SceneBvh, p: DVec2) -> bool {
         let (floor, ceiling) = vertical(bvh, self.lo, self.hi, p);
         let y = (floor.unwrap_or(self.lo.y) + ceiling.unwrap_or(self.hi.y)) * 0.5;
         let middle = Vec3::new(p.x as f32, y as f32, p.y as f32);
@@ -223,9 +233,9 @@ impl Lattice {
 
     /// The lattice points moved onto the walls they nearly meet (`free`: which cells are
     /// blocks; `joined`: which neighbouring cells are joined). A plain grid stays exact.
-    fn snapped_columns(&self, scene: &Scene, free: &[bool], joined: &dyn Fn(usize, usize) -> bool) -> Vec<DVec2> {
+    fn snapped_columns(&self, scene: &Scene, free: &[bool], joined: &dyn Fn(usize, usize) -> bool, height: f64) -> Vec<DVec2> {
         let plain = &self.plain;
-        let lines = self.wall_lines(scene, free, joined);
+        let lines = self.wall_lines(scene, free, joined, height);
         let mut moved = plain.clone();
         for (n, p) in moved.iter_mut().enumerate() {
             let at: Vec<(DVec2, f64)> = lines.iter().filter(|(ends, _)| ends.contains(&n)).map(|(_, line)| *line).collect();
@@ -244,12 +254,18 @@ impl Lattice {
 
     /// Per lattice edge that is a closed face of a free cell and has wall triangles along it:
     /// its two lattice points and the wall's line in plan, n . p = d (n unit).
-    fn wall_lines(&self, scene: &Scene, free: &[bool], joined: &dyn Fn(usize, usize) -> bool) -> Vec<([usize; 2], (DVec2, f64))> {
+    fn wall_lines(
+        &self,
+        scene: &Scene,
+        free: &[bool],
+        joined: &dyn Fn(usize, usize) -> bool,
+        height: f64,
+    ) -> Vec<([usize; 2], (DVec2, f64))> {
         let (nx, nz) = (self.cells[0], self.cells[1]);
         // Edges: along x at z-line j (between cells (i, j - 1) and (i, j)), then along z at
-        // x-line i; each sums area, area x normal and area x (normal . centroid).
+        // x-line i; each gathers its wall triangles: area, plan normal, plan centroid.
         let along_x = nx * (nz + 1);
-        let mut sums = vec![(0.0f64, DVec2::ZERO, 0.0f64); along_x + (nx + 1) * nz];
+        let mut near: Vec<Vec<(f64, DVec2, DVec2)>> = vec![Vec::new(); along_x + (nx + 1) * nz];
         for mesh in &scene.meshes {
             for t in mesh.indices.chunks_exact(3) {
                 let p = [0, 1, 2].map(|k| mesh.positions[t[k] as usize].as_dvec3());
@@ -277,9 +293,7 @@ impl Lattice {
                 let Some(e) = edge else { continue };
                 // Both sides of a thick wall count with one orientation: +x or +z.
                 let plan = plan.normalize_or_zero();
-                let plan = if plan.x + plan.y < 0.0 { -plan } else { plan };
-                let s = &mut sums[e];
-                *s = (s.0 + area, s.1 + plan * area, s.2 + plan.dot(DVec2::new(c.x, c.z)) * area);
+                near[e].push((area, if plan.x + plan.y < 0.0 { -plan } else { plan }, DVec2::new(c.x, c.z)));
             }
         }
         let cell = |i: i64, j: i64| (i >= 0 && j >= 0 && (i as usize) < nx && (j as usize) < nz).then(|| i as usize + nx * j as usize);
@@ -290,8 +304,12 @@ impl Lattice {
             (None, None) => false,
         };
         let mut lines = Vec::new();
-        for (e, &(area, normal, d)) in sums.iter().enumerate() {
-            if area <= 0.0 || normal.length() == 0.0 {
+        for (e, triangles) in near.iter().enumerate() {
+            // A wall covers most of the face (a thick one twice); a desk's side or a block in a
+            // room does not, and stays furniture.
+            let face = if e < along_x { self.size.x } else { self.size.y } * height;
+            let Some((area, normal, d)) = dominant_plane(triangles, 0.15 * self.size.min_element()) else { continue };
+            if area < 0.5 * face {
                 continue;
             }
             let (ends, sides) = if e < along_x {
@@ -302,8 +320,7 @@ impl Lattice {
                 ([self.column(i, j), self.column(i, j + 1)], (cell(i as i64 - 1, j as i64), cell(i as i64, j as i64)))
             };
             if closed(sides.0, sides.1) {
-                let length = normal.length();
-                lines.push((ends, (normal / length, d / length)));
+                lines.push((ends, (normal, d)));
             }
         }
         lines
@@ -381,6 +398,27 @@ impl Lattice {
             (0..self.cells[1]).map(|j| (0..self.cells[0]).map(|i| if free[i + self.cells[0] * j] { '.' } else { '#' }).collect()).collect();
         json!({ "grid": { "origin": self.lo.to_array(), "cell": [self.size.x, self.hi.y - self.lo.y, self.size.y], "rows": rows } })
     }
+}
+
+/// The plane in plan most of `triangles`' area lies in (area, plan normal, centroid): the
+/// normal with the most area within 5 degrees of it, and those triangles' offsets within
+/// `spread` of their area-weighted median (a wall's two sides, not a block leaning on it);
+/// returns their area, the normal and their mean offset, n . p = d.
+fn dominant_plane(triangles: &[(f64, DVec2, DVec2)], spread: f64) -> Option<(f64, DVec2, f64)> {
+    let close = |a: DVec2, b: DVec2| a.dot(b) >= 5f64.to_radians().cos();
+    let aligned = |n: DVec2| triangles.iter().filter(|t| close(t.1, n)).map(|t| t.0).sum::<f64>();
+    let normal = triangles.iter().map(|t| t.1).max_by(|a, b| aligned(*a).total_cmp(&aligned(*b)))?;
+    let mut offsets: Vec<(f64, f64)> = triangles.iter().filter(|t| close(t.1, normal)).map(|t| (normal.dot(t.2), t.0)).collect();
+    offsets.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let half: f64 = offsets.iter().map(|o| o.1).sum::<f64>() / 2.0;
+    let mut running = 0.0;
+    let median = offsets.iter().find(|o| {
+        running += o.1;
+        running >= half
+    })?;
+    let kept: Vec<&(f64, f64)> = offsets.iter().filter(|o| (o.0 - median.0).abs() <= spread).collect();
+    let area: f64 = kept.iter().map(|o| o.1).sum();
+    (area > 0.0).then(|| (area, normal, kept.iter().map(|o| o.0 * o.1).sum::<f64>() / area))
 }
 
 /// The point where the lines n . p = d meet in the least-squares sense, or on the one line

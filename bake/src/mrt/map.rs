@@ -26,7 +26,8 @@ pub struct Mapped {
 }
 
 /// How far a triangle's centroid is moved along its normal to find the block it faces, in the
-/// proxy's shortest block edges.
+/// proxy's shortest block edges (at least: a derived proxy's reach, since its faces may stand
+/// a wall's lean or thickness from the surfaces they hold).
 const SLACK: f32 = 1e-3;
 
 /// The light map's tiles: one per present face of each block, `grid` + 2 texels a side.
@@ -171,7 +172,7 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
     // The block it faces into; else, for a face on a block's boundary facing out of it (the
     // underside of something standing on the floor), the block behind it.
     let centroid = (p[0] + p[1] + p[2]) / 3.0;
-    let step = normal * SLACK * proxy.side();
+    let step = normal * SLACK.max(proxy.reach()) * proxy.side();
     let (block, centre) = proxy
         .locate(centroid + step)
         .or_else(|| proxy.locate(centroid - step))

@@ -72,7 +72,11 @@ impl Proxy {
     /// A proxy of these blocks, joined as `level` says (a derived one: `derive`), whose faces
     /// take triangles reaching `reach` face widths past them.
     pub(super) fn from_parts(corners: Vec<[DVec3; 8]>, level: Level, reach: f32) -> Proxy {
-        Proxy { reach, ..Proxy::new(corners, level) }
+        let mut proxy = Proxy { reach, ..Proxy::new(corners, level) };
+        // Bounds (and the buckets over them) widened by the reach, for `locate`.
+        proxy.boxes = proxy.corners.iter().map(|c| bounds(c, reach as f64 * mean_edge(c))).collect();
+        proxy.buckets = buckets(&proxy.boxes, proxy.bucket);
+        proxy
     }
 
     /// How far past its face a triangle may reach, in face widths.
@@ -113,16 +117,17 @@ impl Proxy {
         local(&self.corners[block], p.as_dvec3()).map(|q| q.as_vec3())
     }
 
-    /// The block `p` lies in (on a shared face: the one it lies deeper in) and its local
-    /// point there.
+    /// The block `p` lies in (on a shared face: the one it lies deeper in; for a derived proxy,
+    /// within its reach outside one) and its local point there.
     pub fn locate(&self, p: Vec3) -> Option<(usize, Vec3)> {
         let p = p.as_dvec3();
+        let outside = if self.reach > DECLARED_REACH { self.reach as f64 } else { SAME };
         let near = self.buckets.get(&bucket_of(p, self.bucket))?;
         near.iter()
             .copied()
             .filter(|&b| self.boxes[b].contains(p))
             .filter_map(|b| local(&self.corners[b], p).map(|q| (b, q)))
-            .filter(|(_, q)| depth(*q) >= -SAME)
+            .filter(|(_, q)| depth(*q) >= -outside)
             .max_by(|a, b| depth(a.1).total_cmp(&depth(b.1)))
             .map(|(b, q)| (b, q.as_vec3()))
     }
@@ -140,17 +145,7 @@ impl Proxy {
         // A bucket about a block wide; never so small that one block meets more than 9^3.
         let bucket = mean.max(longest / 8.0);
         let boxes: Vec<Bounds> = corners.iter().map(|c| bounds(c, SAME * mean_edge(c))).collect();
-        let mut buckets: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-        for (b, bounds) in boxes.iter().enumerate() {
-            let (lo, hi) = (bucket_of(bounds.lo, bucket), bucket_of(bounds.hi, bucket));
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        buckets.entry([x, y, z]).or_default().push(b);
-                    }
-                }
-            }
-        }
+        let buckets = buckets(&boxes, bucket);
         Proxy { corners, level, side: shortest as f32, boxes, buckets, bucket, reach: DECLARED_REACH }
     }
 }
@@ -271,8 +266,19 @@ fn from_blocks(blocks: &Value) -> Result<Proxy, String> {
             if face.axis == 1 {
                 return Err(format!("{key}[{a}]'s {} face is joined to {key}[{b}]: the 2D dictionary's blocks have a closed top and bottom; stack no blocks", face.name()));
             }
-            if closed[a].contains(&face) && closed[b].contains(&other) {
-                continue;
+            match (closed[a].contains(&face), closed[b].contains(&other)) {
+                (true, true) => continue,
+                (false, false) => {}
+                (a_closed, _) => {
+                    let (listed, unlisted) = if a_closed { ((a, face), (b, other)) } else { ((b, other), (a, face)) };
+                    return Err(format!(
+                        "{key}[{}]'s {} face is listed under `closed` but {key}[{}]'s {} face, which it touches, is not: list a wall between two blocks on both",
+                        listed.0,
+                        listed.1.name(),
+                        unlisted.0,
+                        unlisted.1.name()
+                    ));
+                }
             }
             links[a][face.index()] = Some(b);
             links[b][other.index()] = Some(a);
@@ -473,6 +479,22 @@ fn edges(c: &[DVec3; 8]) -> impl Iterator<Item = f64> + '_ {
     (0..8).flat_map(move |i| (0..3).filter(move |a| i & (1 << a) == 0).map(move |a| c[i].distance(c[i | (1 << a)])))
 }
 
+/// The blocks whose bounds meet each cube of a uniform grid of side `bucket`.
+fn buckets(boxes: &[Bounds], bucket: f64) -> HashMap<[i64; 3], Vec<usize>> {
+    let mut buckets: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (b, bounds) in boxes.iter().enumerate() {
+        let (lo, hi) = (bucket_of(bounds.lo, bucket), bucket_of(bounds.hi, bucket));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    buckets.entry([x, y, z]).or_default().push(b);
+                }
+            }
+        }
+    }
+    buckets
+}
+
 fn bucket_of(p: DVec3, size: f64) -> [i64; 3] {
     (p / size).floor().as_i64vec3().to_array()
 }
@@ -603,5 +625,20 @@ mod tests {
         }
         let apart = from_block(&two(&shift(DVec3::new(2.5, 0.0, 0.0)))).unwrap();
         assert!(apart.level().shape(0).open_faces().is_empty(), "blocks apart are not joined");
+    }
+
+    /// Touching faces both listed `closed` are a wall between two blocks: not joined, not a
+    /// dangling opening; listed on one block only, refused naming both.
+    #[test]
+    fn faces_closed_on_both_blocks_are_a_wall_between_them() {
+        let mut blocks = as_blocks(&[".."], |p| p);
+        blocks["blocks"][0]["closed"] = json!(["+x"]);
+        let refused = from_block(&blocks).err().expect("closed on one block only");
+        assert!(refused.contains("blocks[0]'s +x face is listed under `closed` but") && refused.contains("on both"), "{refused}");
+        blocks["blocks"][1]["closed"] = json!(["-x"]);
+        let walled = from_block(&blocks).unwrap();
+        assert!(walled.level().shape(0).open_faces().is_empty() && walled.level().shape(1).open_faces().is_empty());
+        blocks["blocks"][1]["closed"] = json!(["+y"]);
+        assert!(from_block(&blocks).err().expect("a top is no side face").contains("closed must be a list of side faces"));
     }
 }

@@ -141,7 +141,7 @@ fn configs(sweep: &Sweep) -> Result<Vec<Config>> {
 /// or path is refused before any work starts.
 fn check_scenes(sweep: &Sweep) -> Result<()> {
     for entry in &sweep.scenes {
-        configurations(&load_scene(&scene_args(sweep, entry))?, entry)?;
+        configurations(&sweep_scene(sweep, entry)?, entry)?;
     }
     Ok(())
 }
@@ -157,6 +157,19 @@ fn scene_args(sweep: &Sweep, entry: &SweepScene) -> SceneArgs {
         max_texture_pixels: relume_bake::gltf_load::DEFAULT_MAX_TEXTURE_PIXELS,
         lights: entry.lights.clone(),
     }
+}
+
+/// A sweep's scene loaded, less the method settings it leaves out (`without`: what the methods
+/// then derive from the scene); refused when the scene has no such settings.
+fn sweep_scene(sweep: &Sweep, entry: &SweepScene) -> Result<Scene> {
+    let mut scene = load_scene(&scene_args(sweep, entry))?;
+    for key in &entry.without {
+        if scene.settings.blocks.remove(key).is_none() {
+            let held: Vec<&String> = scene.settings.blocks.keys().collect();
+            bail!("{}: without \"{key}\": the scene has no extras.relume.{key} (it has {held:?})", entry.path.display());
+        }
+    }
+    Ok(scene)
 }
 
 fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outcome> {
@@ -233,7 +246,7 @@ impl<'s> SceneBench<'s> {
         cache: &mut ReferenceCache,
         args: &'s BenchArgs,
     ) -> Result<SceneBench<'s>> {
-        let scene = load_scene(&scene_args(sweep, entry))?;
+        let scene = sweep_scene(sweep, entry)?;
         let name = entry.name();
         let configurations = configurations(&scene, entry)?;
         let bvh = SceneBvh::new(&scene);

@@ -218,8 +218,9 @@ impl Method for LightCloudMethod {
         Models::LocalLights
     }
 
+    /// Lights it takes, and a grid declared or derivable (no light inside closed geometry).
     fn suits(&self, scene: &Scene) -> bool {
-        checked(scene).is_ok()
+        checked(scene).is_ok_and(|s| s.declared || lc::region::reachable(scene, &SceneBvh::new(scene)).is_ok())
     }
 
     /// It models all indirect light: an ambient term would count it twice.
@@ -228,11 +229,10 @@ impl Method for LightCloudMethod {
     }
 
     fn bake(&self, source: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
-        let grid = checked(source)?.grid;
+        let declared = checked(source)?;
         let compression = compression(values)?;
         let reduction = reduction(values)?;
         let bands = emission_bands(source, values);
-        let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
         let at = |e: String| anyhow::anyhow!("{}: {e}", source.source.display());
         let edge = max_edge(source, values);
         let tessellation =
@@ -240,6 +240,10 @@ impl Method for LightCloudMethod {
         let fine = tessellation.as_ref().map(|t| t.apply(source));
         let scene = fine.as_ref().unwrap_or(source);
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+        let reachable =
+            (!declared.declared).then(|| stages.timed("region", || lc::region::reachable(scene, &bvh))).transpose().map_err(at)?;
+        let grid = reachable.as_ref().map_or(declared.grid, |r| r.grid.clone());
+        let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
         let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
         let raw_bytes = gathered.terms.len() * 4;
         let reduced = stages.timed("light clustering", || lc::reduce(scene, &bvh, &gathered, reduction)).map_err(at)?;
@@ -337,6 +341,19 @@ impl Method for LightCloudMethod {
             }),
             summary,
         };
+        if let Some(r) = &reachable {
+            let g = &settings.grid;
+            let how = format!(
+                "box {:.3?} .. {:.3?}, {:?} cells (the space the lights reach: {} of {} voxels over the scene's bounds)",
+                g.min.to_array(),
+                g.max.to_array(),
+                g.counts,
+                r.reached,
+                r.voxels
+            );
+            let value = json!({ "box": [g.min.to_array(), g.max.to_array()], "counts": g.counts });
+            bake.derived("grid", value, &how, "extras.relume.light_cloud.grid");
+        }
         if !values.given(&EMISSION_BANDS) && bands > 0 {
             let how = format!("{bands} (the scene has spot lights: each cloud light holds {} emission functions)", settings.emission);
             bake.derived("emission_bands", json!(bands), &how, "--emission-bands");

@@ -223,6 +223,11 @@ impl Method for LightPathMaps {
         bake.parameters["light_path_maps"] = facts.parameters;
         bake.stats["light_path_maps"] = facts.stats;
         bake.summary += &facts.summary;
+        if plan.region.is_none() {
+            let points: Vec<[f32; 3]> = scene.lights.iter().map(|l| l.position.to_array()).collect();
+            let how = format!("the {} light(s) where they stand, as test points (relit well near there only)", points.len());
+            bake.derived("region", json!({ "points": points }), &how, "extras.relume.light_path_maps.region");
+        }
         Ok(bake)
     }
 
