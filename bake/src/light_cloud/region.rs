@@ -28,9 +28,37 @@ pub struct Reachable {
 }
 
 /// The grid over the space `scene`'s lights reach; refused, naming the light, when one stands
-/// inside closed geometry (it reaches nothing), and when the scene has no light.
+/// inside closed geometry (it reaches nothing), and when the scene has no light. The flood runs
+/// twice: over the scene's bounds, then over what that reached widened by a voxel, so a room
+/// in a large model (a house on its terrain) is resolved as finely as a room alone.
 pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
+    if scene.lights.is_empty() {
+        return Err("the scene has no point or spot light to derive the cloud's region from; declare extras.relume.light_cloud.grid".into());
+    }
     let (lo, hi) = scene.settings.bounds;
+    let coarse = flood(scene, bvh, lo, hi)?;
+    let widen = coarse.voxel;
+    let fine = flood(scene, bvh, (coarse.min - widen).max(lo), (coarse.max + widen).min(hi))?;
+    let (min, max) = (fine.min, fine.max);
+    let cell = ((max - min).element_product() / CELLS).cbrt().max(1e-6);
+    let mut counts = ((max - min) / cell).round().as_uvec3().max(glam::UVec3::ONE).to_array();
+    while counts.iter().product::<u32>() > MAX_CLOUD_LIGHTS {
+        counts = counts.map(|c| (c * 3 / 4).max(1));
+    }
+    Ok(Reachable { grid: CloudGrid { min, max, counts }, reached: fine.reached, voxels: fine.voxels })
+}
+
+/// What one flood over a box reached: its voxels' bounds and count, of how many, of what size.
+struct Flood {
+    min: Vec3,
+    max: Vec3,
+    reached: usize,
+    voxels: usize,
+    voxel: f32,
+}
+
+/// Floods `VOXELS` voxels along the longest side of `lo`..`hi` from every light's voxel.
+fn flood(scene: &Scene, bvh: &SceneBvh, lo: Vec3, hi: Vec3) -> Result<Flood, String> {
     let voxel = ((hi - lo).max_element() / VOXELS).max(1e-6);
     let counts = ((hi - lo) / voxel).ceil().as_ivec3().max(IVec3::ONE);
     let centre = |v: IVec3| lo + (v.as_vec3() + 0.5) * voxel;
@@ -40,18 +68,17 @@ pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
     let mut free: Vec<Option<bool>> = vec![None; total];
     let mut is_free = |v: IVec3| *free[index(v)].get_or_insert_with(|| !inside(bvh, centre(v)));
     let mut queue = Vec::new();
-    if scene.lights.is_empty() {
-        return Err("the scene has no point or spot light to derive the cloud's region from; declare extras.relume.light_cloud.grid".into());
-    }
     for light in &scene.lights {
         let v = ((light.position - lo) / voxel).floor().as_ivec3().clamp(IVec3::ZERO, counts - 1);
-        if inside(bvh, light.position) || !is_free(v) {
+        if inside(bvh, light.position) {
             return Err(format!(
                 "light \"{}\" at {} stands inside closed geometry: no free space reaches it, so the cloud's region cannot be derived from it; move the light or declare extras.relume.light_cloud.grid",
                 light.name, light.position
             ));
         }
+        // A light in a voxel whose middle is inside something (a lamp by a wall) starts there.
         if !reached[index(v)] {
+            is_free(v);
             reached[index(v)] = true;
             queue.push(v);
         }
@@ -70,23 +97,11 @@ pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
         }
     }
     let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for z in 0..counts.z {
-        for y in 0..counts.y {
-            for x in 0..counts.x {
-                let v = IVec3::new(x, y, z);
-                if reached[index(v)] {
-                    min = min.min(lo + v.as_vec3() * voxel);
-                    max = max.max(lo + (v.as_vec3() + 1.0) * voxel);
-                }
-            }
-        }
-    }
-    let (min, max) = (min.max(lo), max.min(hi));
-    let cell = ((max - min).element_product() / CELLS).cbrt().max(1e-6);
-    let mut grid_counts = ((max - min) / cell).round().as_uvec3().max(glam::UVec3::ONE).to_array();
-    while grid_counts.iter().product::<u32>() > MAX_CLOUD_LIGHTS {
-        grid_counts = grid_counts.map(|c| (c * 3 / 4).max(1));
+    for (i, _) in reached.iter().enumerate().filter(|(_, r)| **r) {
+        let v = IVec3::new(i as i32 % counts.x, (i as i32 / counts.x) % counts.y, i as i32 / (counts.x * counts.y));
+        min = min.min(lo + v.as_vec3() * voxel);
+        max = max.max(lo + (v.as_vec3() + 1.0) * voxel);
     }
     let count = reached.iter().filter(|&&r| r).count();
-    Ok(Reachable { grid: CloudGrid { min, max, counts: grid_counts }, reached: count, voxels: total })
+    Ok(Flood { min: min.max(lo), max: max.min(hi), reached: count, voxels: total, voxel })
 }
