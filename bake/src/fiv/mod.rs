@@ -38,7 +38,7 @@ pub const SCENE_BLOCK: SceneBlock = SceneBlock { key: KEY, check: |block, _| fro
 impl FivSceneSettings {
     /// The scene's block; without one, the occluders derived from the scene: every closed mesh
     /// (it has an inside, as a table's mask needs) whose footprint, the area of its bounds
-    /// seen from above, is under half the scene's (a ground slab or a room around everything
+    /// seen from above, is under 80 % of the scene's (a ground slab or a room around everything
     /// receives light, it does not move over receivers), each name once. Refused when none is.
     pub fn of(scene: &Scene) -> Result<Self, String> {
         match scene.settings.block(KEY) {
@@ -53,14 +53,14 @@ fn derive(scene: &Scene) -> Result<FivSceneSettings, String> {
     let whole = footprint(scene.settings.bounds);
     let mut occluders: Vec<String> = Vec::new();
     for mesh in &scene.meshes {
-        let apart = footprint(crate::scene::bounds_of(&mesh.positions)) < 0.5 * whole;
+        let apart = footprint(crate::scene::bounds_of(&mesh.positions)) < 0.8 * whole;
         if apart && open_edges(mesh).is_none() && !occluders.contains(&mesh.name) {
             occluders.push(mesh.name.clone());
         }
     }
     if occluders.is_empty() {
         return Err(format!(
-            "the scene names no occluders and none could be derived: none of its {} meshes is closed and under half its footprint; name the meshes that move over receivers in extras.relume.fiv.occluders",
+            "the scene names no occluders and none could be derived: none of its {} meshes is closed and under 80 % of its footprint; name the meshes that move over receivers in extras.relume.fiv.occluders",
             scene.meshes.len()
         ));
     }

@@ -136,13 +136,23 @@ fn room_height(bvh: &SceneBvh, lo: DVec3, hi: DVec3) -> f64 {
 }
 
 /// At plan point `p`: the lowest surface's height (a ray up from below the bounds), and the
-/// highest's if it faces down (a ceiling, seen from above from behind; a surface facing up
-/// there is a floor open to the sky). From outside, so furniture is never taken for either.
+/// highest's if it faces down (a ceiling, seen from above from behind), or the one under it
+/// within a tenth of the bounds' height if that faces down (a roof slab's top, then its
+/// underside); a surface facing up with nothing so close under it is a floor open to the sky.
+/// From outside, so furniture is never taken for either.
 fn vertical(bvh: &SceneBvh, lo: DVec3, hi: DVec3, p: DVec2) -> (Option<f64>, Option<f64>) {
     let margin = 0.01 * (hi.y - lo.y) + 1e-3;
     let at = |y: f64| Vec3::new(p.x as f32, y as f32, p.y as f32);
     let floor = bvh.closest_hit(at(lo.y - margin), Vec3::Y, f32::INFINITY);
-    let ceiling = bvh.closest_hit(at(hi.y + margin), Vec3::NEG_Y, f32::INFINITY).filter(|c| c.geometric_normal.y < 0.0);
+    let facing_down = |h: &crate::bvh::Hit| h.geometric_normal.y < 0.0;
+    let top = bvh.closest_hit(at(hi.y + margin), Vec3::NEG_Y, f32::INFINITY);
+    let ceiling = top.and_then(|t| match facing_down(&t) {
+        true => Some(t),
+        false => {
+            let start = bvh.offset_origin(t.position, t.geometric_normal, Vec3::NEG_Y);
+            bvh.closest_hit(start, Vec3::NEG_Y, (0.1 * (hi.y - lo.y)) as f32).filter(facing_down)
+        }
+    });
     (floor.map(|f| f.position.y as f64), ceiling.map(|c| c.position.y as f64))
 }
 
@@ -363,13 +373,15 @@ impl Lattice {
     }
 
     /// The sides of the cell whose plan quad (its columns where `columns` has them) holds `p`,
-    /// each named by its lattice edge; None outside every cell.
+    /// each named by its lattice edge; outside every cell, the nearest plain cell's (so what
+    /// lies beyond the lattice, a wall's outer face, is cut at its lines too).
     fn sides(&self, p: DVec2, columns: &[DVec2]) -> Option<[Side; 4]> {
         let guess = ((p - DVec2::new(self.lo.x, self.lo.z)) / self.size).floor();
         let (nx, nz) = (self.cells[0] as i64, self.cells[1] as i64);
         let near = (-1..=1).flat_map(|dj| (-1..=1).map(move |di| (guess.x as i64 + di, guess.y as i64 + dj)));
+        let nearest = (guess.x.clamp(0.0, (nx - 1) as f64) as i64, guess.y.clamp(0.0, (nz - 1) as f64) as i64);
         let along_x = self.cells[0] * (self.cells[1] + 1);
-        for (i, j) in near.filter(|&(i, j)| i >= 0 && j >= 0 && i < nx && j < nz) {
+        for (i, j) in near.filter(|&(i, j)| i >= 0 && j >= 0 && i < nx && j < nz).chain([nearest]) {
             let (i, j) = (i as usize, j as usize);
             let q = |a: usize, b: usize| columns[self.column(i + a, j + b)];
             let centre = (q(0, 0) + q(1, 0) + q(0, 1) + q(1, 1)) * 0.25;
@@ -385,7 +397,9 @@ impl Lattice {
                 side(q(0, 0), q(1, 0), j * self.cells[0] + i),
                 side(q(0, 1), q(1, 1), (j + 1) * self.cells[0] + i),
             ];
-            if sides.iter().all(|s| s.normal.dot(p) - s.d >= -1e-9 * self.size.min_element()) {
+            if (i, j) == (nearest.0 as usize, nearest.1 as usize)
+                || sides.iter().all(|s| s.normal.dot(p) - s.d >= -1e-9 * self.size.min_element())
+            {
                 return Some(sides);
             }
         }

@@ -155,7 +155,7 @@ pub fn map(scene: &Scene, proxy: &Proxy, level: &Level, grid: usize, dynamic: &[
 }
 
 /// The meshes (ascending) with a triangle that lies on no face of `proxy`: none stands in a
-/// block, or it reaches past its face by more than the proxy's reach.
+/// block (of a declared proxy), or it reaches past its face by more than the proxy's reach.
 pub fn unplaced(scene: &Scene, proxy: &Proxy, level: &Level) -> Vec<usize> {
     let fits = |m: &crate::scene::Mesh| m.indices.chunks_exact(3).all(|t| place(proxy, level, &m.positions, &m.normals, t).is_ok());
     scene.meshes.iter().enumerate().filter(|(_, m)| !fits(m)).map(|(i, _)| i).collect()
@@ -173,13 +173,26 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
     // underside of something standing on the floor), the block behind it.
     let centroid = (p[0] + p[1] + p[2]) / 3.0;
     let step = normal * SLACK.max(proxy.reach()) * proxy.side();
-    let (block, centre) = proxy
+    let located = proxy
         .locate(centroid + step)
         .or_else(|| proxy.locate(centroid - step))
-        .ok_or_else(|| format!("it stands at {centroid}, in no block"))?;
+        .or_else(|| proxy.locate_near(centroid + step))
+        .or_else(|| proxy.locate_near(centroid - step));
+    // Outside every derived block (a wall's outer face, a roof's top: seen from no room), on
+    // the nearest block's face, clamped: what it shows there is a guess no view inside sees.
+    let beyond = located.is_none() && proxy.derived();
+    let (block, centre) = match located {
+        Some(found) => found,
+        None if beyond => (proxy.nearest(centroid), Vec3::splat(0.5)),
+        None => return Err(format!("it stands at {centroid}, in no block")),
+    };
     let outside = || format!("it reaches past the face it lies on (block {block})");
-    let [Some(a), Some(b), Some(c)] = p.map(|q| proxy.local(block, q)) else { return Err(outside()) };
-    let local = [a, b, c];
+    let local = p.map(|q| proxy.local(block, q));
+    let local = match local {
+        [Some(a), Some(b), Some(c)] => [a, b, c],
+        _ if beyond => [centre; 3],
+        _ => return Err(outside()),
+    };
     // A normal is a covector: in the block's local frame it is J^T n.
     let facing = proxy.jacobian(block, centre).transpose() * normal;
     let face = level
@@ -190,7 +203,7 @@ fn place(proxy: &Proxy, level: &Level, positions: &[Vec3], normals: &[Vec3], tri
         .expect("top and bottom");
     let uvs = local.map(|q| face.uv(q));
     let reach = proxy.reach();
-    if uvs.iter().any(|uv| uv.min_element() < -reach || uv.max_element() > 1.0 + reach) {
+    if !beyond && uvs.iter().any(|uv| uv.min_element() < -reach || uv.max_element() > 1.0 + reach) {
         return Err(outside());
     }
     let off = |q: Vec3| (q[face.axis] - face.positive as u32 as f32).abs();

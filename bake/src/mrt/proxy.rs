@@ -84,6 +84,18 @@ impl Proxy {
         self.reach
     }
 
+    /// Whether it was derived from the scene (its reach wider than a declared proxy's).
+    pub fn derived(&self) -> bool {
+        self.reach > DECLARED_REACH
+    }
+
+    /// The block whose bounds lie nearest `p`.
+    pub fn nearest(&self, p: Vec3) -> usize {
+        let p = p.as_dvec3();
+        let distance = |b: &Bounds| (b.lo - p).max(p - b.hi).max(DVec3::ZERO).length();
+        (0..self.boxes.len()).min_by(|&a, &b| distance(&self.boxes[a]).total_cmp(&distance(&self.boxes[b]))).unwrap_or(0)
+    }
+
     /// The scene's proxy; refused when it declares none (the method needs its blocks).
     pub fn of(scene: &Scene) -> Result<Proxy, String> {
         match scene.settings.block(KEY) {
@@ -117,11 +129,20 @@ impl Proxy {
         local(&self.corners[block], p.as_dvec3()).map(|q| q.as_vec3())
     }
 
-    /// The block `p` lies in (on a shared face: the one it lies deeper in; for a derived proxy,
-    /// within its reach outside one) and its local point there.
+    /// The block `p` lies in (on a shared face: the one it lies deeper in) and its local
+    /// point there.
     pub fn locate(&self, p: Vec3) -> Option<(usize, Vec3)> {
+        self.locate_within(p, SAME)
+    }
+
+    /// As `locate`, or for a derived proxy the block `p` lies within its reach outside of (a
+    /// wall's lean, a floor's edge past a block's).
+    pub fn locate_near(&self, p: Vec3) -> Option<(usize, Vec3)> {
+        self.derived().then(|| self.locate_within(p, self.reach as f64)).flatten()
+    }
+
+    fn locate_within(&self, p: Vec3, outside: f64) -> Option<(usize, Vec3)> {
         let p = p.as_dvec3();
-        let outside = if self.reach > DECLARED_REACH { self.reach as f64 } else { SAME };
         let near = self.buckets.get(&bucket_of(p, self.bucket))?;
         near.iter()
             .copied()

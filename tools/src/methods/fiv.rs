@@ -194,7 +194,7 @@ impl Method for Fiv {
         };
         let declared = FivSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
         if declared.derived {
-            let how = format!("{} (the closed meshes under half the scene's footprint)", declared.occluders.join(", "));
+            let how = format!("{} (the closed meshes under 80 % of the scene's footprint)", declared.occluders.join(", "));
             bake.derived("occluders", json!(declared.occluders), &how, "extras.relume.fiv.occluders");
         }
         Ok(bake)

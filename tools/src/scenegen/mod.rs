@@ -45,6 +45,9 @@
 //!   `mrt-classroom-1block`: `classroom` declared as one block (002 §8's Great Hall);
 //!   `mrt-cave`: 19 warped blocks declared by their corners, four lights (002 Fig. 1);
 //!   `mrt-figures`: `mrt-maze` with two figures its light volume lights (002 Fig. 5).
+//! - `courtyard`: a walled courtyard half under a roof, lit by the sky through its open half and
+//!   by two lamps, a sculpture and a crate on its paving: every method has work there, and the
+//!   scene declares no method's settings (each derives its own).
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -59,6 +62,7 @@
 //! holds little-endian f32 and u32 data.
 
 mod blocks;
+mod courtyard;
 mod geometry;
 mod glossy;
 mod gltf_writer;
@@ -81,7 +85,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 26] = [
+pub const SCENE_NAMES: [&str; 27] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -108,6 +112,7 @@ pub const SCENE_NAMES: [&str; 26] = [
     "mrt-classroom-1block",
     "mrt-cave",
     "mrt-figures",
+    "courtyard",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -180,6 +185,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "glossy-enclosure" => glossy::glossy_enclosure(),
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
+        "courtyard" => courtyard::courtyard(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
         _ => return None,
     };

@@ -83,3 +83,8 @@ pub(super) const GLOSSY_SETTINGS: Settings =
 /// Levels of 2 m blocks: no ambient light (MRT models all indirect light), texels 12.5 cm.
 pub(super) const BLOCKS_SETTINGS: Settings =
     Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 8.0, tau: 0.5, l_max: 1.5, light_region: None, light_area: 0.0 };
+
+/// The courtyard: no ambient light (the sky is its own, and the local-light methods model the
+/// lamps' indirect light), texels 8 cm, the obscurance's range a third of the walls' height.
+pub(super) const COURTYARD_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 12.0, tau: 0.25, l_max: 0.8, light_region: None, light_area: 0.0 };
