@@ -35,7 +35,8 @@ pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
     if scene.lights.is_empty() {
         return Err("the scene has no point or spot light to derive the cloud's region from; declare extras.relume.light_cloud.grid".into());
     }
-    let (lo, hi) = scene.settings.bounds;
+    // The scene's bounds and its lights (a spot above a model lights it from outside them).
+    let (lo, hi) = scene.lights.iter().fold(scene.settings.bounds, |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
     let coarse = flood(scene, bvh, lo, hi)?;
     let widen = coarse.voxel;
     let fine = flood(scene, bvh, (coarse.min - widen).max(lo), (coarse.max + widen).min(hi))?;
@@ -68,6 +69,9 @@ fn flood(scene: &Scene, bvh: &SceneBvh, lo: Vec3, hi: Vec3) -> Result<Flood, Str
     let mut free: Vec<Option<bool>> = vec![None; total];
     let mut is_free = |v: IVec3| *free[index(v)].get_or_insert_with(|| !inside(bvh, centre(v)));
     let mut queue = Vec::new();
+    // Segments start at a voxel's middle, or at the light in a light's voxel (whose middle may
+    // be inside something: a lamp by a wall).
+    let mut seeds: Vec<(IVec3, Vec3)> = Vec::new();
     for light in &scene.lights {
         let v = ((light.position - lo) / voxel).floor().as_ivec3().clamp(IVec3::ZERO, counts - 1);
         if inside(bvh, light.position) {
@@ -76,13 +80,13 @@ fn flood(scene: &Scene, bvh: &SceneBvh, lo: Vec3, hi: Vec3) -> Result<Flood, Str
                 light.name, light.position
             ));
         }
-        // A light in a voxel whose middle is inside something (a lamp by a wall) starts there.
         if !reached[index(v)] {
-            is_free(v);
             reached[index(v)] = true;
             queue.push(v);
+            seeds.push((v, light.position));
         }
     }
+    let start = |v: IVec3| seeds.iter().find(|(s, _)| *s == v).map_or(centre(v), |(_, p)| *p);
     let steps = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, IVec3::Z, IVec3::NEG_Z];
     while let Some(v) = queue.pop() {
         for step in steps {
@@ -90,7 +94,7 @@ fn flood(scene: &Scene, bvh: &SceneBvh, lo: Vec3, hi: Vec3) -> Result<Flood, Str
             if n.cmplt(IVec3::ZERO).any() || n.cmpge(counts).any() || reached[index(n)] {
                 continue;
             }
-            if is_free(n) && bvh.visible(centre(v), centre(n)) {
+            if is_free(n) && bvh.visible(start(v), centre(n)) {
                 reached[index(n)] = true;
                 queue.push(n);
             }

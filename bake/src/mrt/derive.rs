@@ -11,7 +11,8 @@
 //! 2. The lattice: along x and z, round(extent / h) cells (at least 1) over the bounds.
 //! 3. A cell is free where, at most of 5 points at its middle height, at least 9 of 14 rays
 //!    (the axes and the cube's diagonals) first meet a surface facing them: inside a room, not
-//!    inside a wall's or a solid cell's back faces, not outside the model.
+//!    inside a wall's or a solid cell's back faces, not outside the model. Without any room (a
+//!    model on open ground), the bounds are one block.
 //! 4. Two free cells are joined unless most of 3 x 3 segments across their shared face are
 //!    blocked (a wall between them).
 //! 5. Each lattice point that a wall nearly meets moves onto it: every closed face of a free
@@ -75,15 +76,15 @@ pub fn derive(scene: &Scene, bvh: &SceneBvh) -> Result<Derived, String> {
     while cells[0] * cells[1] > MAX_CELLS {
         cells = cells.map(|n| (n * 3 / 4).max(1));
     }
-    let lattice = Lattice::new(lo, hi, cells);
-    let free: Vec<bool> = (0..cells[0] * cells[1]).map(|c| lattice.is_free(bvh, c)).collect();
-    let blocks: Vec<usize> = (0..free.len()).filter(|&c| free[c]).collect();
-    if blocks.is_empty() {
-        return Err(format!(
-            "no block could be derived: none of the {} x {} cells of {:.2} x {:.2} m over the scene's bounds has its middle inside a room (at least {FRONT_RAYS} of 14 rays meeting a surface facing it); declare extras.relume.mrt (a grid or warped blocks)",
-            cells[0], cells[1], lattice.size.x, lattice.size.y
-        ));
+    let mut lattice = Lattice::new(lo, hi, cells);
+    let mut free: Vec<bool> = (0..cells[0] * cells[1]).map(|c| lattice.is_free(bvh, c)).collect();
+    if !free.contains(&true) {
+        // No room anywhere (a model on open ground): the bounds as one block, 002 §8's Great Hall.
+        cells = [1, 1];
+        lattice = Lattice::new(lo, hi, cells);
+        free = vec![true];
     }
+    let blocks: Vec<usize> = (0..free.len()).filter(|&c| free[c]).collect();
     // Each pair of neighbouring free cells tested once, lower cell first.
     let lattice = &lattice;
     let joins: std::collections::HashSet<(usize, usize)> = blocks

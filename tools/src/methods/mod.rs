@@ -8,6 +8,8 @@ mod direct;
 mod fiv;
 mod light_cloud;
 mod light_path_maps;
+#[cfg(test)]
+mod matrix;
 mod mrt;
 mod obscurance;
 pub(crate) mod params;
