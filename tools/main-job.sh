@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # relume's main job: installs what is missing, builds, bakes and renders the default scene
-# `cornell` headless with the Vulkan renderer and with the reference path tracer, compares
+# `cornell` headless with the Vulkan renderer (every method that suits it: direct, constant,
+# obscurance, light path maps, light clouds, MRT) and with the reference path tracer, compares
 # them and writes the images and out/cornell/report.md (extra arguments go to `relume run`);
-# then fullsphere irradiance vectors on `fiv-blobs` lit by a real captured probe (Blender's
-# CC0 forest, from Debian's blender-data), baked, rendered and compared the same way into
-# out/fiv-blobs/report.md; then the default bench sweep (every method, cornell with a moving
-# light and classroom: costs, errors, charts with the Pareto front, and the cheapest
-# configuration of each method within NRMSE 0.2 in out/bench/recommended.toml) into
-# out/bench/report.md.
+# then `fiv-blobs` under a real captured probe (Blender's CC0 forest, from Debian's
+# blender-data): fullsphere irradiance vectors, and the ambient methods lit by the probe's
+# irradiance, baked, rendered and compared the same way into out/fiv-blobs/report.md; then
+# the default bench sweep (cornell with a moving light and classroom: costs, errors, charts
+# with the Pareto front, and the cheapest configuration of each method within NRMSE 0.2 in
+# out/bench/recommended.toml) into out/bench/report.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh probes

@@ -1,6 +1,6 @@
-//! Finer triangles for methods that store light per vertex (the light cloud, 004 §5-6): a
-//! per-vertex term is interpolated across triangles, so a flat-shaded model (three vertices a
-//! triangle, a wall in two triangles) gives it nothing to interpolate. The tessellation welds
+//! Finer triangles for methods that store light per vertex: a per-vertex term is interpolated
+//! across triangles, so a flat-shaded model (three vertices a triangle, a wall in two
+//! triangles) gives it nothing to interpolate. The tessellation welds
 //! each mesh's vertices that are equal in every attribute (a flat face's vertices become
 //! shared; creases keep their own) and splits every triangle of a mesh into k x k, k the
 //! mesh's longest edge over the largest edge asked for. Shared part: a method bakes on the
@@ -30,8 +30,8 @@ pub struct TessellatedMesh {
 /// Every mesh of a scene tessellated, in the scene's order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tessellation {
-    /// The largest edge asked for, metres; 0 for a scene split along other lines (a derived
-    /// block proxy's boundaries, `mrt::split`).
+    /// The largest edge asked for, metres; 0 for a scene split along other lines (a method's
+    /// own boundaries).
     pub max_edge: f32,
     pub meshes: Vec<TessellatedMesh>,
 }

@@ -143,6 +143,24 @@ fn score(method: &str, render: &GpuRender, direct: &GpuRender, reference: &Refer
     })
 }
 
+/// The methods from nearest the reference to farthest by their image's NRMSE, each with how
+/// many times the nearest's error it has: which wins on this scene, and by how much.
+fn ranking(rows: &[Score]) -> String {
+    let mut order: Vec<&Score> = rows.iter().filter(|r| r.combined.nrmse.is_finite()).collect();
+    order.sort_by(|a, b| a.combined.nrmse.total_cmp(&b.combined.nrmse));
+    let Some(best) = order.first() else { return String::new() };
+    let others: Vec<String> = order[1..]
+        .iter()
+        .map(|r| format!("{} {:.4} ({:.2}x)", r.method, r.combined.nrmse, r.combined.nrmse / best.combined.nrmse.max(f64::MIN_POSITIVE)))
+        .collect();
+    format!(
+        "Nearest the reference (image against `combined`): **{}**, NRMSE {:.4}; then {}.",
+        best.method,
+        best.combined.nrmse,
+        if others.is_empty() { "no other method".to_string() } else { others.join(", ") }
+    )
+}
+
 fn report_text(
     args: &RunArgs,
     device: &str,
@@ -155,10 +173,12 @@ fn report_text(
     let mut r = String::new();
     let _ = writeln!(r, "# relume report: {}\n", args.scene.scene.display());
     let _ = writeln!(r, "Image {}x{}. Vulkan device: {device}.\n", args.scene.width, args.scene.height);
-    let _ = writeln!(r, "| method | what it renders | ambient I_A (lux), beta |\n|---|---|---|");
+    let _ = writeln!(r, "| method | what it renders | what it lacks here | ambient I_A (lux), beta |\n|---|---|---|---|");
     for model in models {
         let s = &model.settings;
-        let _ = writeln!(r, "| {} | {} | {:?}, {} |", model.method.name(), model.method.description(), s.ambient.to_array(), s.beta);
+        let lacks = methods::misses(model.method, model.loaded.scene()).map_or("-".to_string(), |m| m.replace('|', "/"));
+        let ambient = format!("{:?}, {}{}", s.ambient.to_array(), s.beta, if s.environment_ambient { ", and the environment's" } else { "" });
+        let _ = writeln!(r, "| {} | {} | {lacks} | {ambient} |", model.method.name(), model.method.description());
     }
     let names: Vec<&str> = models.iter().map(|m| m.method.name()).collect();
     let _ = writeln!(r, "\n| {} | reference |\n|{}---|", names.join(" | "), "---|".repeat(names.len()));
@@ -179,6 +199,7 @@ fn report_text(
             row.method, row.combined.nrmse, row.direct.nrmse, row.indirect.nrmse, row.best_scale, row.best_indirect_nrmse, row.best_nrmse
         );
     }
+    let _ = writeln!(r, "\n{}", ranking(rows));
     let _ = writeln!(r, "\n## Bakes\n\n```\n{bake_summary}```");
     for (name, render) in names.iter().zip(renders) {
         let _ = writeln!(r, "\n## Vulkan GPU time, {name}, median of {} frames\n", render.frames.len());

@@ -80,8 +80,8 @@ pub(crate) struct SweepScene {
     pub occluder_path: Option<OccluderPath>,
     /// Or change one spot light's cone or aim, one configuration a value.
     pub spot_sweep: Option<SpotSweep>,
-    /// Method settings of the scene's `extras.relume` to leave out (`"mrt"`, `"light_cloud"`, ...):
-    /// the methods derive them from the scene instead, as on a scene without them.
+    /// Method settings (keys) of the scene's `extras.relume` to leave out: the methods derive
+    /// them from the scene instead, as on a scene without them.
     #[serde(default)]
     pub without: Vec<String>,
 }
