@@ -177,7 +177,8 @@ fn report_text(
     for model in models {
         let s = &model.settings;
         let lacks = methods::misses(model.method, model.loaded.scene()).map_or("-".to_string(), |m| m.replace('|', "/"));
-        let ambient = format!("{:?}, {}{}", s.ambient.to_array(), s.beta, if s.environment_ambient { ", and the environment's" } else { "" });
+        let ambient =
+            format!("{:?}, {}{}", s.ambient.to_array(), s.beta, if s.environment_ambient { ", and the environment's" } else { "" });
         let _ = writeln!(r, "| {} | {} | {lacks} | {ambient} |", model.method.name(), model.method.description());
     }
     let names: Vec<&str> = models.iter().map(|m| m.method.name()).collect();
