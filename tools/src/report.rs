@@ -90,7 +90,10 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let exposure = args.gpu.exposure;
     write_reference(&mut outputs, &args.out.join("reference.exr"), &reference, exposure)?;
 
-    let rows = names.iter().zip(renders).map(|(name, render)| score(name, render, direct, &reference)).collect::<Result<Vec<_>>>()?;
+    // The direct-only image has no environment light, so an image's indirect part cannot be separated from it.
+    let separable = !scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    let rows =
+        names.iter().zip(renders).map(|(name, render)| score(name, render, direct, &reference, separable)).collect::<Result<Vec<_>>>()?;
     for (name, render) in names.iter().zip(renders) {
         let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
         image::write_png_rgb8(&mut outputs, &args.out.join(format!("error_{name}.png")), args.scene.width, args.scene.height, &rgb)?;
@@ -114,9 +117,15 @@ struct Score {
     /// The image against the reference's direct layer: the score of a method that models
     /// direct light alone (punctual or an environment's).
     direct: metrics::ErrorStats,
-    /// The method's indirect part (its image minus the direct-only image) against the
-    /// reference's indirect layer.
-    indirect: metrics::ErrorStats,
+    /// The indirect part's scores, where the scene's direct light is all punctual (none under
+    /// an environment: the direct-only image lacks its light).
+    indirect: Option<IndirectScore>,
+}
+
+/// A method's indirect part (its image minus the direct-only image) against the reference's
+/// indirect layer.
+struct IndirectScore {
+    nrmse: f64,
     /// The factor on the indirect part that fits the reference's indirect layer best in the
     /// least-squares sense, and the NRMSE of the indirect part and of the image at that
     /// factor: how much of the error is the method's shape rather than its parameters.
@@ -125,18 +134,25 @@ struct Score {
     best_nrmse: f64,
 }
 
-fn score(method: &str, render: &GpuRender, direct: &GpuRender, reference: &ReferenceRun) -> Result<Score> {
+fn score(method: &str, render: &GpuRender, direct: &GpuRender, reference: &ReferenceRun, separable: bool) -> Result<Score> {
+    let refs = &reference.images;
+    Ok(Score {
+        method: method.to_string(),
+        combined: metrics::compare(&render.radiance, &refs.combined)?,
+        direct: metrics::compare(&render.radiance, &refs.direct)?,
+        indirect: if separable { Some(score_indirect(render, direct, reference)?) } else { None },
+    })
+}
+
+fn score_indirect(render: &GpuRender, direct: &GpuRender, reference: &ReferenceRun) -> Result<IndirectScore> {
     let refs = &reference.images;
     let indirect = metrics::difference(&render.radiance, &direct.radiance)?;
     let black = Image::new(indirect.width, indirect.height);
     let best_scale = metrics::best_scale(&black, &indirect, &refs.indirect)?;
     let best_indirect = metrics::add_scaled(&black, &indirect, best_scale as f32)?;
     let best = metrics::add_scaled(&direct.radiance, &indirect, best_scale as f32)?;
-    Ok(Score {
-        method: method.to_string(),
-        combined: metrics::compare(&render.radiance, &refs.combined)?,
-        direct: metrics::compare(&render.radiance, &refs.direct)?,
-        indirect: metrics::compare(&indirect, &refs.indirect)?,
+    Ok(IndirectScore {
+        nrmse: metrics::compare(&indirect, &refs.indirect)?.nrmse,
         best_scale,
         best_indirect_nrmse: metrics::compare(&best_indirect, &refs.indirect)?.nrmse,
         best_nrmse: metrics::compare(&best, &refs.combined)?.nrmse,
@@ -187,18 +203,18 @@ fn report_text(
     let errors: String = names.iter().map(|m| format!(" ![](error_{m}.png) |")).collect();
     let _ = writeln!(r, "|{errors} false-colour error against the reference |\n");
     let _ = writeln!(r, "## Error against the reference (NRMSE = RMSE / RMS of the reference, all channels)\n");
-    let _ = writeln!(r, "A method that models direct light alone is scored against the reference's direct layer (emission and one bounce). The indirect part of a method is its image minus the direct-only image (punctual lights with shadow maps). The best factor scales that part to fit the reference's indirect layer in the least-squares sense.\n");
+    let _ = writeln!(r, "A method that models direct light alone is scored against the reference's direct layer (emission and one bounce). The indirect part of a method is its image minus the direct-only image (punctual lights with shadow maps). The best factor scales that part to fit the reference's indirect layer in the least-squares sense. Under an environment light the direct-only image lacks the environment's direct light, so no indirect part is separated (-).\n");
     let _ = writeln!(
         r,
         "| method | image vs combined | image vs direct | indirect part vs reference indirect | best factor | indirect at best factor | image at best factor |"
     );
     let _ = writeln!(r, "|---|---|---|---|---|---|---|");
     for row in rows {
-        let _ = writeln!(
-            r,
-            "| {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
-            row.method, row.combined.nrmse, row.direct.nrmse, row.indirect.nrmse, row.best_scale, row.best_indirect_nrmse, row.best_nrmse
-        );
+        let indirect = match &row.indirect {
+            Some(i) => format!("{:.4} | {:.4} | {:.4} | {:.4}", i.nrmse, i.best_scale, i.best_indirect_nrmse, i.best_nrmse),
+            None => "- | - | - | -".to_string(),
+        };
+        let _ = writeln!(r, "| {} | {:.4} | {:.4} | {indirect} |", row.method, row.combined.nrmse, row.direct.nrmse);
     }
     let _ = writeln!(r, "\n{}", ranking(rows));
     let _ = writeln!(r, "\n## Bakes\n\n```\n{bake_summary}```");
