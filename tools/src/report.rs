@@ -91,7 +91,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     write_reference(&mut outputs, &args.out.join("reference.exr"), &reference, exposure)?;
 
     // The direct-only image has no environment light, so an image's indirect part cannot be separated from it.
-    let separable = !scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    let separable = !methods::environment_lit(&scene);
     let rows =
         names.iter().zip(renders).map(|(name, render)| score(name, render, direct, &reference, separable)).collect::<Result<Vec<_>>>()?;
     for (name, render) in names.iter().zip(renders) {

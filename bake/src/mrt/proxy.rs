@@ -71,6 +71,7 @@ impl Proxy {
 
     /// A proxy of these blocks, joined as `level` says (a derived one: `derive`), whose faces
     /// take triangles reaching `reach` face widths past them.
+    #[cfg(feature = "baking")]
     pub(super) fn from_parts(corners: Vec<[DVec3; 8]>, level: Level, reach: f32) -> Proxy {
         let mut proxy = Proxy { reach, ..Proxy::new(corners, level) };
         // Bounds (and the buckets over them) widened by the reach, for `locate`.

@@ -114,9 +114,14 @@ pub(crate) fn suits(method: &dyn Method, scene: &Scene) -> bool {
     refusal(method, scene).is_none() && method.suits(scene)
 }
 
+/// Whether a distant environment lights `scene` (one whose light is not all zero).
+pub(crate) fn environment_lit(scene: &Scene) -> bool {
+    scene.environment.as_ref().is_some_and(|e| e.is_lit())
+}
+
 /// Why `method` cannot render `scene`: the scene has none of the light it models.
 pub(crate) fn refusal(method: &dyn Method, scene: &Scene) -> Option<String> {
-    let lit = scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    let lit = environment_lit(scene);
     match method.models() {
         Models::LocalLights if scene.lights.is_empty() => Some(format!(
             "{} models the light of point, spot and directional lights; this scene has none (give some with --lights FILE)",
@@ -132,7 +137,7 @@ pub(crate) fn refusal(method: &dyn Method, scene: &Scene) -> Option<String> {
 
 /// The light the scene has that `method` does not model (its image lacks it), for a warning.
 pub(crate) fn misses(method: &dyn Method, scene: &Scene) -> Option<String> {
-    let lit = scene.environment.as_ref().is_some_and(|e| e.is_lit());
+    let lit = environment_lit(scene);
     match method.models() {
         Models::LocalLights if lit => Some(format!("{} models no environment light: its image lacks the environment's", method.name())),
         Models::Environment if !scene.lights.is_empty() => {

@@ -1,9 +1,9 @@
 //! `courtyard`: a scene where every method has work. A 6 x 4 m paved courtyard inside four
 //! walls 2.5 m high, its south half under a roof: an interior lit by the sky through the open
 //! half (`envs/sky.exr` at half its radiance, whose sun stands 50 degrees up over the south-east
-//! corner, behind the camera) and by two spot lights, a downlight under the roof and one on the
-//! west wall aimed at the open half; a
-//! sculpture (a lumpy blob) and a crate stand on the paving (FIV's occluders, which a sweep may
+//! corner, behind the camera) and by two spot lights, a downlight under the roof and a lamp on a
+//! bracket off the west wall over the open half; a sculpture (a lumpy blob) and a crate stand on
+//! the paving (the ground) (FIV's occluders, which a sweep may
 //! move). The scene declares no method's settings: each method derives what it needs (the
 //! light cloud's grid, modular radiance transfer's blocks, FIV's occluders, light path maps'
 //! region), so the chart shows what each models and misses: the ambient methods the sky's
@@ -30,8 +30,8 @@ pub(super) fn courtyard() -> Builder {
     let crate_wood = b.material("crate", [0.65, 0.32, 0.18]);
     let (x, z) = HALF;
     let floor = [DVec3::new(-x, 0.0, -z), DVec3::new(x, 0.0, -z), DVec3::new(x, 0.0, z), DVec3::new(-x, 0.0, z)];
-    let mesh = b.mesh("Paving", &quad_facing(floor, |_| DVec3::Y), paving);
-    b.mesh_node("Paving", mesh, DVec3::ZERO, DVec3::ONE);
+    let mesh = b.mesh("Ground", &quad_facing(floor, |_| DVec3::Y), paving);
+    b.mesh_node("Ground", mesh, DVec3::ZERO, DVec3::ONE);
     // North and south walls run the whole width, corners included; east and west between.
     let walls: Vec<Part> = vec![
         ("North".into(), DVec3::new(-x - THICK, 0.0, -z - THICK), DVec3::new(x + THICK, HEIGHT, -z)),
@@ -56,9 +56,10 @@ pub(super) fn courtyard() -> Builder {
     // A downlight under the roof: pi lux on the paving below it.
     let lamp = DVec3::new(0.5, 2.4, 1.2);
     b.spot_light("Downlight", lamp, DVec3::NEG_Y, exposure_one_intensity(lamp.y), 45.0, 60.0);
-    // On the west wall, aimed down and east at the open half: pi lux where its axis meets the paving.
-    let (spot, aim) = (DVec3::new(-2.8, 2.2, -1.0), DVec3::new(-1.4, 0.0, -1.0));
-    b.spot_light("WallSpot", spot, aim - spot, exposure_one_intensity(spot.distance(aim)), 30.0, 45.0);
+    // A lamp on a bracket a metre off the west wall, over the open half: pi lux on the paving
+    // below it, its cone's edge reaching up the wall.
+    let spot = DVec3::new(-2.0, 2.2, -1.0);
+    b.spot_light("WallSpot", spot, DVec3::NEG_Y, exposure_one_intensity(spot.y), 30.0, 45.0);
     // Half the sky's radiance: the open paving then takes about as much from the sky as the
     // paving under a lamp takes from the lamp (pi lux).
     b.environment("envs/sky.exr", 0.5);
