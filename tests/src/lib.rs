@@ -238,9 +238,15 @@ pub fn mrt_quick_bake_derived(scene: &Scene) -> (Dictionary, Mapped, LevelData, 
     (dictionary, mapped, level, applied)
 }
 
-/// A small dictionary: 8 x 8 samples a face, 1,024 rays; a coarse lightfield.
+/// A small dictionary: 8 x 8 samples a face, 1,024 rays; a coarse lightfield. Built once per
+/// test binary (the same bytes every time: its seeds are fixed) and shared by its tests.
 fn quick_dictionary() -> Dictionary {
-    let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
-    let lightfield = InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
-    Dictionary::build(&block, &lightfield, |_| {})
+    static QUICK: std::sync::OnceLock<Dictionary> = std::sync::OnceLock::new();
+    let build = || {
+        let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
+        let lightfield =
+            InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
+        Dictionary::build(&block, &lightfield, |_| {})
+    };
+    QUICK.get_or_init(build).clone()
 }
