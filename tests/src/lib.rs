@@ -214,11 +214,17 @@ pub fn light_cloud_by_defaults(
 pub fn mrt_quick_bake(scene: &Scene) -> (Dictionary, Mapped, LevelData, Scene) {
     let dictionary = quick_dictionary();
     let (mapped, level) = bake_level(scene, &dictionary, 8).expect("the level bakes");
+    let applied = with_light_map(scene, &mapped);
+    (dictionary, mapped, level, applied)
+}
+
+/// `scene` with the light map's uv1 of `mapped` on its meshes.
+fn with_light_map(scene: &Scene, mapped: &Mapped) -> Scene {
     let mut applied = scene.clone();
     for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&mapped.meshes) {
         *mesh = atlas_mesh.apply(mesh);
     }
-    (dictionary, mapped, level, applied)
+    applied
 }
 
 /// As [`mrt_quick_bake`], on the block proxy derived from `scene` (its own declaration
@@ -231,10 +237,7 @@ pub fn mrt_quick_bake_derived(scene: &Scene) -> (Dictionary, Mapped, LevelData, 
     let dictionary = quick_dictionary();
     let (mapped, level) =
         relume_bake::mrt::baker::bake_on(&fine, &derived.proxy, &derived.dynamic, &dictionary, 8).expect("the level bakes");
-    let mut applied = fine.clone();
-    for (mesh, atlas_mesh) in applied.meshes.iter_mut().zip(&mapped.meshes) {
-        *mesh = atlas_mesh.apply(mesh);
-    }
+    let applied = with_light_map(&fine, &mapped);
     (dictionary, mapped, level, applied)
 }
 
