@@ -164,6 +164,7 @@ impl SceneBvh {
     /// unit length so that `t` is a distance.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
+        let dir = positive_zeros(dir);
         let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
         let wt = WatertightRay::new(origin, dir);
         let mut hit = RayHit::none();
@@ -188,6 +189,7 @@ impl SceneBvh {
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
+        let dir = positive_zeros(dir);
         let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
         let wt = WatertightRay::new(origin, dir);
         !bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
@@ -295,6 +297,13 @@ impl WatertightRay {
     }
 }
 
+/// `dir` with any -0.0 component made +0.0: a ray along an axis whose other components are
+/// -0.0 (the negation of a light pointing straight down, (0, -1, 0)) passed through every
+/// triangle in the traversal (a sunroom's ceiling let a vertical sun through).
+fn positive_zeros(dir: Vec3) -> Vec3 {
+    Vec3::select(dir.cmpeq(Vec3::ZERO), Vec3::ZERO, dir)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -332,6 +341,25 @@ mod tests {
             let ray = WatertightRay::new(origin, dir);
             let hits = ray.intersect(&t0, f32::INFINITY).is_some() as u32 + ray.intersect(&t1, f32::INFINITY).is_some() as u32;
             assert!(hits >= 1, "ray {i} slipped through the shared edge");
+        }
+    }
+
+    /// A ray straight up from a floor meets the ceiling whether its other components are +0.0
+    /// or -0.0 (the second once missed), and so does one a hair off the axis.
+    #[test]
+    fn a_ray_along_an_axis_meets_the_ceiling_whatever_the_sign_of_its_zeros() {
+        use crate::testing::{look_at, material, scene, square};
+        let ceiling = square(Vec3::new(0.0, 2.6, 0.0), Vec3::X * 2.0, Vec3::Z * 2.0, 4, 0);
+        let floor = square(Vec3::ZERO, Vec3::X * 2.0, Vec3::NEG_Z * 2.0, 4, 0);
+        let m = vec![material("m", Vec3::ONE, Vec3::ZERO)];
+        let s = scene("ceiling", vec![ceiling, floor], m, vec![], look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 1.0));
+        let bvh = SceneBvh::new(&s);
+        for dir in [Vec3::Y, -Vec3::NEG_Y, Vec3::new(1e-6, 1.0, 0.0).normalize()] {
+            for origin in [Vec3::new(0.3, 0.001, 0.2), Vec3::new(-0.7, 0.001, 0.45)] {
+                assert!(bvh.occluded(origin, dir, f32::INFINITY), "{dir:?} from {origin}");
+                let hit = bvh.closest_hit(origin, dir, f32::INFINITY).map(|h| h.position.y);
+                assert!(hit.is_some_and(|y| (y - 2.6).abs() < 1e-5), "{dir:?} from {origin}: {hit:?}");
+            }
         }
     }
 }
