@@ -66,7 +66,13 @@ fn sphere_scene() -> Scene {
 
 fn bake(s: &Scene, emission: usize) -> LightCloud {
     let grid = CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] };
-    let settings = LightCloudBakeSettings { grid, samples: 32, emission, work: WorkOptions { seed: 5, ..WorkOptions::default() } };
+    let settings = LightCloudBakeSettings {
+        grid: Some(grid),
+        directions: 0,
+        samples: 32,
+        emission,
+        work: WorkOptions { seed: 5, ..WorkOptions::default() },
+    };
     lc::bake(s, &SceneBvh::new(s), &settings).expect("bake")
 }
 

@@ -13,7 +13,13 @@ use relume_bake::testing::{closed_box, look_at, material, point_light, scene, sp
 use relume_bake::work::WorkOptions;
 
 fn gathered(s: &Scene, grid: CloudGrid, samples: u32) -> LightCloud {
-    let settings = LightCloudBakeSettings { grid, samples, emission: 1, work: WorkOptions { seed: 3, ..WorkOptions::default() } };
+    let settings = LightCloudBakeSettings {
+        grid: Some(grid),
+        directions: 0,
+        samples,
+        emission: 1,
+        work: WorkOptions { seed: 3, ..WorkOptions::default() },
+    };
     lc::bake(s, &SceneBvh::new(s), &settings).expect("bake")
 }
 

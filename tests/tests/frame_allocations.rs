@@ -174,11 +174,21 @@ fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
     let scene = load_scene("cornell-cloud");
     let bvh = SceneBvh::new(&scene);
     let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
-    let cloud = light_cloud::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, emission: 1, work: WorkOptions::default() })
-        .expect("bake");
+    let cloud = light_cloud::bake(
+        &scene,
+        &bvh,
+        &LightCloudBakeSettings { grid: Some(grid), directions: 0, samples: 1, emission: 1, work: WorkOptions::default() },
+    )
+    .expect("bake");
     // In zones of clustered lights, as the method's defaults bake it.
     let cloud = light_cloud_by_defaults(&scene, &bvh, &cloud);
-    let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.25, visibility: Arc::new(move |a, b| bvh.visible(a, b)) };
+    let data = LightCloudData {
+        cloud: &cloud,
+        nearest: 8,
+        nearest_directions: 3,
+        fade_seconds: 0.25,
+        visibility: Arc::new(move |a, b| bvh.visible(a, b)),
+    };
     let ctx = validated_context();
     let mut renderer = new_renderer(&ctx, &scene, &settings(), &[&data]);
     // Each frame also moves the light continuously (the fade advancing), from lists made

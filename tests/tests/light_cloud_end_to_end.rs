@@ -37,7 +37,8 @@ fn settings() -> RenderSettings {
 fn bake(scene: &Scene, effort: Effort) -> (LightCloud, Visibility) {
     let bvh = SceneBvh::new(scene);
     let grid = LightCloudSceneSettings::of(scene).unwrap().grid;
-    let settings = LightCloudBakeSettings { grid, samples: effort.gather, emission: 1, work: WorkOptions::default() };
+    let settings =
+        LightCloudBakeSettings { grid: Some(grid), directions: 0, samples: effort.gather, emission: 1, work: WorkOptions::default() };
     let cloud = lc::bake(scene, &bvh, &settings).expect("bake");
     (cloud, Arc::new(move |a, b| bvh.visible(a, b)))
 }
@@ -68,9 +69,11 @@ fn nrmse_along_a_path(ctx: &Arc<Context>, effort: Effort) -> Measured {
     let scene = load_scene("cornell-cloud");
     let (cloud, visibility) = bake(&scene, effort);
     let reduced = light_cloud_by_defaults(&scene, &SceneBvh::new(&scene), &cloud);
-    let interpolated = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
-    let by_default = LightCloudData { cloud: &reduced, nearest: 8, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
-    let nearest_one = LightCloudData { cloud: &cloud, nearest: 1, fade_seconds: 0.0, visibility };
+    let interpolated =
+        LightCloudData { cloud: &cloud, nearest: 8, nearest_directions: 3, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
+    let by_default =
+        LightCloudData { cloud: &reduced, nearest: 8, nearest_directions: 3, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
+    let nearest_one = LightCloudData { cloud: &cloud, nearest: 1, nearest_directions: 3, fade_seconds: 0.0, visibility };
     let mut with_cloud = new_renderer(ctx, &scene, &settings(), &[&interpolated]);
     let mut with_reduced = new_renderer(ctx, &scene, &settings(), &[&by_default]);
     let mut only_column = new_renderer(ctx, &scene, &settings(), &[&nearest_one]);

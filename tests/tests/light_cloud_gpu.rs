@@ -26,7 +26,8 @@ fn baked_with(emission: usize) -> (Scene, LightCloud, Visibility) {
     let scene = load_scene("cornell-cloud");
     let bvh = SceneBvh::new(&scene);
     let settings = LightCloudBakeSettings {
-        grid: LightCloudSceneSettings::of(&scene).unwrap().grid,
+        grid: Some(LightCloudSceneSettings::of(&scene).unwrap().grid),
+        directions: 0,
         samples: 2,
         emission,
         work: WorkOptions::default(),
@@ -40,15 +41,16 @@ fn settings() -> RenderSettings {
 }
 
 /// The cluster sums and the per-vertex irradiance the GPU wrote against the CPU's, as the
-/// light moves in four steps.
+/// light moves and turns in four steps.
 fn gpu_equals_cpu(scene: &Scene, cloud: &LightCloud, visibility: Visibility) {
     let ctx = validated_context();
-    let data = LightCloudData { cloud, nearest: 8, fade_seconds: 0.0, visibility };
+    let data = LightCloudData { cloud, nearest: 8, nearest_directions: 3, fade_seconds: 0.0, visibility };
     let mut renderer = new_renderer(&ctx, scene, &settings(), &[&data]);
     let mut lights = scene.lights.clone();
     let mut previous: Option<Vec<Vec3>> = None;
     for step in 0..4 {
         lights[0].position = scene.lights[0].position + Vec3::new(0.05 * step as f32, -0.06 * step as f32, 0.03 * step as f32);
+        lights[0].direction = (scene.lights[0].direction + Vec3::new(0.1 * step as f32, 0.0, 0.06 * step as f32)).normalize();
         renderer.set_lights(&lights).unwrap();
         render(&mut renderer);
         let weights = renderer.technique_mut::<LightCloudTechnique>().unwrap().weights().to_vec();
@@ -104,18 +106,27 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     gpu_equals_cpu(&scene, &shared, visibility);
 }
 
+/// A sun on a cloud of directions alone (`sunroom`, 16 directions, no grid), clustered: the GPU
+/// against the CPU as the sun turns.
+#[test]
+fn a_sun_on_the_clouds_directions_gives_what_the_cpu_does() {
+    let scene = load_scene("sunroom");
+    let bvh = SceneBvh::new(&scene);
+    let settings = LightCloudBakeSettings { grid: None, directions: 16, samples: 2, emission: 1, work: WorkOptions::default() };
+    let cloud = lc::bake(&scene, &bvh, &settings).expect("bake");
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(2)).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
+}
+
 #[test]
 fn directional_lights_another_scenes_cloud_and_a_bad_m_are_refused_by_name() {
     let (scene, cloud, visibility) = baked();
     let ctx = validated_context();
-    let data = |nearest| LightCloudData { cloud: &cloud, nearest, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
+    let data =
+        |nearest| LightCloudData { cloud: &cloud, nearest, nearest_directions: 3, fade_seconds: 0.0, visibility: Arc::clone(&visibility) };
     let mut sun = scene.clone();
     sun.lights =
         vec![Light { name: "sun".into(), kind: LightKind::Directional, ..spot_light(Vec3::ZERO, Vec3::NEG_Y, Vec3::ONE, 0.3, 0.5) }];
-    says(
-        &refusal(try_new_renderer(&ctx, &sun, &settings(), &[&data(8)])),
-        &["light cloud", "directional light", "point and spot lights only"],
-    );
+    says(&refusal(try_new_renderer(&ctx, &sun, &settings(), &[&data(8)])), &["light cloud", "directional light", "no cloud of directions"]);
     says(&refusal(try_new_renderer(&ctx, &scene, &settings(), &[&data(0)])), &["light cloud", "m = 0"]);
     let other = load_scene("cornell");
     let mut point_lit = other.clone();
@@ -148,7 +159,7 @@ fn the_shaders_spherical_harmonics_equal_the_cpus() {
     let vertices = s.meshes[0].positions.len();
     let cloud = LightCloud::uncompressed(vec![light], (sh::COEFFICIENTS, 1), 1, row.repeat(vertices));
     let ctx = validated_context();
-    let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility: Arc::new(|_, _| true) };
+    let data = LightCloudData { cloud: &cloud, nearest: 8, nearest_directions: 3, fade_seconds: 0.0, visibility: Arc::new(|_, _| true) };
     let (width, height) = (64, 64);
     let mut renderer = new_renderer(&ctx, &s, &RenderSettings { width, height, ..RenderSettings::default() }, &[&data]);
     let image = render(&mut renderer);
@@ -175,8 +186,12 @@ fn spherical_harmonic_transfer_equals_the_cpus_as_the_light_moves() {
     let bvh = SceneBvh::new(&scene);
     // 2 x 2 x 2 cloud lights over the room: 384 values a vertex keep the test short.
     let grid = lc::CloudGrid { counts: [2; 3], ..LightCloudSceneSettings::of(&scene).unwrap().grid };
-    let cloud =
-        lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 1, emission: 1, work: WorkOptions::default() }).expect("bake");
+    let cloud = lc::bake(
+        &scene,
+        &bvh,
+        &LightCloudBakeSettings { grid: Some(grid), directions: 0, samples: 1, emission: 1, work: WorkOptions::default() },
+    )
+    .expect("bake");
     assert_eq!(cloud.coefficients, relume_bake::sh::COEFFICIENTS);
     gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(4)).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
 }
@@ -199,7 +214,7 @@ fn the_single_draw_equals_the_papers_per_cluster_alpha_blended_passes() {
     let (width, height) = (64, 64);
     let size = RenderSettings { width, height, ..RenderSettings::default() };
     let ctx = validated_context();
-    let data = LightCloudData { cloud: &cloud, nearest: 8, fade_seconds: 0.0, visibility };
+    let data = LightCloudData { cloud: &cloud, nearest: 8, nearest_directions: 3, fade_seconds: 0.0, visibility };
     let mut lit = new_renderer(&ctx, &scene, &size, &[&data]);
     let single_draw = render(&mut lit);
     let weights = lit.technique_mut::<LightCloudTechnique>().unwrap().weights().to_vec();

@@ -29,7 +29,7 @@ const MOVES_PER_FRAME: usize = 6;
 fn flicker_along(scene: &Scene, cloud: &LightCloud, bvh: &Arc<SceneBvh>, from: Vec3, to: Vec3) -> (Vec<f64>, Vec<f64>) {
     let data = |fade_seconds| {
         let bvh = Arc::clone(bvh);
-        LightCloudData { cloud, nearest: 8, fade_seconds, visibility: Arc::new(move |a, b| bvh.visible(a, b)) }
+        LightCloudData { cloud, nearest: 8, nearest_directions: 3, fade_seconds, visibility: Arc::new(move |a, b| bvh.visible(a, b)) }
     };
     let settings = RenderSettings { width: SIZE, height: SIZE, shadow_map_size: 256, ..RenderSettings::default() };
     let reference =
@@ -72,8 +72,12 @@ fn a_light_through_and_past_the_window_pops_no_more_than_first_measured() {
     let scene = load_scene("cornell-window");
     let bvh = SceneBvh::new(&scene);
     let grid = LightCloudSceneSettings::of(&scene).unwrap().grid;
-    let gathered =
-        lc::bake(&scene, &bvh, &LightCloudBakeSettings { grid, samples: 16, emission: 1, work: WorkOptions::default() }).expect("bake");
+    let gathered = lc::bake(
+        &scene,
+        &bvh,
+        &LightCloudBakeSettings { grid: Some(grid), directions: 0, samples: 16, emission: 1, work: WorkOptions::default() },
+    )
+    .expect("bake");
     let cloud = light_cloud_by_defaults(&scene, &bvh, &gathered);
     let bvh = Arc::new(bvh);
     let largest = |f: &[f64]| f.iter().copied().fold(0.0, f64::max);

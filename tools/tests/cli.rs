@@ -411,10 +411,12 @@ fn every_value_that_cannot_be_read_exits_with_2() {
 
 /// The light cloud bakes a spot-lit, flat-shaded scene with what it derives named in warning
 /// lines and in the manifest (emission bands for the spot, a tessellation for the flat
-/// meshes); refuses a directional light by its name; and, told not to tessellate, bakes a
-/// flat-shaded scene with a warning that its vertices have nothing to interpolate.
+/// meshes); a bake without directions refuses a directional light at render time by its
+/// name, naming the flag; a sun's bake derives its directions and no grid of points; and,
+/// told not to tessellate, bakes a flat-shaded scene with a warning that its vertices have
+/// nothing to interpolate.
 #[test]
-fn light_cloud_derives_bands_and_a_tessellation_and_refuses_directional_lights() {
+fn light_cloud_derives_bands_a_tessellation_and_directions() {
     let dir = temp_dir("light-cloud");
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
     let bake = |extra: &[&str]| {
@@ -432,10 +434,24 @@ fn light_cloud_derives_bands_and_a_tessellation_and_refuses_directional_lights()
     assert!(manifest["parameters"]["derived"]["max_edge"].as_f64().is_some_and(|e| e > 0.0), "{manifest}");
     let sun = r#"{ "format": "relume-lights", "version": 1, "lights": [{ "type": "directional", "name": "Sun", "direction": [0, -1, 0], "intensity": [1, 1, 1] }] }"#;
     std::fs::write(dir.join("sun.json"), sun).unwrap();
-    assert_one_error(
-        &bake(&["--lights", dir.join("sun.json").to_str().unwrap()]),
-        &["Sun", "directional light", "point and spot lights only"],
-    );
+    let sun = dir.join("sun.json");
+    let sun = sun.to_str().unwrap();
+    // The bake without directions refuses the sun at render time, naming the fix.
+    let render = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .args(["render", cornell.to_str().unwrap(), "--bake"])
+        .arg(dir.join("lc"))
+        .args(["--lights", sun, "--width", "16", "--height", "16", "--out"])
+        .arg(dir.join("sun.exr"))
+        .output()
+        .unwrap();
+    assert_one_error(&render, &["Sun", "directional light", "no cloud of directions", "--directions"]);
+    let baked = bake(&["--lights", sun]);
+    let out = String::from_utf8_lossy(&baked.stdout).to_string() + &String::from_utf8_lossy(&baked.stderr);
+    assert!(baked.status.success(), "{out}");
+    assert!(out.contains("warning: derived directions: 128") && out.contains("0 cloud lights (0 grid points"), "{out}");
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("lc/manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["parameters"]["derived"]["directions"], 128, "{manifest}");
+    assert!(manifest["parameters"]["grid"].is_null(), "a sun alone needs no grid of points: {manifest}");
     let lights = r#"{ "format": "relume-lights", "version": 1, "lights": [{ "type": "point", "position": [0, 0.4, -0.28], "intensity": [0.5, 0.5, 0.5] }] }"#;
     std::fs::write(dir.join("point.json"), lights).unwrap();
     let baked = bake(&["--lights", dir.join("point.json").to_str().unwrap(), "--max-edge", "0"]);

@@ -31,7 +31,10 @@ use std::f32::consts::PI;
 /// What a light-cloud bake takes besides the scene.
 #[derive(Clone, Debug)]
 pub struct LightCloudBakeSettings {
-    pub grid: CloudGrid,
+    /// The point lights' grid; None: no point lights (a scene lit by directional lights alone).
+    pub grid: Option<CloudGrid>,
+    /// Directions of the cloud of directional lights (`super::directions`; 0: none).
+    pub directions: usize,
     /// Gather paths per vertex.
     pub samples: u32,
     /// Emission functions per cloud light (`LightCloud::emission`: 1, 4, 9 or 16).
@@ -63,9 +66,31 @@ fn unit_light(position: Vec3) -> Light {
     Light { name: String::new(), kind: LightKind::Point, intensity: Vec3::ONE, range: None, position, direction: Vec3::NEG_Z }
 }
 
-/// Bakes the cloud's transfer; refused when no cloud light is left outside closed geometry.
+/// A cloud direction's light: parallel, 1 lux white, travelling along `direction`.
+fn unit_directional_light(direction: Vec3) -> Light {
+    Light { kind: LightKind::Directional, position: Vec3::ZERO, direction, ..unit_light(Vec3::ZERO) }
+}
+
+/// The cloud's points (none without a grid); refused when a grid's every point lies inside
+/// closed geometry.
+fn points(bvh: &SceneBvh, grid: Option<&CloudGrid>) -> Result<Vec<Vec3>, String> {
+    let Some(grid) = grid else { return Ok(Vec::new()) };
+    grid.validate()?;
+    let points = cloud_points(bvh, grid);
+    if points.is_empty() {
+        return Err(format!(
+            "every one of the {} cloud lights of light_cloud.grid {} .. {} lies inside closed geometry; put the grid's box where lights may move",
+            grid.points().len(),
+            grid.min,
+            grid.max
+        ));
+    }
+    Ok(points)
+}
+
+/// Bakes the cloud's transfer; refused when no cloud light is left outside closed geometry,
+/// and when there is neither a grid nor a direction.
 pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) -> Result<LightCloud, String> {
-    settings.grid.validate()?;
     settings.work.validate()?;
     if settings.samples == 0 {
         return Err("the gather needs at least one path per vertex".into());
@@ -73,16 +98,17 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     if !super::EMISSION_COUNTS.contains(&settings.emission) {
         return Err(format!("{} emission functions a cloud light: one of {:?}", settings.emission, super::EMISSION_COUNTS));
     }
-    let points = cloud_points(bvh, &settings.grid);
-    if points.is_empty() {
-        return Err(format!(
-            "every one of the {} cloud lights of light_cloud.grid {} .. {} lies inside closed geometry; put the grid's box where lights may move",
-            settings.grid.points().len(),
-            settings.grid.min,
-            settings.grid.max
-        ));
+    if settings.grid.is_none() && settings.directions == 0 {
+        return Err("a cloud needs a grid of points or some directions".into());
     }
-    let lights: Vec<Light> = points.iter().map(|&p| unit_light(p)).collect();
+    if settings.directions > super::MAX_DIRECTIONS {
+        return Err(format!("{} directions: at most {}", settings.directions, super::MAX_DIRECTIONS));
+    }
+    let mut points = points(bvh, settings.grid.as_ref())?;
+    let mut lights: Vec<Light> = points.iter().map(|&p| unit_light(p)).collect();
+    let directions = super::directions(settings.directions);
+    lights.extend(directions.iter().map(|&d| unit_directional_light(d)));
+    points.extend(directions);
     let supports = Supports::new(scene);
     let vertices = vertex_count(scene);
     let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { sh::COEFFICIENTS } else { 1 };
@@ -108,7 +134,7 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     if coefficients > 1 {
         rows.par_chunks_mut(row).enumerate().for_each(|(v, row)| Hemisphere::new(supports.normals[v]).fit(row));
     }
-    Ok(LightCloud::uncompressed(points, (coefficients, emission), taken, rows))
+    Ok(LightCloud { directions: settings.directions, ..LightCloud::uncompressed(points, (coefficients, emission), taken, rows) })
 }
 
 /// Directions over a vertex's hemisphere (uniform in solid angle: 16 bands of cos theta by 16
@@ -406,9 +432,10 @@ impl Gather<'_> {
                     // Irradiance at the vertex by cosine sampling: L cos / pdf = pi L.
                     let c = PI * throughput * bsdf.eval(wi) * e;
                     // Each emission function e_f(w) = y_f(w) / y_0 of the direction the light
-                    // left the cloud light by (e_0 = 1).
+                    // left the cloud light by (e_0 = 1); a direction's light has no pattern.
                     let y = if self.emission > 1 { sh::eval(-wi) } else { [0.0; sh::COEFFICIENTS] };
-                    for f in 0..self.emission {
+                    let functions = if light.kind == LightKind::Directional { 1 } else { self.emission };
+                    for f in 0..functions {
                         let emitted = if f == 0 { c } else { c * (y[f] / y[0]) };
                         let at = (j * self.emission + f) * 3 * self.coefficients;
                         for (k, t) in projection[..self.coefficients].iter().enumerate() {

@@ -152,10 +152,20 @@ fn from_block(block: Option<&Value>, bounds: (Vec3, Vec3)) -> Result<LightCloudS
 /// its cone's coefficients in those functions (004 §8's "spotlights with emission described
 /// by spherical harmonics"; `emission`). A cloud light's transfers are its `emission`
 /// columns, light after light; everything that weighs, sums or reconstructs works on columns.
+///
+/// A scene with a directional light (the sun through a window) has a cloud of directions too
+/// (004 §4.1 leaves it open: "a cloud of directions"): the last `directions` lights of every
+/// zone are unit directional lights of 1 lux from a set of directions over the sphere
+/// (`directions`), on which a user's directional light stands by angle (`Weigher`). Their
+/// light has no emission pattern: a direction's first column holds its transfer, the others
+/// are zero.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightCloud {
-    /// Every zone's lights, zone after zone.
+    /// Every zone's lights, zone after zone: a point light's position, a directional light's
+    /// unit direction (the way its light travels, as `Light::direction`).
     pub lights: Vec<Vec3>,
+    /// How many of each zone's lights, its last, are directional (the same in every zone).
+    pub directions: usize,
     /// n_b: 1 (indirect irradiance, lux) or `sh::COEFFICIENTS` (exitant radiance in spherical
     /// harmonics).
     pub coefficients: usize,
@@ -201,6 +211,7 @@ impl LightCloud {
         LightCloud {
             coefficients,
             emission,
+            directions: 0,
             zone_lights: vec![0, lights.len() as u32],
             zone_clusters: vec![0, vertices as u32],
             lights,
@@ -292,6 +303,7 @@ impl LightCloud {
         if let Some(z) = (0..self.zone_count()).find(|&z| self.zone_light_range(z).len() > MAX_CLOUD_LIGHTS as usize) {
             return Err(format!("zone {z} has {} lights: at most {MAX_CLOUD_LIGHTS}", self.zone_light_range(z).len()));
         }
+        self.check_directions()?;
         let clusters = self.cluster_count();
         if self.vectors.len() != clusters || self.basis() > MAX_VECTORS {
             return Err(format!("{} vector counts for {clusters} clusters, each at most {MAX_VECTORS}", self.vectors.len()));
@@ -314,6 +326,29 @@ impl LightCloud {
             return Err(format!(
                 "transfer value {i} is {} (must be finite, and >= 0 uncompressed)",
                 self.terms.iter().chain(&self.coords).nth(i).unwrap()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether light `j` (an index into `lights`) is one of its zone's directions.
+    pub fn is_direction(&self, j: usize) -> bool {
+        let zone = self.zone_lights.partition_point(|&start| start as usize <= j) - 1;
+        j >= self.zone_lights[zone + 1] as usize - self.directions
+    }
+
+    /// Every zone ends with the same `directions` unit vectors.
+    fn check_directions(&self) -> Result<(), String> {
+        let tail = |z: usize| {
+            let lights = self.zone_light_range(z);
+            &self.lights[lights.end - self.directions.min(lights.len())..lights.end]
+        };
+        let fits = (0..self.zone_count()).all(|z| tail(z).len() == self.directions && tail(z) == tail(0));
+        let unit = tail(0).iter().all(|d| (d.length() - 1.0).abs() < 1e-4);
+        if !(fits && unit && self.directions <= MAX_DIRECTIONS) {
+            return Err(format!(
+                "{} directions: every zone must end with the same unit vectors, at most {MAX_DIRECTIONS}",
+                self.directions
             ));
         }
         Ok(())
@@ -410,12 +445,29 @@ pub fn vertex_count(scene: &Scene) -> usize {
 }
 
 pub const SECTION: &str = "light-cloud";
-/// Version 6: emission functions per cloud light (version 5 had isotropic lights only,
+/// Version 7: a cloud of directions beside the points (version 6 had points only, version 5 had isotropic lights only,
 /// version 4 one D for all, version 3 irradiance only, version 2 one zone, version 1 rows
 /// only).
-pub const SECTION_VERSION: u32 = 6;
+pub const SECTION_VERSION: u32 = 7;
 /// Emission functions a cloud light may have: bands 0 to 3 of spherical harmonics.
 pub const EMISSION_COUNTS: [usize; 4] = [1, 4, 9, 16];
+/// The most directions a cloud may have.
+pub const MAX_DIRECTIONS: usize = 1024;
+
+/// `count` directions spread evenly over the sphere (a Fibonacci lattice: equal areas, no
+/// pole crowding), the first pointing most nearly down (+y up), each the way a directional
+/// light's light would travel.
+pub fn directions(count: usize) -> Vec<Vec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..count)
+        .map(|i| {
+            let y = 1.0 - (2.0 * i as f64 + 1.0) / count as f64;
+            let (radius, phi) = ((1.0 - y * y).sqrt(), golden * i as f64);
+            -glam::DVec3::new(radius * phi.cos(), y, radius * phi.sin()).as_vec3()
+        })
+        .collect()
+}
+
 /// The most basis vectors a cluster may have.
 pub const MAX_VECTORS: usize = 1024;
 const BIN: &str = "light-cloud.bin";
@@ -434,6 +486,7 @@ pub fn section(cloud: &LightCloud, summary: Value) -> Section {
         cloud.zone_count() as u32,
         cloud.coefficients as u32,
         cloud.emission as u32,
+        cloud.directions as u32,
     ]);
     w.f32s(&cloud.lights.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>());
     w.u32s(&cloud.zone_lights);
@@ -456,7 +509,7 @@ pub fn read_for(artifact: &Artifact, scene: &Scene, vertices_expected: usize) ->
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "light cloud")?;
-    let [lights, vertices, samples, clusters, basis, zones, coefficients, emission] = [
+    let [lights, vertices, samples, clusters, basis, zones, coefficients, emission, directions] = [
         r.u32("the light count")?,
         r.u32("the vertex count")?,
         r.u32("the sample count")?,
@@ -465,6 +518,7 @@ pub fn read_for(artifact: &Artifact, scene: &Scene, vertices_expected: usize) ->
         r.u32("the zone count")?,
         r.u32("the coefficient count")?,
         r.u32("the emission function count")?,
+        r.u32("the direction count")?,
     ];
     if vertices as usize != vertices_expected
         || lights == 0
@@ -476,9 +530,10 @@ pub fn read_for(artifact: &Artifact, scene: &Scene, vertices_expected: usize) ->
         || zones > clusters.min(lights)
         || (coefficients != 1 && coefficients as usize != sh::COEFFICIENTS)
         || !EMISSION_COUNTS.contains(&(emission as usize))
+        || directions as usize > MAX_DIRECTIONS
     {
         let problem = format!(
-            "{lights} cloud lights of {emission} emission functions and {coefficients} coefficients, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {vertices_expected} vertices"
+            "{lights} cloud lights ({directions} directions a zone) of {emission} emission functions and {coefficients} coefficients, {vertices} vertices, {clusters} clusters of D = {basis} in {zones} zones do not fit the scene's {vertices_expected} vertices"
         );
         return Err(fail(&path, problem, REBAKE));
     }
@@ -498,6 +553,7 @@ pub fn read_for(artifact: &Artifact, scene: &Scene, vertices_expected: usize) ->
         lights: positions.chunks_exact(3).map(Vec3::from_slice).collect(),
         coefficients: coefficients as usize,
         emission: emission as usize,
+        directions: directions as usize,
         zone_lights,
         zone_clusters,
         samples,

@@ -68,7 +68,7 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
             let (lo, hi) = scene.settings.bounds;
             let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
             let scale = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
-            let base = pair_base(bvh, &gathered.lights, w1 / diagonal);
+            let base = pair_base(bvh, &gathered.lights[..n - gathered.directions], n, w1 / diagonal);
             zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, (n, per_light), w2 / scale))).collect()
         }
     };
@@ -100,6 +100,7 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
         lights,
         coefficients: gathered.coefficients,
         emission: gathered.emission,
+        directions: gathered.directions,
         zone_lights,
         zone_clusters,
         samples: gathered.samples,
@@ -149,12 +150,14 @@ fn symmetric(n: usize, pair: impl Fn(usize, usize) -> f32 + Sync) -> Vec<f32> {
     matrix
 }
 
-/// Per pair of cloud lights, the part of eq. (9) every zone shares: `w1` times their distance,
-/// plus 1 when they do not see each other (V_jk).
-fn pair_base(bvh: &SceneBvh, lights: &[Vec3], w1: f32) -> Vec<f32> {
-    symmetric(lights.len(), |j, k| {
-        let hidden = !bvh.visible(lights[j], lights[k]);
-        w1 * lights[j].distance(lights[k]) + if hidden { 1.0 } else { 0.0 }
+/// Per pair of the `n` cloud lights, the part of eq. (9) every zone shares: `w1` times their
+/// distance, plus 1 when they do not see each other (V_jk). Lights past the `points` are
+/// directions, which never merge: a light from afar stands for no other.
+fn pair_base(bvh: &SceneBvh, points: &[Vec3], n: usize, w1: f32) -> Vec<f32> {
+    symmetric(n, |j, k| {
+        let (Some(a), Some(b)) = (points.get(j), points.get(k)) else { return f32::INFINITY };
+        let hidden = !bvh.visible(*a, *b);
+        w1 * a.distance(*b) + if hidden { 1.0 } else { 0.0 }
     })
 }
 
@@ -236,6 +239,10 @@ pub fn complete_linkage(n: usize, metric: &[f32]) -> Vec<Vec<u32>> {
 /// The merged light's position: its members' mean, or the member nearest the mean (ties to the
 /// lowest) when the mean does not see every member.
 fn merged_position(bvh: &SceneBvh, lights: &[Vec3], group: &[u32]) -> Vec3 {
+    // A lone light (a direction always) is its own.
+    if let [j] = group {
+        return lights[*j as usize];
+    }
     let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + lights[j as usize]) / group.len() as f32;
     if group.iter().all(|&j| bvh.visible(mean, lights[j as usize])) {
         return mean;

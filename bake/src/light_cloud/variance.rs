@@ -17,8 +17,8 @@ use rayon::prelude::*;
 pub struct ExplainedVariance {
     /// The transfer as gathered (before compression): `reduced`'s rows.
     pub indirect: Vec<f64>,
-    /// A 1 cd light's direct irradiance at each vertex, from the same lights: cos / r^2, zero
-    /// where the light is hidden or behind the surface.
+    /// A 1 cd light's direct irradiance at each vertex, from the same lights: cos / r^2 (a
+    /// direction's 1 lux: cos), zero where the light is hidden or behind the surface.
     pub direct: Vec<f64>,
 }
 
@@ -50,7 +50,10 @@ pub fn explained_variance(
             .par_iter()
             .flat_map_iter(|&v| {
                 let (p, n) = (positions[v as usize], normals[v as usize]);
-                lights.clone().map(move |j| direct_irradiance(bvh, p, n, reduced.lights[j]))
+                lights.clone().map(move |j| match reduced.is_direction(j) {
+                    true => direct_parallel(bvh, p, n, reduced.lights[j]),
+                    false => direct_irradiance(bvh, p, n, reduced.lights[j]),
+                })
             })
             .collect();
         indirect_shares.add(&indirect, vertices.len());
@@ -99,5 +102,18 @@ fn direct_irradiance(bvh: &SceneBvh, p: Vec3, n: Vec3, light: Vec3) -> f32 {
         cos / (distance * distance)
     } else {
         0.0
+    }
+}
+
+/// The irradiance 1 lux of parallel light travelling along `direction` gives a surface at `p`
+/// facing `n` (lux).
+fn direct_parallel(bvh: &SceneBvh, p: Vec3, n: Vec3, direction: Vec3) -> f32 {
+    let cos = -n.dot(direction);
+    if cos <= 0.0 {
+        return 0.0;
+    }
+    match bvh.closest_hit(bvh.offset_origin(p, n, -direction), -direction, f32::INFINITY) {
+        Some(_) => 0.0,
+        None => cos,
     }
 }

@@ -8,6 +8,9 @@
 //! would jump. With this r a light leaves the set at weight zero, so the weights are
 //! continuous as the light moves, except where visibility changes.
 //!
+//! A user's directional light stands likewise on the cloud's directions (`LightCloud::directions`)
+//! nearest it by angle, the same kernel over angles, none hidden, times its illuminance (lux).
+//!
 //! A cloud of emission bands (`LightCloud::emission`) takes spot lights too: each cloud light's
 //! weight is shared out over its emission functions by the light's own coefficients in them
 //! (`emission`), so that the cone's light leaves the cloud lights where the spot points.
@@ -16,7 +19,7 @@ use crate::scene::{Light, LightKind};
 use crate::sh;
 use glam::Vec3;
 
-/// One column's weight (per channel, candela): a cloud light's, or one emission function's of
+/// One column's weight (per channel, candela; lux for a direction's): a cloud light's, or one emission function's of
 /// it (column = light x emission functions + function).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CloudWeight {
@@ -27,12 +30,12 @@ pub struct CloudWeight {
 /// The most cloud lights one user light stands on.
 pub const MAX_NEAREST: usize = 16;
 
-/// Refuses what the cloud cannot stand in for: directional lights, whose light comes from no
-/// point of a cloud (004 §4.1 says they would need a cloud of directions of their own).
-pub fn refuse_lights(lights: &[Light]) -> Result<(), String> {
-    match lights.iter().find(|l| l.kind == LightKind::Directional) {
+/// Refuses a directional light when the cloud has no directions to stand it on (004 §4.1: its
+/// light comes from no point of the cloud).
+pub fn refuse_lights(lights: &[Light], directions: usize) -> Result<(), String> {
+    match lights.iter().find(|l| l.kind == LightKind::Directional).filter(|_| directions == 0) {
         Some(l) => Err(format!(
-            "light \"{}\" is a directional light; light clouds stand in for point and spot lights only (a directional light comes from no point of the cloud; 004 §4.1): give point or spot lights (--lights FILE)",
+            "light \"{}\" is a directional light and the bake has no cloud of directions to stand it on (a directional light comes from no point of the cloud; 004 §4.1): bake with it in the scene, or with --directions N",
             l.name
         )),
         None => Ok(()),
@@ -86,6 +89,10 @@ pub struct Weigher {
     zone_lights: Vec<u32>,
     /// Emission functions (columns) a cloud light has.
     emission: usize,
+    /// How many of each zone's cloud lights, its last, are directions, and how many of them a
+    /// directional light stands on.
+    directions: usize,
+    nearest_directions: usize,
     /// Seconds a cloud light takes to fade in or out as visibility changes; 0 (the default):
     /// at once.
     fade_seconds: f32,
@@ -115,6 +122,8 @@ impl Weigher {
             nearest,
             zone_lights,
             emission: 1,
+            directions: 0,
+            nearest_directions: 1,
             fade_seconds: 0.0,
             faded: Vec::new(),
             order: Vec::with_capacity(cloud_size),
@@ -130,6 +139,18 @@ impl Weigher {
         }
         let columns = self.dense.len() * count / self.emission;
         Ok(Weigher { emission: count, dense: vec![Vec3::ZERO; columns], ..self })
+    }
+
+    /// The same, for a cloud whose zones end with `count` directions
+    /// (`LightCloud::directions`), each directional light standing on its `nearest`.
+    pub fn with_directions(self, count: usize, nearest: usize) -> Result<Weigher, String> {
+        if !(1..=MAX_NEAREST).contains(&nearest) {
+            return Err(format!("{nearest} nearest directions: a directional light stands on 1..={MAX_NEAREST}"));
+        }
+        if let Some(z) = self.zone_lights.windows(2).position(|w| ((w[1] - w[0]) as usize) < count) {
+            return Err(format!("{count} directions: zone {z} has fewer lights"));
+        }
+        Ok(Weigher { directions: count, nearest_directions: nearest, ..self })
     }
 
     /// The same, with cloud lights fading in and out over `seconds` as visibility changes
@@ -178,8 +199,20 @@ impl Weigher {
         for (k, light) in lights.iter().enumerate() {
             let mut seen = true;
             for zone in 0..self.zone_lights.len() - 1 {
-                let zone = self.zone_lights[zone] as usize..self.zone_lights[zone + 1] as usize;
-                seen &= self.add(cloud, zone, k * cloud.len(), light, step, &mut visible);
+                let (start, end) = (self.zone_lights[zone] as usize, self.zone_lights[zone + 1] as usize);
+                let (points, directions) = (start..end - self.directions, end - self.directions..end);
+                let faded_at = k * cloud.len();
+                seen &= match light.kind {
+                    // Directions are never hidden, so never fade.
+                    LightKind::Directional => {
+                        let angle = |j: usize| cloud[j].dot(light.direction).clamp(-1.0, 1.0).acos();
+                        self.add(directions, faded_at, light, (f32::INFINITY, self.nearest_directions), angle, |_| true)
+                    }
+                    _ => {
+                        let distance = |j: usize| cloud[j].distance(light.position);
+                        self.add(points, faded_at, light, (step, self.nearest), distance, |j| visible(light.position, cloud[j]))
+                    }
+                };
             }
             unseen += usize::from(!seen);
         }
@@ -190,32 +223,32 @@ impl Weigher {
         unseen
     }
 
-    /// Adds one light's weights over one zone's cloud lights (`faded_at`: where the light's
-    /// fade factors start); false when none is visible from it.
+    /// Adds one light's weights over the cloud lights `zone` (a zone's points, or its
+    /// directions), the `nearest` visible ones by `distance` (`faded_at`: where the light's fade
+    /// factors start, which move by `step`); false when none is visible from it.
     fn add(
         &mut self,
-        cloud: &[Vec3],
         zone: std::ops::Range<usize>,
         faded_at: usize,
         light: &Light,
-        step: f32,
-        visible: &mut impl FnMut(Vec3, Vec3) -> bool,
+        (step, nearest): (f32, usize),
+        distance: impl Fn(usize) -> f32,
+        mut visible: impl FnMut(usize) -> bool,
     ) -> bool {
-        let position = light.position;
         self.order.clear();
-        self.order.extend(zone.clone().map(|j| (cloud[j].distance(position), j as u32)));
+        self.order.extend(zone.clone().map(|j| (distance(j), j as u32)));
         self.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         self.chosen.clear();
         for &(d, j) in &self.order {
-            if self.chosen.len() > self.nearest {
+            if self.chosen.len() > nearest {
                 break;
             }
-            if visible(position, cloud[j as usize]) {
+            if visible(j as usize) {
                 self.chosen.push((d, j));
             }
         }
         let Some(&(r, _)) = self.chosen.last() else { return false };
-        let used = &self.chosen[..self.chosen.len().min(self.nearest)];
+        let used = &self.chosen[..self.chosen.len().min(nearest)];
         let faded = &mut self.faded[faded_at + zone.start..faded_at + zone.end];
         for (f, j) in faded.iter_mut().zip(zone.clone()) {
             let wanted = used.iter().any(|&(_, u)| u as usize == j);
@@ -223,7 +256,7 @@ impl Weigher {
         }
         // 004 §6.1: Silverman's kernel, normalised to sum to one.
         let kernel = |d: f32| if r > 0.0 { (1.0 - d / r).max(0.0).powi(4) } else { 1.0 };
-        let weight = |j: usize| faded[j - zone.start] * kernel(cloud[j].distance(position));
+        let weight = |j: usize| faded[j - zone.start] * kernel(distance(j));
         let total: f32 = zone.clone().map(weight).sum();
         let coefficients = emission(light, self.emission);
         let mut add = |j: usize, share: f32| {

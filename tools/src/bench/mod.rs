@@ -551,15 +551,23 @@ fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration
     Ok(vec![at_rest()])
 }
 
-/// A spot sweep's configurations: the spot with each cone, or aimed at each target.
+/// A spot sweep's configurations: the spot with each cone, or aimed at each target (a
+/// directional light too: from where its node stands).
 fn spot_configurations(
     scene: &Scene,
     entry: &SweepScene,
     sweep: &sweep::SpotSweep,
     at_rest: &dyn Fn() -> Configuration,
 ) -> Result<Vec<Configuration>> {
-    let Some(spot) = scene.lights.get(sweep.light).filter(|l| matches!(l.kind, LightKind::Spot { .. })) else {
-        bail!("{}: spot_sweep.light {}: not a spot light of the scene's {}", entry.path.display(), sweep.light, scene.lights.len());
+    let aimed = sweep.outer_degrees.is_empty();
+    let sweepable = |l: &&Light| matches!(l.kind, LightKind::Spot { .. }) || (aimed && l.kind == LightKind::Directional);
+    let Some(spot) = scene.lights.get(sweep.light).filter(sweepable) else {
+        bail!(
+            "{}: spot_sweep.light {}: not a spot light (nor, for targets, a directional light) of the scene's {}",
+            entry.path.display(),
+            sweep.light,
+            scene.lights.len()
+        );
     };
     let with = |kind: LightKind, direction: Vec3| {
         let mut configuration = at_rest();

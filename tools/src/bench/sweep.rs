@@ -90,7 +90,7 @@ pub(crate) struct SweepScene {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct SpotSweep {
-    /// Index of the scene's spot light (default 0).
+    /// Index of the scene's spot light (default 0), or for `targets` its directional light.
     #[serde(default)]
     pub light: usize,
     /// Outer cone angles, degrees (0, 90]: one configuration each, the inner angle

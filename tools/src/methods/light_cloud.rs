@@ -1,6 +1,7 @@
 //! Local radiance transfer with light clouds (Kristensen, Akenine-Möller, Jensen,
 //! "Precomputed Local Radiance Transfer for Real-Time Lighting Design", 004): a cloud of unit
-//! point lights over the scene's grid, each vertex's indirect irradiance from each of them by
+//! point lights over the scene's grid (and of unit directional lights over the sphere when the
+//! scene has a directional light), each vertex's indirect irradiance from each of them by
 //! a gather whose noise every light shares; at run time each user point light stands on its m
 //! nearest visible cloud lights (§6.1) and one pass sums their transfer per vertex.
 
@@ -33,6 +34,13 @@ const EMISSION_BANDS: Param = Param::count(
     3,
     Default::From("0; 2 when the scene has a spot light"),
 );
+const DIRECTIONS: Param = Param::count(
+    "directions",
+    "directions of a cloud of unit directional lights over the sphere, on which a directional light (the sun) stands by angle; 0: none",
+    0,
+    1024,
+    Default::From("0; 128 when the scene has a directional light"),
+);
 const MAX_EDGE: Param = Param::number(
     "max-edge",
     "metres: the scene's meshes welded and split until no edge is longer (per-vertex light needs vertices across surfaces); 0: the meshes as they are",
@@ -45,6 +53,15 @@ const NEAREST: Param = Param::count(
     1,
     16,
     Default::Value("8"),
+)
+.at_render();
+
+const NEAREST_DIRECTIONS: Param = Param::count(
+    "nearest-directions",
+    "the cloud's directions nearest by angle each directional light stands on (the kernel of --nearest, over angles)",
+    1,
+    16,
+    Default::Value("3"),
 )
 .at_render();
 
@@ -90,9 +107,10 @@ const EXPLAINED_VARIANCE: Param = Param::flag(
 );
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 14] = [
+const PARAMS: [&Param; 16] = [
     &SAMPLES,
     &EMISSION_BANDS,
+    &DIRECTIONS,
     &MAX_EDGE,
     &ZONES,
     &W1,
@@ -104,6 +122,7 @@ const PARAMS: [&Param; 14] = [
     &UNCOMPRESSED,
     &EXPLAINED_VARIANCE,
     &NEAREST,
+    &NEAREST_DIRECTIONS,
     &FADE,
 ];
 
@@ -160,11 +179,26 @@ fn emission_bands(scene: &Scene, values: &Values) -> usize {
 /// measures 0 to 3 against the path tracer).
 const SPOT_BANDS: usize = 2;
 
-/// The scene's settings, or its lights refused, naming the scene.
+/// The directions given, or those the scene's lights need: `SUN_DIRECTIONS` when any is
+/// directional, else none.
+fn directions(scene: &Scene, values: &Values) -> usize {
+    let sun = scene.lights.iter().any(|l| l.kind == LightKind::Directional);
+    values.given_count(&DIRECTIONS).map_or(if sun { SUN_DIRECTIONS } else { 0 }, |d| d as usize)
+}
+
+/// The directions a scene with a directional light gets when none are given (about 18
+/// degrees apart; docs/BENCHMARKS.md measures 16 to 256 against the path tracer).
+const SUN_DIRECTIONS: usize = 128;
+
+/// The scene's settings, naming the scene.
 fn checked(scene: &Scene) -> Result<LightCloudSceneSettings> {
-    let at = |e: String| anyhow::anyhow!("{}: {e}", scene.source.display());
-    lc::refuse_lights(&scene.lights).map_err(at)?;
-    LightCloudSceneSettings::of(scene).map_err(at)
+    LightCloudSceneSettings::of(scene).map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.display()))
+}
+
+/// Whether the scene has a light that stands somewhere (else the cloud needs no points unless
+/// the scene declares a grid).
+fn has_local_lights(scene: &Scene) -> bool {
+    lc::region::local_lights(scene).next().is_some()
 }
 
 /// A bake read for a scene, with the run-time m and fade and the scene's visibility.
@@ -172,6 +206,7 @@ struct Baked {
     scene: Scene,
     cloud: LightCloud,
     nearest: usize,
+    nearest_directions: usize,
     fade_seconds: f32,
     visibility: Visibility,
 }
@@ -185,6 +220,7 @@ impl Loaded for Baked {
         vec![Box::new(LightCloudData {
             cloud: &self.cloud,
             nearest: self.nearest,
+            nearest_directions: self.nearest_directions,
             fade_seconds: self.fade_seconds,
             visibility: Arc::clone(&self.visibility),
         })]
@@ -203,7 +239,7 @@ impl Method for LightCloudMethod {
     }
 
     fn description(&self) -> &'static str {
-        "indirect light of moving point lights from a cloud of baked unit lights, per vertex (Kristensen et al. 2005)"
+        "indirect light of moving point, spot and directional lights from a cloud of baked unit lights and directions, per vertex (Kristensen et al. 2005)"
     }
 
     fn params(&self) -> Vec<&'static Param> {
@@ -220,7 +256,7 @@ impl Method for LightCloudMethod {
 
     /// Lights it takes, and a grid declared or derivable (no light inside closed geometry).
     fn suits(&self, scene: &Scene) -> bool {
-        checked(scene).is_ok_and(|s| s.declared || lc::region::reachable(scene, &SceneBvh::new(scene)).is_ok())
+        checked(scene).is_ok_and(|s| s.declared || !has_local_lights(scene) || lc::region::reachable(scene, &SceneBvh::new(scene)).is_ok())
     }
 
     /// It models all indirect light: an ambient term would count it twice.
@@ -240,10 +276,16 @@ impl Method for LightCloudMethod {
         let fine = tessellation.as_ref().map(|t| t.apply(source));
         let scene = fine.as_ref().unwrap_or(source);
         let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-        let reachable =
-            (!declared.declared).then(|| stages.timed("region", || lc::region::reachable(scene, &bvh))).transpose().map_err(at)?;
-        let grid = reachable.as_ref().map_or(declared.grid, |r| r.grid.clone());
-        let settings = LightCloudBakeSettings { grid, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
+        let derive = !declared.declared && has_local_lights(scene);
+        let reachable = derive.then(|| stages.timed("region", || lc::region::reachable(scene, &bvh))).transpose().map_err(at)?;
+        // Points where the scene declares a grid or has a light that stands somewhere.
+        let grid = match &reachable {
+            Some(r) => Some(r.grid.clone()),
+            None => declared.declared.then_some(declared.grid),
+        };
+        let directions = directions(source, values);
+        let settings =
+            LightCloudBakeSettings { grid, directions, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
         let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
         let raw_bytes = gathered.terms.len() * 4;
         let reduced = stages.timed("light clustering", || lc::reduce(scene, &bvh, &gathered, reduction)).map_err(at)?;
@@ -264,12 +306,14 @@ impl Method for LightCloudMethod {
             cloud.vectors.iter().min().copied().unwrap_or(0),
             cloud.vectors.iter().sum::<u32>() as f64 / cloud.cluster_count().max(1) as f64,
         );
-        let cloud_lights = gathered.lights.len();
+        let cloud_lights = gathered.lights.len() - directions;
+        let grid_points = settings.grid.as_ref().map_or(0, |g| g.points().len());
         let mean_per_zone = per_zone.iter().sum::<usize>() as f64 / per_zone.len() as f64;
         let (fewest, most) = (per_zone.iter().min().copied().unwrap_or(0), per_zone.iter().max().copied().unwrap_or(0));
         let facts = json!({
             "cloud_lights": cloud_lights,
-            "grid_points": settings.grid.points().len(),
+            "grid_points": grid_points,
+            "directions": directions,
             "vertices": cloud.vertex_count(),
             "zones": cloud.zone_count(),
             "lights_per_zone": per_zone,
@@ -279,10 +323,9 @@ impl Method for LightCloudMethod {
             "relative_error": error,
         });
         let mut summary = format!(
-            "{cloud_lights} cloud lights ({} grid points less those inside closed geometry), {} vertices, {} paths a vertex\n\
+            "{cloud_lights} cloud lights ({grid_points} grid points less those inside closed geometry) and {directions} directions, {} vertices, {} paths a vertex\n\
              {} zones of {fewest}..{most} lights (mean {mean_per_zone:.1}) after light clustering, relative error {:.4}\n\
              {} clusters of D = {fewest_vectors}..{} (mean {vectors_mean:.1}), relative error {error:.4}; {:.2} MiB -> {:.2} MiB\n",
-            settings.grid.points().len(),
             cloud.vertex_count(),
             cloud.samples,
             cloud.zone_count(),
@@ -319,11 +362,13 @@ impl Method for LightCloudMethod {
                 "clusters": compression.map(|c| c.0),
                 "vectors": compression.map(|(_, v)| v.count()),
                 "variable_vectors": matches!(compression, Some((_, lc::Vectors::Shared(_)))),
-                "grid": { "box": [settings.grid.min.to_array(), settings.grid.max.to_array()], "counts": settings.grid.counts },
+                "directions": directions,
+                "grid": settings.grid.as_ref().map(|g| json!({ "box": [g.min.to_array(), g.max.to_array()], "counts": g.counts })),
             }),
             stats: json!({
                 "explained_variance": variance.map(|v| json!({ "indirect": v.indirect, "direct": v.direct })),
                 "cloud_lights": cloud_lights,
+                "directions": directions,
                 "zones": cloud.zone_count(),
                 "lights_per_zone_mean": mean_per_zone,
                 "lights_per_zone_min": fewest,
@@ -342,7 +387,7 @@ impl Method for LightCloudMethod {
             summary,
         };
         if let Some(r) = &reachable {
-            let g = &settings.grid;
+            let g = &r.grid;
             let how = format!(
                 "box {:.3?} .. {:.3?}, {:?} cells (the space the lights reach: {} of {} voxels over the scene's bounds)",
                 g.min.to_array(),
@@ -353,6 +398,10 @@ impl Method for LightCloudMethod {
             );
             let value = json!({ "box": [g.min.to_array(), g.max.to_array()], "counts": g.counts });
             bake.derived("grid", value, &how, "extras.relume.light_cloud.grid");
+        }
+        if !values.given(&DIRECTIONS) && directions > 0 {
+            let how = format!("{directions} (the scene has a directional light: it stands on the nearest of {directions} unit directional lights over the sphere)");
+            bake.derived("directions", json!(directions), &how, "--directions");
         }
         if !values.given(&EMISSION_BANDS) && bands > 0 {
             let how = format!("{bands} (the scene has spot lights: each cloud light holds {} emission functions)", settings.emission);
@@ -371,14 +420,15 @@ impl Method for LightCloudMethod {
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {
         let artifact = artifact.ok_or_else(|| anyhow::anyhow!("light-cloud renders from a bake: give --bake"))?;
-        checked(scene)?;
         let fine = tessellation::read(artifact, scene)?.map_or_else(|| scene.clone(), |t| t.apply(scene));
         let cloud = lc::read_for(artifact, scene, lc::vertex_count(&fine))?;
+        lc::refuse_lights(&scene.lights, cloud.directions).map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.display()))?;
         Ok(Box::new(Baked {
             visibility: visibility(&fine),
             scene: fine,
             cloud,
             nearest: values.count(&NEAREST) as usize,
+            nearest_directions: values.count(&NEAREST_DIRECTIONS) as usize,
             fade_seconds: values.number(&FADE) as f32,
         }))
     }

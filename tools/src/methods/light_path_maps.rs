@@ -14,7 +14,7 @@ use relume_bake::atlas::Atlas;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::light_path_maps::{self, ClusteredTransfer, Compression, LightPathMapSettings, LightPathMapsSceneSettings, LightRegion};
 use relume_bake::obscurance::Variant;
-use relume_bake::scene::Scene;
+use relume_bake::scene::{LightKind, Scene};
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
@@ -80,6 +80,8 @@ fn compression(values: &Values) -> Result<Compression> {
 struct Plan {
     settings: LightPathMapSettings,
     region: Option<LightRegion>,
+    /// Whether the scene declares no region (the bake then derives one: `derived_region`).
+    derived: bool,
     compression: Compression,
     light_area: f32,
 }
@@ -94,19 +96,32 @@ fn plan(scene: &Scene, values: &Values, l_max: f32, work: WorkOptions) -> Result
     };
     settings.validate().map_err(|e| anyhow::anyhow!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
     let block = LightPathMapsSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
-    // The scene's region, with its box re-sampled at `--test-points` when given.
-    let region = match (block.region, values.given_count(&TEST_POINTS)) {
+    let derived = block.region.is_none();
+    // The scene's region, or the one derived, with its box re-sampled at `--test-points` when given.
+    let region = match (block.region.or_else(|| derived_region(scene)), values.given_count(&TEST_POINTS)) {
         (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min, max, test_points: m as u32 }),
-        (_, Some(_)) => bail!("--test-points needs a scene whose extras.relume.light_path_maps.region is a box"),
+        (_, Some(_)) => {
+            bail!("--test-points needs a region that is a box (declared in extras.relume.light_path_maps.region, or a directional light's)")
+        }
         (region, None) => region,
     };
-    Ok(Plan { settings, region, compression: compression(values)?, light_area: block.light_area })
+    Ok(Plan { settings, region, derived, compression: compression(values)?, light_area: block.light_area })
+}
+
+/// Test points a directional light's derived region has (the scenes' declared boxes: 64).
+const SUN_TEST_POINTS: u32 = 64;
+
+/// The region of a scene that declares none and has a directional light: its bounds, whose
+/// every surface the sun may reach. Else None: the point and spot lights where they stand.
+fn derived_region(scene: &Scene) -> Option<LightRegion> {
+    let (min, max) = scene.settings.bounds;
+    scene.lights.iter().any(|l| l.kind == LightKind::Directional).then_some(LightRegion::Box { min, max, test_points: SUN_TEST_POINTS })
 }
 
 /// Entry points, transfers and their compression (000 §3.2), each a timed stage; returns the
 /// transfer and the facts for the manifest, stats.json and the summary.
 fn bake_transfer(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, plan: &Plan, stages: &mut Stages) -> Result<(ClusteredTransfer, Bake)> {
-    let Plan { settings, region, compression, light_area } = plan;
+    let Plan { settings, region, compression, light_area, .. } = plan;
     let (work, compression, light_area) = (settings.work, *compression, *light_area);
     let entries = stages
         .timed("entry_points", || {
@@ -223,10 +238,20 @@ impl Method for LightPathMaps {
         bake.parameters["light_path_maps"] = facts.parameters;
         bake.stats["light_path_maps"] = facts.stats;
         bake.summary += &facts.summary;
-        if plan.region.is_none() {
-            let points: Vec<[f32; 3]> = scene.lights.iter().map(|l| l.position.to_array()).collect();
-            let how = format!("the {} light(s) where they stand, as test points (relit well near there only)", points.len());
-            bake.derived("region", json!({ "points": points }), &how, "extras.relume.light_path_maps.region");
+        match &plan.region {
+            _ if !plan.derived => {}
+            Some(LightRegion::Box { min, max, test_points }) => {
+                let how =
+                    format!("the scene's bounds {min} .. {max}, {test_points} test points (a directional light may reach every surface)");
+                let value = json!({ "box": [min.to_array(), max.to_array()], "test_points": test_points });
+                bake.derived("region", value, &how, "extras.relume.light_path_maps.region");
+            }
+            _ => {
+                let local = scene.lights.iter().filter(|l| l.kind != LightKind::Directional);
+                let points: Vec<[f32; 3]> = local.map(|l| l.position.to_array()).collect();
+                let how = format!("the {} light(s) where they stand, as test points (relit well near there only)", points.len());
+                bake.derived("region", json!({ "points": points }), &how, "extras.relume.light_path_maps.region");
+            }
         }
         Ok(bake)
     }

@@ -274,14 +274,7 @@ impl Builder {
     /// its node's -Z is turned onto `sized_for`, the direction of the surface its intensity is
     /// chosen for (which the scene tests check).
     pub(super) fn point_light(&mut self, name: &str, position: DVec3, sized_for: DVec3, intensity: f64) {
-        self.lights.push(json!({ "name": name, "type": "point", "color": [num(1.0), num(1.0), num(1.0)], "intensity": num(intensity) }));
-        let rotation = DQuat::from_rotation_arc(DVec3::NEG_Z, sized_for.normalize());
-        self.nodes.push(json!({
-            "name": name,
-            "translation": vec_json(position),
-            "rotation": quat_json(rotation),
-            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
-        }));
+        self.light(name, position, sized_for, json!({ "type": "point", "intensity": num(intensity) }));
     }
 
     /// A KHR_lights_punctual spot light, white, `intensity` candela, cone angles in degrees;
@@ -295,13 +288,22 @@ impl Builder {
         inner_degrees: f64,
         outer_degrees: f64,
     ) {
-        self.lights.push(json!({
-            "name": name,
-            "type": "spot",
-            "color": [num(1.0), num(1.0), num(1.0)],
-            "intensity": num(intensity),
-            "spot": { "innerConeAngle": num(inner_degrees.to_radians()), "outerConeAngle": num(outer_degrees.to_radians()) },
-        }));
+        let spot = json!({ "innerConeAngle": num(inner_degrees.to_radians()), "outerConeAngle": num(outer_degrees.to_radians()) });
+        self.light(name, position, direction, json!({ "type": "spot", "intensity": num(intensity), "spot": spot }));
+    }
+
+    /// A KHR_lights_punctual directional light, white, `illuminance` lux, its light travelling
+    /// along `direction`; glTF ignores its node's `position`, which the scene tests cast from.
+    pub(super) fn directional_light(&mut self, name: &str, position: DVec3, direction: DVec3, illuminance: f64) {
+        self.light(name, position, direction, json!({ "type": "directional", "intensity": num(illuminance) }));
+    }
+
+    /// A white light (`light`: its type and what the type needs) on a node at `position` whose
+    /// rotation turns its -Z onto `direction`.
+    fn light(&mut self, name: &str, position: DVec3, direction: DVec3, mut light: Value) {
+        light["name"] = json!(name);
+        light["color"] = json!([num(1.0), num(1.0), num(1.0)]);
+        self.lights.push(light);
         let rotation = DQuat::from_rotation_arc(DVec3::NEG_Z, direction.normalize());
         self.nodes.push(json!({
             "name": name,

@@ -48,6 +48,8 @@
 //! - `courtyard`: a walled courtyard half under a roof, lit by the sky through its open half and
 //!   by two lamps, a sculpture and a crate on its paving: every method has work there, and the
 //!   scene declares no method's settings (each derives its own).
+//! - `sunroom`: a room lit by the sun alone, straight down through a skylight (a directional
+//!   light), a table half in the sun patch; every face a welded grid.
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -69,6 +71,7 @@ mod gltf_writer;
 mod maze;
 mod scenes;
 mod settings;
+mod sunroom;
 #[cfg(test)]
 mod tests;
 
@@ -85,7 +88,7 @@ use scenes::{
 use std::path::{Path, PathBuf};
 
 /// The scenes [`write_all`] writes, in order; each is `<name>.gltf` + `<name>.bin`.
-pub const SCENE_NAMES: [&str; 27] = [
+pub const SCENE_NAMES: [&str; 28] = [
     "cornell",
     "occluder-plane",
     "occluder-stacked",
@@ -113,6 +116,7 @@ pub const SCENE_NAMES: [&str; 27] = [
     "mrt-cave",
     "mrt-figures",
     "courtyard",
+    "sunroom",
 ];
 
 /// The procedural environments [`write_all`] writes into `envs/` (lat-long EXRs, 256 x 128):
@@ -186,6 +190,7 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "fiv-blobs" => fiv_blobs(),
         "fiv-garden" => fiv_garden(),
         "courtyard" => courtyard::courtyard(),
+        "sunroom" => sunroom::sunroom(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
         _ => return None,
     };

@@ -88,3 +88,8 @@ pub(super) const BLOCKS_SETTINGS: Settings =
 /// lamps' indirect light), texels 8 cm, the obscurance's range a third of the walls' height.
 pub(super) const COURTYARD_SETTINGS: Settings =
     Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 12.0, tau: 0.25, l_max: 0.8, light_region: None, light_area: 0.0 };
+
+/// The sunroom: no ambient light (the sun's bounce is its indirect light), texels 8 cm, the
+/// obscurance's range about a third of the room's height.
+pub(super) const SUNROOM_SETTINGS: Settings =
+    Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 12.0, tau: 0.25, l_max: 0.8, light_region: None, light_area: 0.0 };

@@ -1,7 +1,8 @@
 //! Local radiance transfer with light clouds (Kristensen et al., 004 §6) at run time: each
 //! user point or spot light stands on its nearest visible cloud lights (weights on the CPU, when
 //! the lights move: `Renderer::set_lights`; a spot's shared out over the cloud lights' emission
-//! functions by its cone), and two passes turn the weights into every vertex's
+//! functions by its cone), a directional light on the cloud's directions nearest it, and two
+//! passes turn the weights into every vertex's
 //! indirect irradiance (diffuse scenes) or exitant radiance in spherical harmonics (glossy
 //! ones), handed to the lighting pass as a vertex term (interpolated across triangles: 004
 //! §5's blending, Gouraud-style).
@@ -45,11 +46,12 @@ use std::sync::Arc;
 pub type Visibility = Arc<dyn Fn(Vec3, Vec3) -> bool + Send + Sync>;
 
 /// What the technique is made from: a bake's cloud, m (each light's nearest visible cloud
-/// lights), the seconds a cloud light takes to fade in or out as it comes into or goes out of
+/// lights), the directions each directional light stands on, the seconds a cloud light takes to fade in or out as it comes into or goes out of
 /// a light's sight (`Renderer::move_lights`; 0: at once) and the caller's visibility query.
 pub struct LightCloudData<'d> {
     pub cloud: &'d LightCloud,
     pub nearest: usize,
+    pub nearest_directions: usize,
     pub fade_seconds: f32,
     pub visibility: Visibility,
 }
@@ -166,15 +168,16 @@ impl Technique for LightCloudTechnique {
 impl MakeTechnique for LightCloudData<'_> {
     /// Uploads the transfer in one submission that is waited for and weighs the scene's
     /// lights. Refused, by name: a cloud that fails `validate` or is for another vertex count,
-    /// directional lights, an m out of range, a transfer larger than one storage
+    /// directional lights when the cloud has no directions, an m out of range, a transfer larger than one storage
     /// buffer, and more weights than one in-stream update holds (64 KiB, 4,096 weights).
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
         let ctx = shared.ctx;
         let cloud = self.cloud;
-        check(ctx, cloud, shared.gpu_scene.vertex_count(), (self.nearest, shared.scene.lights.len()))?;
-        refuse_lights(&shared.scene.lights).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
+        check(ctx, cloud, shared.gpu_scene.vertex_count(), (self.nearest.max(self.nearest_directions), shared.scene.lights.len()))?;
+        refuse_lights(&shared.scene.lights, cloud.directions).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest)
             .and_then(|w| w.with_emission(cloud.emission))
+            .and_then(|w| w.with_directions(cloud.directions, self.nearest_directions))
             .and_then(|w| w.with_fade(self.fade_seconds))
             .map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let clusters: Vec<GpuCluster> = cloud
