@@ -7,8 +7,8 @@
 # blender-data): fullsphere irradiance vectors, and the ambient methods lit by the probe's
 # irradiance, baked, rendered and compared the same way into out/fiv-blobs/report.md; then
 # the default bench sweep (cornell with a moving light and classroom: costs, errors, charts
-# with the Pareto front, and the cheapest configuration of each method within NRMSE 0.2 in
-# out/bench/recommended.toml) into out/bench/report.md.
+# with the Pareto front, and the cheapest configuration of each method within NRMSE 0.2 and
+# per scene the cheapest method of all in out/bench/recommended.toml) into out/bench/report.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh probes

@@ -19,8 +19,13 @@ pub(crate) struct BakeArgs {
     /// A glTF 2.0 scene (.gltf or .glb).
     scene: PathBuf,
     /// The method to bake: one of the registry's with a bake (`relume methods` lists them).
-    #[arg(long, value_parser = |name: &str| baking_method(name).map(|m| m.name().to_string()).map_err(|e| e.to_string()))]
-    method: String,
+    #[arg(long, required_unless_present = "recommended", value_parser = |name: &str| baking_method(name).map(|m| m.name().to_string()).map_err(|e| e.to_string()))]
+    method: Option<String>,
+    /// Instead of --method: bake the method and parameters a `relume bench --budget` chose for
+    /// this scene (its recommended.toml; the scene by its file name, as the sweep names it).
+    /// Flags given beside it override its parameters.
+    #[arg(long, conflicts_with = "method")]
+    recommended: Option<PathBuf>,
     #[command(flatten)]
     work: WorkArgs,
     /// The artifact folder (default: out/<scene>/<method>).
@@ -45,8 +50,7 @@ pub(crate) struct BakeArgs {
 
 /// The artifact folder `relume bake` writes for a scene and method when no --out is given.
 pub(crate) fn default_bake_dir(scene: &Path, method: &str) -> PathBuf {
-    let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-    PathBuf::from("out").join(stem).join(method)
+    PathBuf::from("out").join(scene_name(scene)).join(method)
 }
 
 /// A method that bakes, or a refusal that names those that do.
@@ -59,9 +63,49 @@ pub(crate) fn baking_method(name: &str) -> Result<&'static dyn Method> {
     Ok(method)
 }
 
+/// The scene's name as a sweep names it: its file name without the extension.
+fn scene_name(scene: &Path) -> String {
+    scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
+}
+
+/// The method a bench's recommended.toml chose for the scene `name` and its bake parameters
+/// as flag pairs (its run-time and frame keys left to `render`), refused naming the file, the
+/// scene and the fix.
+fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, Vec<(String, String)>)> {
+    let at = |what: String| anyhow::anyhow!("{}: {what}", file.display());
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| at(format!("cannot read it ({e}); give the recommended.toml `relume bench --budget` wrote")))?;
+    let table: toml::Table =
+        toml::from_str(&text).map_err(|e| at(format!("not a recommended.toml ({e}); `relume bench --budget` writes one")))?;
+    let Some(entry) = table.get(name).and_then(|v| v.as_table()) else {
+        let scenes: Vec<&String> = table.keys().collect();
+        return Err(at(format!(
+            "no scene \"{name}\" (it has {scenes:?}); bench this scene with --budget, or give the scene under the name the sweep gave it"
+        )));
+    };
+    let Some(method) = entry.get("method").and_then(|m| m.as_str()) else {
+        return Err(at(format!("scene \"{name}\": no method was within the budget; bench again with a larger --budget")));
+    };
+    let method = baking_method(method)
+        .map_err(|e| at(format!("scene \"{name}\": {e:#} (the budget chose a method that needs no bake: render it)")))?;
+    let params = entry.get(method.name()).and_then(|e| e.get("params")).and_then(|p| p.as_table()).cloned().unwrap_or_default();
+    let (_, pairs) = crate::bench::config::split(&params).map_err(|e| at(format!("scene \"{name}\": {e:#}")))?;
+    let baked: Vec<&str> = method.params().iter().filter(|p| p.stage == Stage::Bake).map(|p| p.name).collect();
+    Ok((method, pairs.into_iter().filter(|(key, _)| baked.contains(&key.as_str())).collect()))
+}
+
 pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
-    let method = baking_method(&args.method)?;
-    let values = methods::parse_values(method, &args.params.pairs, Some(Stage::Bake))?;
+    let (method, pairs) = match (&args.recommended, &args.method) {
+        (Some(file), _) => {
+            let (method, mut pairs) = recommended(file, &scene_name(&args.scene))?;
+            pairs.retain(|(key, _)| !args.params.pairs.iter().any(|(given, _)| given == key));
+            pairs.extend(args.params.pairs.iter().cloned());
+            (method, pairs)
+        }
+        (None, Some(name)) => (baking_method(name)?, args.params.pairs.clone()),
+        (None, None) => bail!("give --method or --recommended"),
+    };
+    let values = methods::parse_values(method, &pairs, Some(Stage::Bake))?;
     let work = args.work.options()?;
     let options =
         LoadOptions { outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels), ..Default::default() };

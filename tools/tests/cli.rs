@@ -529,3 +529,46 @@ fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
     assert!(said.contains("mrt:   block shape") && bytes("remade") == bytes("cube") && kept_bytes(entry) == bytes("cube"), "{said}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bake --recommended` bakes what a bench's budget chose for the scene (its method, its bake
+/// parameters; a flag beside it overrides one), and refuses, naming the file, a scene the file
+/// lacks and a chosen method that has no bake.
+#[test]
+fn bake_takes_the_method_and_parameters_a_budget_recommended() {
+    let dir = temp_dir("recommended");
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell.gltf");
+    let cornell = cornell.to_str().unwrap();
+    let recommended = r#"
+[cornell]
+method = "obscurance"
+
+[cornell.obscurance]
+params = { rays = 4, patches = 500, ambient = 0.5 }
+
+[cornell.constant]
+params = { ambient = 0.5 }
+
+[classroom]
+method = "constant"
+"#;
+    std::fs::write(dir.join("recommended.toml"), recommended).unwrap();
+    let bake = relume(&["bake", cornell, "--recommended", "recommended.toml", "--out", "chosen"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("chosen/manifest.json")).unwrap()).unwrap();
+    assert_eq!(
+        (manifest["method"].as_str(), manifest["parameters"]["rays_per_texel"].as_u64()),
+        (Some("obscurance"), Some(4)),
+        "{manifest}"
+    );
+    let bake = relume(&["bake", cornell, "--recommended", "recommended.toml", "--rays", "8", "--out", "given"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("given/manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["parameters"]["rays_per_texel"].as_u64(), Some(8), "the flag overrides the file: {manifest}");
+    let classroom = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/classroom.gltf");
+    let refused = relume(&["bake", classroom.to_str().unwrap(), "--recommended", "recommended.toml", "--out", "x"], &dir);
+    assert_one_error(&refused, &["recommended.toml", "scene \"classroom\"", "constant", "needs no bake"]);
+    let maze = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/maze.gltf");
+    let refused = relume(&["bake", maze.to_str().unwrap(), "--recommended", "recommended.toml", "--out", "x"], &dir);
+    assert_one_error(&refused, &["recommended.toml", "no scene \"maze\"", "--budget"]);
+    assert!(!dir.join("x").exists());
+}

@@ -61,9 +61,18 @@ impl Config {
 pub(crate) fn config(method: &'static dyn Method, table: toml::Table) -> Result<Config> {
     let label = label(&table);
     let context = || format!("method {} [{label}]", method.name());
+    let (frame, pairs) = split(&table).with_context(context)?;
+    let values = methods::parse_values(method, &pairs, None)
+        .with_context(|| format!("{} (or one of the frame keys: {})", context(), FRAME_KEYS.join(", ")))?;
+    Ok(Config { method, table, label, frame, values })
+}
+
+/// A parameter table's frame keys, and its other keys as flag pairs (`key = value` as
+/// `("key", "value")`, `key = true` as `("key", "true")`, `key = false` left out).
+pub(crate) fn split(table: &toml::Table) -> Result<(FrameParams, Vec<(String, String)>)> {
     let mut frame = FrameParams::default();
     let mut pairs = Vec::new();
-    for (key, value) in &table {
+    for (key, value) in table {
         let number = || {
             value
                 .as_float()
@@ -73,12 +82,12 @@ pub(crate) fn config(method: &'static dyn Method, table: toml::Table) -> Result<
         };
         let count = || value.as_integer().and_then(|i| u32::try_from(i).ok()).with_context(|| format!("{key}: give a whole number >= 0"));
         match key.as_str() {
-            "ambient" => frame.ambient = Some(Vec3::splat(number().with_context(context)?)),
-            "beta" => frame.beta = Some(number().with_context(context)?),
-            "shadow_map_size" => frame.shadow_map_size = Some(count().with_context(context)?),
-            "blur_radius" => frame.blur_radius = Some(count().with_context(context)?),
-            "min_variance" => frame.min_variance = Some(number().with_context(context)?),
-            "bleeding_reduction" => frame.bleeding_reduction = Some(number().with_context(context)?),
+            "ambient" => frame.ambient = Some(Vec3::splat(number()?)),
+            "beta" => frame.beta = Some(number()?),
+            "shadow_map_size" => frame.shadow_map_size = Some(count()?),
+            "blur_radius" => frame.blur_radius = Some(count()?),
+            "min_variance" => frame.min_variance = Some(number()?),
+            "bleeding_reduction" => frame.bleeding_reduction = Some(number()?),
             _ => match value {
                 toml::Value::Boolean(true) => pairs.push((key.clone(), "true".to_string())),
                 toml::Value::Boolean(false) => {}
@@ -87,9 +96,7 @@ pub(crate) fn config(method: &'static dyn Method, table: toml::Table) -> Result<
             },
         }
     }
-    let values = methods::parse_values(method, &pairs, None)
-        .with_context(|| format!("{} (or one of the frame keys: {})", context(), FRAME_KEYS.join(", ")))?;
-    Ok(Config { method, table, label, frame, values })
+    Ok((frame, pairs))
 }
 
 /// A parameter table as one short label: `key=value` pairs joined by spaces ("defaults" when empty).

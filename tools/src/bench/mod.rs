@@ -4,7 +4,7 @@
 //! writes results.csv, results.json, the charts and report.md into one folder.
 
 mod charts;
-mod config;
+pub(crate) mod config;
 mod figures;
 mod pareto;
 mod perceptual;

@@ -147,8 +147,9 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     let fronts = fronts(&summaries);
     save("summary.csv", &summary_csv(&summaries, &fronts))?;
     let recommendations = budget.map(|b| recommend(&summaries, b));
-    if let Some(recommendations) = &recommendations {
-        save("recommended.toml", &recommended_toml(recommendations))?;
+    let choices = recommendations.as_deref().map(choose);
+    if let (Some(recommendations), Some(choices)) = (&recommendations, &choices) {
+        save("recommended.toml", &recommended_toml(recommendations, choices))?;
     }
     let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
     scenes.dedup();
@@ -161,7 +162,8 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
             let _ = writeln!(charts_md, "![{md}]({stem}.png) ([SVG]({stem}.svg))\n");
         }
     }
-    let report = report_text(outcome, &summaries, &fronts, &charts_md, recommendations.as_deref(), budget);
+    let budgeted = recommendations.as_deref().zip(choices.as_deref()).zip(budget).map(|((r, c), b)| (r, c, b));
+    let report = report_text(outcome, &summaries, &fronts, &charts_md, budgeted);
     outputs.bytes(&out.join("report.md"), report.as_bytes())?;
     outputs.commit()?;
     if recommendations.is_none() {
@@ -281,8 +283,48 @@ fn recommend<'s>(summaries: &'s [Summary<'s>], budget: f64) -> Vec<Recommendatio
     recommendations
 }
 
-fn recommended_toml(recommendations: &[Recommendation]) -> String {
+/// The `--budget` choice for one scene across its methods: of each method's choice, the
+/// cheapest in cost order; the next cheapest method within the budget beside it. Without any
+/// within the budget, neither.
+pub(crate) struct SceneChoice<'s> {
+    scene: &'s str,
+    /// Indices into the recommendations: the chosen method's, then the next cheapest's.
+    chosen: Option<usize>,
+    runner_up: Option<usize>,
+}
+
+/// Per scene, in the order the scenes ran: the method the budget picks (the cheapest of the
+/// methods' choices) and the next cheapest within the budget.
+fn choose<'s>(recommendations: &[Recommendation<'s>]) -> Vec<SceneChoice<'s>> {
+    let mut scenes: Vec<&str> = recommendations.iter().map(|r| r.scene).collect();
+    scenes.dedup();
+    scenes
+        .into_iter()
+        .map(|scene| {
+            let mut within: Vec<usize> =
+                (0..recommendations.len()).filter(|&i| recommendations[i].scene == scene && recommendations[i].chosen.is_some()).collect();
+            within.sort_by(|&a, &b| cost_order(recommendations[a].choice().unwrap(), recommendations[b].choice().unwrap()));
+            SceneChoice { scene, chosen: within.first().copied(), runner_up: within.get(1).copied() }
+        })
+        .collect()
+}
+
+impl<'s> Recommendation<'s> {
+    /// The configuration chosen within the budget.
+    fn choice(&self) -> Option<&'s Summary<'s>> {
+        self.chosen.map(|i| self.ladder[i])
+    }
+}
+
+fn recommended_toml(recommendations: &[Recommendation], choices: &[SceneChoice]) -> String {
     let mut root = toml::Table::new();
+    for c in choices {
+        if let Some(i) = c.chosen {
+            let mut scene = toml::Table::new();
+            scene.insert("method".into(), toml::Value::String(recommendations[i].method.to_string()));
+            root.insert(c.scene.to_string(), toml::Value::Table(scene));
+        }
+    }
     for r in recommendations {
         let Some(chosen) = r.chosen else { continue };
         let s = r.ladder[chosen];
@@ -298,7 +340,7 @@ fn recommended_toml(recommendations: &[Recommendation]) -> String {
         }
     }
     format!(
-        "# relume bench --budget: per scene and method, the cheapest parameter set within the budget.\n{}",
+        "# relume bench --budget: per scene, the method whose cheapest parameter set within the budget is cheapest\n# of all (`method`), and per method its cheapest parameter set within the budget.\n{}",
         toml::to_string(&root).unwrap_or_default()
     )
 }
@@ -317,8 +359,7 @@ fn report_text(
     summaries: &[Summary],
     fronts: &[bool],
     charts_md: &str,
-    recommendations: Option<&[Recommendation]>,
-    budget: Option<f64>,
+    budgeted: Option<(&[Recommendation], &[SceneChoice], f64)>,
 ) -> String {
     let sweep = &outcome.sweep;
     let mut r = String::new();
@@ -367,43 +408,8 @@ fn report_text(
         );
     }
     let _ = writeln!(r, "\n## Charts\n\n{charts_md}");
-    if let (Some(recommendations), Some(budget)) = (recommendations, budget) {
-        let _ = writeln!(r, "## Within the budget: NRMSE <= {budget}\n");
-        let _ = writeln!(r, "Per scene and method, the configurations in order of cost (artifact size to 3 digits, then bake time, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
-        for rec in recommendations {
-            let describe = |i: usize| {
-                let s = rec.ladder[i];
-                format!(
-                    "[{}] NRMSE {:.4}, {:.2} MiB, bake {:.2} s, {:.2} ms",
-                    s.first().params,
-                    s.mean_nrmse,
-                    s.artifact_mib(),
-                    s.first().bake.seconds,
-                    s.gpu_ms
-                )
-            };
-            match rec.chosen {
-                Some(i) => {
-                    let smaller = if i > 0 { describe(i - 1) } else { "none".into() };
-                    let larger = if i + 1 < rec.ladder.len() { describe(i + 1) } else { "none".into() };
-                    let _ = writeln!(
-                        r,
-                        "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}",
-                        rec.scene,
-                        rec.method,
-                        describe(i)
-                    );
-                }
-                None => {
-                    let best = (0..rec.ladder.len())
-                        .min_by(|&a, &b| rec.ladder[a].mean_nrmse.total_cmp(&rec.ladder[b].mean_nrmse))
-                        .map(describe)
-                        .unwrap_or_default();
-                    let _ = writeln!(r, "- {} {}: no configuration within the budget (the best: {best})", rec.scene, rec.method);
-                }
-            }
-        }
-        let _ = writeln!(r);
+    if let Some((recommendations, choices, budget)) = budgeted {
+        budget_text(&mut r, recommendations, choices, budget);
     }
     let _ = writeln!(r, "## Every point: method image, reference, false-colour error\n");
     let _ = writeln!(r, "| point | method | reference | error | NRMSE |\n|---|---|---|---|---|");
@@ -421,6 +427,72 @@ fn report_text(
         );
     }
     r
+}
+
+/// A configuration as the budget's text names it.
+fn describe(s: &Summary) -> String {
+    format!(
+        "{} [{}] NRMSE {:.4}, {:.2} MiB, bake {:.2} s, {:.2} ms",
+        s.first().method,
+        s.first().params,
+        s.mean_nrmse,
+        s.artifact_mib(),
+        s.first().bake.seconds,
+        s.gpu_ms
+    )
+}
+
+/// The report's budget section: per scene the method chosen across methods, the next
+/// cheapest and what one step more of the chosen method buys; then per scene and method.
+fn budget_text(r: &mut String, recommendations: &[Recommendation], choices: &[SceneChoice], budget: f64) {
+    let _ = writeln!(r, "## Within the budget: NRMSE <= {budget}\n");
+    let _ = writeln!(r, "Per scene, across methods: the cheapest of each method's choice (below), the next cheapest method within the budget, and what one step dearer of the chosen method would cost and give. Written to recommended.toml as the scene's `method`.\n");
+    for c in choices {
+        let Some(i) = c.chosen else {
+            let best = recommendations
+                .iter()
+                .filter(|rec| rec.scene == c.scene)
+                .flat_map(|rec| rec.ladder.iter())
+                .min_by(|a, b| a.mean_nrmse.total_cmp(&b.mean_nrmse));
+            let _ = writeln!(
+                r,
+                "- {}: no method within the budget (the most accurate: {})",
+                c.scene,
+                best.map_or("none".into(), |s| describe(s))
+            );
+            continue;
+        };
+        let rec = &recommendations[i];
+        let next = c.runner_up.and_then(|j| recommendations[j].choice()).map_or("no other method within the budget".into(), describe);
+        let more = rec.chosen.and_then(|k| rec.ladder.get(k + 1)).map_or("none".into(), |s| describe(s));
+        let _ = writeln!(
+            r,
+            "- {}: **{}**; the next cheapest method: {next}; one step dearer: {more}",
+            c.scene,
+            describe(rec.choice().unwrap())
+        );
+    }
+    let _ = writeln!(r, "\nPer scene and method, the configurations in order of cost (artifact size to 3 digits, then bake time, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
+    for rec in recommendations {
+        match rec.chosen {
+            Some(i) => {
+                let smaller = if i > 0 { describe(rec.ladder[i - 1]) } else { "none".into() };
+                let larger = rec.ladder.get(i + 1).map_or("none".into(), |s| describe(s));
+                let _ = writeln!(
+                    r,
+                    "- {} {}: **{}**; one step smaller: {smaller}; one step larger: {larger}",
+                    rec.scene,
+                    rec.method,
+                    describe(rec.ladder[i])
+                );
+            }
+            None => {
+                let best = rec.ladder.iter().min_by(|a, b| a.mean_nrmse.total_cmp(&b.mean_nrmse)).map_or(String::new(), |s| describe(s));
+                let _ = writeln!(r, "- {} {}: no configuration within the budget (the best: {best})", rec.scene, rec.method);
+            }
+        }
+    }
+    let _ = writeln!(r);
 }
 
 #[cfg(test)]
@@ -479,5 +551,40 @@ mod tests {
         let cell = |name: &str| failed[header.iter().position(|h| *h == name).unwrap()];
         assert_eq!((cell("nrmse"), cell("flip"), cell("non_finite_pixels")), ("", "", "3"), "error cells empty, the NaN count kept");
         assert!(summary_csv(&summaries, &fronts(&summaries)).contains("\ns,m,a,2,1,0.100000,"));
+    }
+
+    /// Across methods, the budget picks the cheaper of two methods when both meet it, and the
+    /// more accurate when only one does; recommended.toml names it; with none within it, the
+    /// report names the most accurate.
+    #[test]
+    fn the_budget_picks_the_cheaper_method_within_it_and_else_the_one_that_meets_it() {
+        let of = |method: &str, params: &str, nrmse: f64, bytes: u64| Row {
+            method: method.into(),
+            bake: BakeCost { artifact_bytes: bytes, ..BakeCost::default() },
+            ..point(params, 0, Some(nrmse))
+        };
+        let rows = [of("small", "a", 0.15, 1_000), of("small", "b", 0.12, 4_000), of("large", "c", 0.05, 50_000)];
+        let summaries = summaries(&rows);
+        let recommendations = recommend(&summaries, 0.2);
+        let choices = choose(&recommendations);
+        assert_eq!(choices.len(), 1);
+        let chosen = &recommendations[choices[0].chosen.unwrap()];
+        assert_eq!((chosen.method, chosen.choice().unwrap().first().params.as_str()), ("small", "a"), "both meet 0.2: the cheaper");
+        assert_eq!(recommendations[choices[0].runner_up.unwrap()].method, "large");
+        let written: toml::Table = toml::from_str(&recommended_toml(&recommendations, &choices)).unwrap();
+        assert_eq!(written["s"]["method"].as_str(), Some("small"));
+        assert_eq!(written["s"]["large"]["mean_nrmse"].as_float(), Some(0.05));
+
+        let recommendations = recommend(&summaries, 0.1);
+        let choices = choose(&recommendations);
+        assert_eq!(recommendations[choices[0].chosen.unwrap()].method, "large", "only the dearer meets 0.1");
+        assert!(choices[0].runner_up.is_none());
+
+        let recommendations = recommend(&summaries, 0.01);
+        let choices = choose(&recommendations);
+        assert!(choices[0].chosen.is_none());
+        let mut text = String::new();
+        budget_text(&mut text, &recommendations, &choices, 0.01);
+        assert!(text.contains("- s: no method within the budget (the most accurate: large [c] NRMSE 0.0500"), "{text}");
     }
 }
