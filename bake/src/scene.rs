@@ -108,6 +108,12 @@ pub struct Camera {
 }
 
 impl Scene {
+    /// Its point and spot lights: those that stand somewhere (a directional light's light
+    /// comes from afar).
+    pub fn local_lights(&self) -> impl Iterator<Item = &Light> {
+        self.lights.iter().filter(|l| l.kind != LightKind::Directional)
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.indices.len() / 3).sum()
     }

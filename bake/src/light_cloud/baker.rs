@@ -67,7 +67,7 @@ fn unit_light(position: Vec3) -> Light {
 }
 
 /// A cloud direction's light: parallel, 1 lux white, travelling along `direction`.
-fn unit_directional_light(direction: Vec3) -> Light {
+pub(super) fn unit_directional_light(direction: Vec3) -> Light {
     Light { kind: LightKind::Directional, position: Vec3::ZERO, direction, ..unit_light(Vec3::ZERO) }
 }
 

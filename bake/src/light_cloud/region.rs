@@ -10,7 +10,7 @@
 use super::baker::inside;
 use super::{CloudGrid, MAX_CLOUD_LIGHTS};
 use crate::bvh::SceneBvh;
-use crate::scene::{Light, LightKind, Scene};
+use crate::scene::Scene;
 use glam::{IVec3, Vec3};
 
 /// Voxels along the scene's longest side.
@@ -32,11 +32,11 @@ pub struct Reachable {
 /// twice: over the scene's bounds, then over what that reached widened by a voxel, so a room
 /// in a large model (a house on its terrain) is resolved as finely as a room alone.
 pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
-    if local_lights(scene).next().is_none() {
+    if scene.local_lights().next().is_none() {
         return Err("the scene has no point or spot light to derive the cloud's region from; declare extras.relume.light_cloud.grid".into());
     }
     // The scene's bounds and its lights (a spot above a model lights it from outside them).
-    let (lo, hi) = local_lights(scene).fold(scene.settings.bounds, |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
+    let (lo, hi) = scene.local_lights().fold(scene.settings.bounds, |(lo, hi), l| (lo.min(l.position), hi.max(l.position)));
     let coarse = flood(scene, bvh, lo, hi)?;
     let widen = coarse.voxel;
     let fine = flood(scene, bvh, (coarse.min - widen).max(lo), (coarse.max + widen).min(hi))?;
@@ -47,12 +47,6 @@ pub fn reachable(scene: &Scene, bvh: &SceneBvh) -> Result<Reachable, String> {
         counts = counts.map(|c| (c * 3 / 4).max(1));
     }
     Ok(Reachable { grid: CloudGrid { min, max, counts }, reached: fine.reached, voxels: fine.voxels })
-}
-
-/// The scene's point and spot lights: those that stand somewhere (a directional light's light
-/// comes from afar, and the cloud's directions stand for it).
-pub fn local_lights(scene: &Scene) -> impl Iterator<Item = &Light> {
-    scene.lights.iter().filter(|l| l.kind != LightKind::Directional)
 }
 
 /// What one flood over a box reached: its voxels' bounds and count, of how many, of what size.
@@ -78,7 +72,7 @@ fn flood(scene: &Scene, bvh: &SceneBvh, lo: Vec3, hi: Vec3) -> Result<Flood, Str
     // Segments start at a voxel's middle, or at the light in a light's voxel (whose middle may
     // be inside something: a lamp by a wall).
     let mut seeds: Vec<(IVec3, Vec3)> = Vec::new();
-    for light in local_lights(scene) {
+    for light in scene.local_lights() {
         let v = ((light.position - lo) / voxel).floor().as_ivec3().clamp(IVec3::ZERO, counts - 1);
         if inside(bvh, light.position) {
             return Err(format!(

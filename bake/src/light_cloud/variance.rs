@@ -3,9 +3,11 @@
 //! The paper plots the back wall of its Cornell box; relume averages over the clusters of a
 //! compressed cloud (each cluster is one PCA), weighted by their vertices.
 
+use super::baker::unit_directional_light;
 use super::{Columns, LightCloud};
 use crate::bvh::SceneBvh;
 use crate::cpca;
+use crate::reference::punctual_irradiance;
 use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -51,7 +53,7 @@ pub fn explained_variance(
             .flat_map_iter(|&v| {
                 let (p, n) = (positions[v as usize], normals[v as usize]);
                 lights.clone().map(move |j| match reduced.is_direction(j) {
-                    true => direct_parallel(bvh, p, n, reduced.lights[j]),
+                    true => punctual_irradiance(bvh, &unit_directional_light(reduced.lights[j]), p, n, n, true).map_or(0.0, |(e, _)| e.x),
                     false => direct_irradiance(bvh, p, n, reduced.lights[j]),
                 })
             })
@@ -102,18 +104,5 @@ fn direct_irradiance(bvh: &SceneBvh, p: Vec3, n: Vec3, light: Vec3) -> f32 {
         cos / (distance * distance)
     } else {
         0.0
-    }
-}
-
-/// The irradiance 1 lux of parallel light travelling along `direction` gives a surface at `p`
-/// facing `n` (lux).
-fn direct_parallel(bvh: &SceneBvh, p: Vec3, n: Vec3, direction: Vec3) -> f32 {
-    let cos = -n.dot(direction);
-    if cos <= 0.0 {
-        return 0.0;
-    }
-    match bvh.closest_hit(bvh.offset_origin(p, n, -direction), -direction, f32::INFINITY) {
-        Some(_) => 0.0,
-        None => cos,
     }
 }

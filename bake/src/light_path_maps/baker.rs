@@ -15,7 +15,7 @@ use crate::atlas::Texel;
 use crate::bvh::SceneBvh;
 use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
-use crate::scene::{Light, LightKind, Scene};
+use crate::scene::{Light, Scene};
 use crate::settings::first_failed_check;
 use crate::work::{progress_bar, WorkOptions};
 use glam::{Vec2, Vec3};
@@ -94,7 +94,7 @@ pub fn test_points(scene: &Scene, region: Option<&LightRegion>, seed: u64) -> Re
             })
             .collect()),
         None => {
-            let lights: Vec<Vec3> = scene.lights.iter().filter(|l| l.kind != LightKind::Directional).map(|l| l.position).collect();
+            let lights: Vec<Vec3> = scene.local_lights().map(|l| l.position).collect();
             if lights.is_empty() {
                 return Err(format!(
                     "{}: no light region and no point or spot light to place entry points from; declare extras.relume.light_path_maps.region",

@@ -198,7 +198,7 @@ fn checked(scene: &Scene) -> Result<LightCloudSceneSettings> {
 /// Whether the scene has a light that stands somewhere (else the cloud needs no points unless
 /// the scene declares a grid).
 fn has_local_lights(scene: &Scene) -> bool {
-    lc::region::local_lights(scene).next().is_some()
+    scene.local_lights().next().is_some()
 }
 
 /// A bake read for a scene, with the run-time m and fade and the scene's visibility.

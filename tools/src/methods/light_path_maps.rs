@@ -247,8 +247,7 @@ impl Method for LightPathMaps {
                 bake.derived("region", value, &how, "extras.relume.light_path_maps.region");
             }
             _ => {
-                let local = scene.lights.iter().filter(|l| l.kind != LightKind::Directional);
-                let points: Vec<[f32; 3]> = local.map(|l| l.position.to_array()).collect();
+                let points: Vec<[f32; 3]> = scene.local_lights().map(|l| l.position.to_array()).collect();
                 let how = format!("the {} light(s) where they stand, as test points (relit well near there only)", points.len());
                 bake.derived("region", json!({ "points": points }), &how, "extras.relume.light_path_maps.region");
             }
