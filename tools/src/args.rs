@@ -197,8 +197,6 @@ fn parse_ambient(text: &str) -> Result<Vec3> {
     }
 }
 
-/// The frame's settings from the flags over the method's ambient light `defaults` (I_A and
-/// beta; None: the method models none, as with --direct-only).
 /// The frame's settings from the flags, with a method's ambient light: `defaults` its I_A and
 /// beta (None: it models no ambient light), `environment` whether it adds the scene's
 /// environment to them (`Method::environment_ambient`); `--direct-only` drops all three.

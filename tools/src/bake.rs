@@ -64,32 +64,21 @@ pub(crate) fn baking_method(name: &str) -> Result<&'static dyn Method> {
 }
 
 /// The scene's name as a sweep names it: its file name without the extension.
-fn scene_name(scene: &Path) -> String {
+pub(crate) fn scene_name(scene: &Path) -> String {
     scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
 }
 
 /// The method a bench's recommended.toml chose for the scene `name` and its bake parameters
-/// as flag pairs (its run-time and frame keys left to `render`), refused naming the file, the
-/// scene and the fix.
+/// as flag pairs (its run-time and frame keys left to `render`).
 fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, Vec<(String, String)>)> {
-    let at = |what: String| anyhow::anyhow!("{}: {what}", file.display());
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| at(format!("cannot read it ({e}); give the recommended.toml `relume bench --budget` wrote")))?;
-    let table: toml::Table =
-        toml::from_str(&text).map_err(|e| at(format!("not a recommended.toml ({e}); `relume bench --budget` writes one")))?;
-    let Some(entry) = table.get(name).and_then(|v| v.as_table()) else {
-        let scenes: Vec<&String> = table.keys().collect();
-        return Err(at(format!(
-            "no scene \"{name}\" (it has {scenes:?}); bench this scene with --budget, or give the scene under the name the sweep gave it"
-        )));
-    };
-    let Some(method) = entry.get("method").and_then(|m| m.as_str()) else {
-        return Err(at(format!("scene \"{name}\": no method was within the budget; bench again with a larger --budget")));
-    };
-    let method = baking_method(method)
-        .map_err(|e| at(format!("scene \"{name}\": {e:#} (the budget chose a method that needs no bake: render it)")))?;
-    let params = entry.get(method.name()).and_then(|e| e.get("params")).and_then(|p| p.as_table()).cloned().unwrap_or_default();
-    let (_, pairs) = crate::bench::config::split(&params).map_err(|e| at(format!("scene \"{name}\": {e:#}")))?;
+    let (method, table) = crate::bench::config::recommended(file, name)?;
+    let method = baking_method(method.name()).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: scene \"{name}\": {e:#} (the budget chose a method that needs no bake: `relume run --recommended` renders it)",
+            file.display()
+        )
+    })?;
+    let (_, pairs) = crate::bench::config::split(&table)?;
     let baked: Vec<&str> = method.params().iter().filter(|p| p.stage == Stage::Bake).map(|p| p.name).collect();
     Ok((method, pairs.into_iter().filter(|(key, _)| baked.contains(&key.as_str())).collect()))
 }

@@ -1,11 +1,13 @@
-//! `relume run`, the main job: every method that suits the scene, baked (those that bake) and
-//! rendered with the Vulkan renderer, and the reference path tracer; each compared with the
+//! `relume run`, the main job: every method that suits the scene (or the one a bench's budget
+//! chose for it), baked (those that bake) and rendered with the Vulkan renderer, and the reference path tracer; each compared with the
 //! reference, over the whole image and over its indirect part (its image minus direct light
 //! alone); the images and `report.md` written into one folder.
 
 use crate::args::{load_scene, reference_settings, render_settings, GpuArgs, PathTracerArgs, SceneArgs, FRAMES};
 use crate::bake::bake_scene;
+use crate::bench::config::{self, FrameParams};
 use crate::gpu::{median_timings, render_on_gpu, write_render_outputs, GpuJob, GpuRender};
+use crate::methods::params::Values;
 use crate::methods::{self, Loaded, Method, Plain};
 use crate::reference::{trace_reference, write_reference, ReferenceRun};
 use anyhow::{bail, Context as _, Result};
@@ -14,6 +16,7 @@ use relume_bake::artifact::Artifact;
 use relume_bake::image::{self, Image};
 use relume_bake::metrics;
 use relume_bake::outputs::Outputs;
+use relume_bake::scene::Scene;
 use relume_renderer::RenderSettings;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -35,6 +38,12 @@ pub(crate) struct RunArgs {
     /// Rays per texel of the bakes that trace them (obscurances).
     #[arg(long, default_value_t = 256)]
     rays: u32,
+    /// Instead of every method that suits the scene: the method and configuration (bake, run
+    /// time and frame keys) a `relume bench --budget` chose for this scene (its
+    /// recommended.toml; the scene by its file name, as the sweep names it), as the bench
+    /// rendered it.
+    #[arg(long, conflicts_with_all = ["ambient", "beta", "direct_only", "rays"])]
+    recommended: Option<PathBuf>,
 }
 
 /// One method of the main job: what it renders from, with which settings.
@@ -49,12 +58,13 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
     let frames = args.frames;
     let work = relume_bake::work::WorkOptions { threads: reference_settings.work.threads, progress: true, ..Default::default() };
+    // A bad recommended file is refused before anything is written.
+    let chosen = chosen_methods(args, &scene)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
     let mut models = Vec::new();
     let mut bake_summary = String::new();
-    for method in methods::METHODS.into_iter().filter(|m| methods::suits(*m, &scene)) {
-        let values = methods::parse_values(method, &method.main_job_values(args.rays), None)?;
+    for (method, values, frame) in chosen {
         let artifact = match method.bakes() {
             true => {
                 println!("baking {} of {}", method.name(), args.scene.scene.display());
@@ -68,6 +78,11 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
         };
         let loaded = methods::load(method, artifact.as_ref(), &scene, &values)?;
         let settings = render_settings(&args.scene, &args.gpu, method.ambient(&scene), method.environment_ambient())?;
+        let settings = match frame {
+            Some(frame) => frame.settings(method, &scene, settings),
+            None => settings,
+        };
+        settings.validate().map_err(|e| anyhow::anyhow!("{}: render settings: {e}", method.name()))?;
         models.push(Model { method, loaded, settings });
     }
 
@@ -108,6 +123,23 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
         bail!("the {} image has {} NaN or infinite pixel(s)", row.method, row.combined.non_finite_pixels);
     }
     Ok(())
+}
+
+/// The methods `relume run` renders, with their values and (from a recommended.toml) the
+/// frame's keys: the one the budget chose, or every method that suits the scene with the main
+/// job's values.
+fn chosen_methods(args: &RunArgs, scene: &Scene) -> Result<Vec<(&'static dyn Method, Values, Option<FrameParams>)>> {
+    if let Some(file) = &args.recommended {
+        let (method, table) = config::recommended(file, &crate::bake::scene_name(&args.scene.scene))?;
+        methods::refuse(method, scene).with_context(|| format!("{}: the method chosen for this scene", file.display()))?;
+        let chosen = config::config(method, table).with_context(|| format!("{}", file.display()))?;
+        return Ok(vec![(method, chosen.values, Some(chosen.frame))]);
+    }
+    methods::METHODS
+        .into_iter()
+        .filter(|m| methods::suits(*m, scene))
+        .map(|method| Ok((method, methods::parse_values(method, &method.main_job_values(args.rays), None)?, None)))
+        .collect()
 }
 
 /// One method's error against the reference.

@@ -170,3 +170,96 @@ fn light_clouds_on_cornells_spot_beat_light_path_maps_of_the_same_size() {
     assert!(bands2 <= lpm, "light cloud {bands2} against light path maps {lpm}");
     assert!(bands2 < 0.7 * bands0, "bands 2 {bands2} against bands 0 {bands0}");
 }
+
+/// The cross-method sweep in small: every method on cornell (its spot) and fiv-blobs (an
+/// environment), at the least effort each takes. methods.csv has a row per scene and method
+/// that applies there and none for the others (listed in the report as not applying); the
+/// indirect columns are empty under the environment; a budget on memory alone names a method
+/// per scene; and `relume run --recommended` bakes and renders that choice against the
+/// reference.
+#[test]
+fn a_tiny_cross_method_sweep_covers_every_method_that_applies_and_its_choice_runs() {
+    let (out, cache) = (temp_dir("methods-out"), temp_dir("methods-cache"));
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let sweep = format!(
+        "name = 'methods'\nwidth = 24\nheight = 24\nreference_spp = 8\nframes = 2\nwarmup_seconds = 0.05\nreference_noise = true\n\
+         [[scenes]]\npath = '{}'\n[[scenes]]\npath = '{}'\n\
+         [[methods]]\nmethod = 'direct'\n[[methods]]\nmethod = 'constant'\n\
+         [[methods]]\nmethod = 'obscurance'\nparams = [{{ rays = 4, patches = 300 }}]\n\
+         [[methods]]\nmethod = 'light-path-maps'\nparams = [{{ rays = 1, patches = 400, entry-points = 64, uncompressed = true }}]\n\
+         [[methods]]\nmethod = 'fiv'\nparams = [{{ grid = '32x17x15', difmap-width = 8 }}]\n\
+         [[methods]]\nmethod = 'light-cloud'\nparams = [{{ samples = 2, zones = 1, emission-bands = 1, max-edge = 0.1 }}]\n\
+         [[methods]]\nmethod = 'mrt'\nparams = [{{ samples-per-face = 2, gather-rays = 16, modes = 4, prior-modes = 4, lightfield = 2, lightfield-modes = 8, response-modes = 4, dictionary-cache = '{}' }}]\n",
+        scenes.join("cornell.gltf").display(),
+        scenes.join("fiv-blobs.gltf").display(),
+        out.join("dictionaries").display()
+    );
+    std::fs::write(out.join("methods.toml"), sweep).unwrap();
+    let report = out.join("report");
+    bench_sweep(
+        &out.join("methods.toml"),
+        &report,
+        &cache,
+        &["--budget-mib", "64", "--overview", &out.join("overview.md").to_string_lossy()],
+    );
+
+    let rows = read_csv(&report.join("methods.csv"));
+    let mut cells: Vec<(String, String)> = rows.iter().map(|r| (r["scene"].clone(), r["method"].clone())).collect();
+    cells.sort();
+    let expected = [
+        ("cornell", "constant"),
+        ("cornell", "direct"),
+        ("cornell", "light-cloud"),
+        ("cornell", "light-path-maps"),
+        ("cornell", "mrt"),
+        ("cornell", "obscurance"),
+        ("fiv-blobs", "constant"),
+        ("fiv-blobs", "fiv"),
+        ("fiv-blobs", "obscurance"),
+    ];
+    assert_eq!(cells, expected.map(|(s, m)| (s.to_string(), m.to_string())), "a row per scene and method that applies");
+    for row in &rows {
+        assert!(row["best NRMSE"].parse::<f64>().is_ok_and(f64::is_finite), "{row:?}");
+        let indirect = &row["best indirect NRMSE"];
+        match row["scene"].as_str() {
+            "fiv-blobs" => assert!(indirect.is_empty(), "no indirect part under an environment: {row:?}"),
+            _ => assert!(indirect.parse::<f64>().is_ok_and(f64::is_finite), "{row:?}"),
+        }
+    }
+    let text = std::fs::read_to_string(report.join("report.md")).unwrap();
+    for refused in ["cornell fiv: fiv models a distant environment's light", "fiv-blobs light-cloud: light-cloud models the light of point"]
+    {
+        assert!(text.contains(refused), "the report lists what does not apply ({refused}):\n{text}");
+    }
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report.join("results.json")).unwrap()).unwrap();
+    let noise = json["reference_noise"].as_array().expect("the references' noise per scene");
+    assert_eq!(noise.len(), 2);
+    for n in noise {
+        // 8 samples a pixel: noisy, never identical to the next seed's.
+        assert!(n["nrmse"].as_f64().is_some_and(|v| v > 0.0 && v < 2.0), "{n}");
+    }
+    assert!(text.contains("The references' own noise"), "{text}");
+    let overview = std::fs::read_to_string(out.join("overview.md")).unwrap();
+    assert!(overview.contains("(report/cornell_error_vs_frame_time.png)") && overview.contains("## Across methods"), "{overview}");
+
+    let recommended: toml::Table = toml::from_str(&std::fs::read_to_string(report.join("recommended.toml")).unwrap()).unwrap();
+    let chosen = recommended["cornell"]["method"].as_str().expect("the budget names a method for cornell").to_string();
+    assert!(recommended["fiv-blobs"]["method"].is_str(), "and for fiv-blobs");
+    let run = Command::new(env!("CARGO_BIN_EXE_relume"))
+        .arg("run")
+        .arg(scenes.join("cornell.gltf"))
+        .args(["--recommended", &report.join("recommended.toml").to_string_lossy(), "--out", &out.join("run").to_string_lossy()])
+        .args(["--width", "24", "--height", "24", "--spp", "8", "--frames", "1"])
+        .output()
+        .expect("run relume run");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "relume run --recommended failed:\n{stdout}\n{}", String::from_utf8_lossy(&run.stderr));
+    let run_report = std::fs::read_to_string(out.join("run/report.md")).unwrap();
+    assert!(run_report.contains(&format!("| {chosen} | ")), "the chosen {chosen} is rendered and scored:\n{run_report}");
+    let rendered: Vec<String> = std::fs::read_dir(out.join("run"))
+        .unwrap()
+        .filter_map(|e| e.unwrap().file_name().to_str()?.strip_suffix(".exr").map(String::from))
+        .filter(|name| name != "reference")
+        .collect();
+    assert_eq!(rendered, [chosen], "the chosen method alone");
+}

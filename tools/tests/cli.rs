@@ -532,7 +532,8 @@ fn an_mrt_bake_reuses_a_dictionary_and_refuses_one_of_other_parameters() {
 
 /// `bake --recommended` bakes what a bench's budget chose for the scene (its method, its bake
 /// parameters; a flag beside it overrides one), and refuses, naming the file, a scene the file
-/// lacks and a chosen method that has no bake.
+/// lacks and a chosen method that has no bake; `run --recommended` refuses a scene the file
+/// lacks the same way, and --ambient beside it.
 #[test]
 fn bake_takes_the_method_and_parameters_a_budget_recommended() {
     let dir = temp_dir("recommended");
@@ -570,5 +571,10 @@ method = "constant"
     let maze = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/maze.gltf");
     let refused = relume(&["bake", maze.to_str().unwrap(), "--recommended", "recommended.toml", "--out", "x"], &dir);
     assert_one_error(&refused, &["recommended.toml", "no scene \"maze\"", "--budget"]);
+    // `run --recommended` refuses the same way, before any work, and takes no --ambient beside it.
+    let refused = relume(&["run", maze.to_str().unwrap(), "--recommended", "recommended.toml", "--out", "x"], &dir);
+    assert_one_error(&refused, &["recommended.toml", "no scene \"maze\"", "--budget"]);
+    let refused = relume(&["run", cornell, "--recommended", "recommended.toml", "--ambient", "1", "--out", "x"], &dir);
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("cannot be used with"), "{}", String::from_utf8_lossy(&refused.stderr));
     assert!(!dir.join("x").exists());
 }

@@ -17,6 +17,39 @@ const SIZE: (u32, u32) = (900, 560);
 pub(crate) struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
+    /// Its colour and marker, by index (None: its place among the chart's series), so that
+    /// one method looks the same in every chart.
+    pub style: Option<usize>,
+    /// A short label written beside each point (none when empty).
+    pub point_labels: Vec<String>,
+}
+
+impl Series {
+    pub fn new(label: String, points: Vec<(f64, f64)>) -> Series {
+        Series { label, points, style: None, point_labels: Vec::new() }
+    }
+}
+
+/// The markers a series is told apart by beside its colour, in style order.
+const MARKERS: usize = 7;
+
+/// Series `style`'s marker as a polygon about (0, 0), in pixels: a disc, a triangle, a
+/// square, a plus, a diamond, a triangle upside down and a cross (one per method).
+fn marker(style: usize) -> Vec<(i32, i32)> {
+    match style % MARKERS {
+        0 => (0..12)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 12.0;
+                ((5.5 * a.cos()).round() as i32, (5.5 * a.sin()).round() as i32)
+            })
+            .collect(),
+        1 => vec![(0, -7), (7, 5), (-7, 5)],
+        2 => vec![(-5, -5), (5, -5), (5, 5), (-5, 5)],
+        3 => vec![(-2, -7), (2, -7), (2, -2), (7, -2), (7, 2), (2, 2), (2, 7), (-2, 7), (-2, 2), (-7, 2), (-7, -2), (-2, -2)],
+        4 => vec![(0, -7), (7, 0), (0, 7), (-7, 0)],
+        5 => vec![(0, 7), (7, -5), (-7, -5)],
+        _ => vec![(-6, -4), (-4, -6), (0, -2), (4, -6), (6, -4), (2, 0), (6, 4), (4, 6), (0, 2), (-4, 6), (-6, 4), (-2, 0)],
+    }
 }
 
 pub(crate) struct Chart<'a> {
@@ -97,14 +130,26 @@ where
         .map_err(fail)?;
     plot.configure_mesh().x_desc(chart.x_label).y_desc(chart.y_label).label_style((FONT, 14)).draw().map_err(fail)?;
     for (i, series) in chart.series.iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
+        let style = series.style.unwrap_or(i);
+        let colour = Palette99::pick(style).to_rgba();
         if chart.lines {
             plot.draw_series(LineSeries::new(series.points.iter().copied(), colour.stroke_width(2))).map_err(fail)?;
         }
-        plot.draw_series(series.points.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+        plot.draw_series(series.points.iter().map(|&p| EmptyElement::at(p) + Polygon::new(marker(style), colour.filled())))
             .map_err(fail)?
             .label(&series.label)
-            .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+            .legend(move |(x, y)| {
+                Polygon::new(marker(style).into_iter().map(|(dx, dy)| (x + 8 + dx, y + dy)).collect::<Vec<_>>(), colour.filled())
+            });
+        let text = TextStyle::from((FONT, 12).into_font()).color(&colour);
+        plot.draw_series(
+            series
+                .points
+                .iter()
+                .zip(&series.point_labels)
+                .map(|(&p, label)| EmptyElement::at(p) + Text::new(label.clone(), (7, -16), text.clone())),
+        )
+        .map_err(fail)?;
     }
     if chart.front.len() > 1 {
         let staircase: Vec<(f64, f64)> =

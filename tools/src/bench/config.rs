@@ -8,6 +8,7 @@ use anyhow::{Context as _, Result};
 use glam::Vec3;
 use relume_bake::scene::Scene;
 use relume_renderer::RenderSettings;
+use std::path::Path;
 
 /// The keys every method takes at run time: `relume render`'s flags of the same names.
 pub(crate) const FRAME_KEYS: [&str; 6] = ["ambient", "beta", "shadow_map_size", "blur_radius", "min_variance", "bleeding_reduction"];
@@ -97,6 +98,28 @@ pub(crate) fn split(table: &toml::Table) -> Result<(FrameParams, Vec<(String, St
         }
     }
     Ok((frame, pairs))
+}
+
+/// The method a bench's recommended.toml chose for the scene `name` and its parameter table,
+/// refused naming the file, the scene and the fix.
+pub(crate) fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, toml::Table)> {
+    let at = |what: String| anyhow::anyhow!("{}: {what}", file.display());
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| at(format!("cannot read it ({e}); give the recommended.toml `relume bench --budget` wrote")))?;
+    let table: toml::Table =
+        toml::from_str(&text).map_err(|e| at(format!("not a recommended.toml ({e}); `relume bench --budget` writes one")))?;
+    let Some(entry) = table.get(name).and_then(|v| v.as_table()) else {
+        let scenes: Vec<&String> = table.keys().collect();
+        return Err(at(format!(
+            "no scene \"{name}\" (it has {scenes:?}); bench this scene with --budget, or give the scene under the name the sweep gave it"
+        )));
+    };
+    let Some(method) = entry.get("method").and_then(|m| m.as_str()) else {
+        return Err(at(format!("scene \"{name}\": no method was within the budget; bench again with a looser budget")));
+    };
+    let method = methods::find(method).map_err(|e| at(format!("scene \"{name}\": {e:#}")))?;
+    let params = entry.get(method.name()).and_then(|e| e.get("params")).and_then(|p| p.as_table()).cloned().unwrap_or_default();
+    Ok((method, params))
 }
 
 /// A parameter table as one short label: `key=value` pairs joined by spaces ("defaults" when empty).

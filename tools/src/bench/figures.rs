@@ -56,12 +56,13 @@ fn against_parameter<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart<'a>
     let mut series: Vec<Series> = Vec::new();
     for s in of_method {
         let table = &s.first().params_table;
-        let Some(at) = table.get(x).and_then(number) else { continue };
+        // Under an environment no indirect part is told apart: nothing to draw.
+        let Some(at) = table.get(x).and_then(number).filter(|_| s.mean_indirect_nrmse.is_finite()) else { continue };
         let others: Vec<String> = table.iter().filter(|(k, _)| *k != x).map(|(k, v)| format!("{k} = {v}")).collect();
         let label = if others.is_empty() { "defaults".to_string() } else { others.join(", ") };
         match series.iter_mut().find(|line| line.label == label) {
             Some(line) => line.points.push((at, s.mean_indirect_nrmse)),
-            None => series.push(Series { label, points: vec![(at, s.mean_indirect_nrmse)] }),
+            None => series.push(Series::new(label, vec![(at, s.mean_indirect_nrmse)])),
         }
     }
     series.iter_mut().for_each(|line| line.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
@@ -87,13 +88,17 @@ fn against_configuration<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart
     };
     let mut series = Vec::new();
     for s in of_method {
-        let mut points: Vec<(f64, f64)> =
-            s.rows().iter().filter_map(|r| Some((value(r)? as f64, r.accuracy.as_ref()?.indirect_nrmse))).collect();
+        let mut points: Vec<(f64, f64)> = s
+            .rows()
+            .iter()
+            .filter_map(|r| Some((value(r)? as f64, r.accuracy.as_ref()?.indirect_nrmse)))
+            .filter(|p| p.1.is_finite())
+            .collect();
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
         let label = if s.first().params.is_empty() { "defaults".to_string() } else { s.first().params.clone() };
         // A line needs the configurations to vary what it is drawn against.
         if points.windows(2).any(|w| w[0].0 != w[1].0) {
-            series.push(Series { label, points });
+            series.push(Series::new(label, points));
         }
     }
     (!series.is_empty()).then(|| Chart {
@@ -119,7 +124,7 @@ fn statistic_lines<'a>(of_method: &[&Summary], name: &'a str) -> Option<Chart<'a
                 continue;
             }
             let params = &s.first().params;
-            series.push(Series { label: if params.is_empty() { key.clone() } else { format!("{key} [{params}]") }, points });
+            series.push(Series::new(if params.is_empty() { key.clone() } else { format!("{key} [{params}]") }, points));
         }
     }
     (!series.is_empty()).then(|| Chart {

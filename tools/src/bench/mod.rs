@@ -48,10 +48,25 @@ pub(crate) struct BenchArgs {
     /// Reference images are cached here, by a hash of scene, camera, lights, samples and version.
     #[arg(long, default_value = "out/reference-cache")]
     cache: PathBuf,
-    /// Pick, per scene and method, the cheapest parameter set whose mean NRMSE over the light
-    /// configurations is within this; written to recommended.toml and the report.
+    /// Pick, per scene, the method and parameter set that is cheapest of those whose mean NRMSE
+    /// over the light configurations is within this; written to recommended.toml and the report.
     #[arg(long, value_parser = positive::<f64>)]
     budget: Option<f64>,
+    /// Leave out of the budget's choice what takes longer than this per frame (median GPU time,
+    /// ms); without --budget, the most accurate within the bounds is chosen.
+    #[arg(long, value_parser = positive::<f64>)]
+    budget_ms: Option<f64>,
+    /// Leave out of the budget's choice what has a larger bake artifact than this (MiB, what a
+    /// renderer uploads); without --budget, the most accurate within the bounds is chosen.
+    #[arg(long, value_parser = positive::<f64>)]
+    budget_mib: Option<f64>,
+    /// Also write this page: the budget's answer, the charts and the table across methods, and
+    /// links to --link's reports (the main job's out/report.md).
+    #[arg(long)]
+    overview: Option<PathBuf>,
+    /// A report the overview links to (repeatable): a `relume run` report, say.
+    #[arg(long, requires = "overview")]
+    link: Vec<PathBuf>,
     /// Start no new method configuration after this many seconds (the report says which were skipped).
     #[arg(long, value_parser = positive::<f64>)]
     time_limit: Option<f64>,
@@ -72,6 +87,10 @@ pub(crate) struct Outcome {
     device: String,
     rows: Vec<Row>,
     skipped: Vec<String>,
+    /// "scene method: why" of each method of the sweep that does not suit a scene (not run there).
+    not_applicable: Vec<String>,
+    /// Per scene that measured it: the references' own noise.
+    noise: Vec<(String, ReferenceNoise)>,
     references_traced: usize,
     references_found: usize,
     seconds: f64,
@@ -86,7 +105,9 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
     std::fs::create_dir_all(args.out.join("images")).with_context(|| format!("{}: cannot create the report folder", args.out.display()))?;
     let outcome = run_sweep(sweep, &configs, args)?;
     let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();
-    report::write_all(&args.out, &outcome, args.budget)?;
+    let budget = report::Budget { nrmse: args.budget, frame_ms: args.budget_ms, artifact_mib: args.budget_mib };
+    let overview = args.overview.as_ref().map(|path| report::Overview { path: path.clone(), links: args.link.clone() });
+    report::write_all(&args.out, &outcome, budget.given(), overview.as_ref())?;
     if let Some(first) = outcome.validation_messages.first() {
         bail!("{} Vulkan validation message(s), first: {first}", outcome.validation_messages.len());
     }
@@ -180,6 +201,8 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
     let mut cache = ReferenceCache::new(&args.cache)?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
+    let mut not_applicable = Vec::new();
+    let mut noise = Vec::new();
     let out_of_time = || args.time_limit.is_some_and(|limit| start.elapsed().as_secs_f64() > limit);
     for entry in &sweep.scenes {
         if out_of_time() {
@@ -187,7 +210,16 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
             continue;
         }
         let mut bench = SceneBench::new(&sweep, entry, &ctx, &mut cache, args)?;
+        noise.extend(bench.noise.map(|n| (bench.name.clone(), n)));
         for config in configs {
+            if let Some(why) = methods::unsuited(config.method, &bench.scene) {
+                let line = format!("{} {}: {why}", bench.name, config.method.name());
+                if !not_applicable.contains(&line) {
+                    println!("{line}");
+                    not_applicable.push(line);
+                }
+                continue;
+            }
             if out_of_time() {
                 skipped.push(format!("{} {} [{}]", bench.name, config.method.name(), config.label));
                 continue;
@@ -214,6 +246,8 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
         device,
         rows,
         skipped,
+        not_applicable,
+        noise,
         references_traced,
         references_found,
         seconds: start.elapsed().as_secs_f64(),
@@ -233,6 +267,8 @@ struct SceneBench<'s> {
     /// Seconds between consecutive configurations when the light moves continuously.
     continuous: Option<f32>,
     references: Vec<Reference>,
+    /// The references' own noise (with the sweep's reference_noise).
+    noise: Option<ReferenceNoise>,
     /// Bakes made so far, by method and flags: configurations that differ only at run time
     /// (composition, shadow maps) share one.
     bakes: Vec<(String, PathBuf, BakeCost)>,
@@ -273,6 +309,16 @@ impl<'s> SceneBench<'s> {
             outputs.commit()?;
             references.push(reference);
         }
+        let noise = match sweep.reference_noise {
+            true => {
+                println!("{name}: reference 1 again with the next seed (its noise)");
+                let seeded = ReferenceSettings { work: WorkOptions { seed: settings.work.seed + 1, ..settings.work }, ..settings.clone() };
+                let moved = configurations[0].apply_to(&scene);
+                let again = cache.get(&moved, &SceneBvh::new(&moved), &seeded)?;
+                Some(reference_noise(&references[0], &again)?)
+            }
+            false => None,
+        };
         let continuous = entry.light_path.as_ref().and_then(|p| p.seconds);
         Ok(SceneBench {
             sweep,
@@ -284,6 +330,7 @@ impl<'s> SceneBench<'s> {
             configurations,
             continuous,
             references,
+            noise,
             bakes: Vec::new(),
         })
     }
@@ -305,9 +352,14 @@ impl<'s> SceneBench<'s> {
         let settings = config.frame.settings(method, &self.scene, base);
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
         let mut renderer = gpu::renderer(self.ctx, loaded.as_ref(), &settings)?;
-        // Direct light alone with the same shadow maps: what the indirect part is measured against.
+        // Direct light alone with the same shadow maps: what the indirect part is measured
+        // against. Under an environment it lacks the environment's direct light, so no
+        // indirect part can be told apart (its columns stay empty).
         let direct_settings = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
-        let mut direct_renderer = gpu::renderer(self.ctx, &methods::Plain(self.scene.clone()), &direct_settings)?;
+        let mut direct_renderer = match methods::environment_lit(&self.scene) {
+            false => Some(gpu::renderer(self.ctx, &methods::Plain(self.scene.clone()), &direct_settings)?),
+            true => None,
+        };
         let mut rows: Vec<Row> = Vec::new();
         let mut previous: Option<Image> = None;
         for (k, configuration) in self.configurations.iter().enumerate() {
@@ -317,9 +369,14 @@ impl<'s> SceneBench<'s> {
             }
             let frames = time_frames(&mut renderer, self.sweep.frames, self.sweep.warmup_seconds)?;
             let image = frame_image(&mut renderer)?;
-            configuration.apply(&mut direct_renderer)?;
-            let direct = frame_image(&mut direct_renderer)?;
-            let scored = self.score(k, &image, &direct, &self.point_id(config, k))?;
+            let direct = match &mut direct_renderer {
+                Some(renderer) => {
+                    configuration.apply(renderer)?;
+                    Some(frame_image(renderer)?)
+                }
+                None => None,
+            };
+            let scored = self.score(k, &image, direct.as_ref(), &self.point_id(config, k))?;
             let accuracy = scored.as_ref().ok().copied();
             let flicker = match (&previous, &accuracy) {
                 (Some(before), Some(_)) => {
@@ -403,7 +460,7 @@ impl<'s> SceneBench<'s> {
     }
 
     /// Writes the point's pictures (image, false-colour error) and scores it.
-    fn score(&self, k: usize, image: &Image, direct: &Image, point_id: &str) -> Result<Result<Accuracy, String>> {
+    fn score(&self, k: usize, image: &Image, direct: Option<&Image>, point_id: &str) -> Result<Result<Accuracy, String>> {
         let reference = &self.references[k];
         let exposure = perceptual::exposure_for(&reference.combined);
         let images = self.out.join("images");
@@ -417,10 +474,10 @@ impl<'s> SceneBench<'s> {
 }
 
 /// The errors of a method's image against the reference, over the whole image and over its
-/// indirect part (the image minus the direct-only frame `direct`). The point fails (inner
+/// indirect part (the image minus the direct-only frame `direct`; NaN without one). The point fails (inner
 /// Err, saying why; nothing is averaged over it) when the image holds a NaN or an infinity,
 /// or when the reference is black, where NRMSE has no meaning.
-fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Result<Accuracy, String>> {
+fn accuracy(image: &Image, reference: &Reference, direct: Option<&Image>) -> Result<Result<Accuracy, String>> {
     let non_finite = count_non_finite(image);
     if non_finite > 0 {
         return Ok(Err(format!("{non_finite} NaN or infinite pixel(s)")));
@@ -430,16 +487,40 @@ fn accuracy(image: &Image, reference: &Reference, direct: &Image) -> Result<Resu
     if !combined.nrmse.is_finite() {
         return Ok(Err("the reference is black (the camera sees nothing the lights reach): NRMSE has no meaning".into()));
     }
-    let indirect_part = metrics::difference(image, direct)?;
-    let indirect = metrics::compare(&indirect_part, &reference.indirect)?;
+    let (indirect_rmse, indirect_nrmse, indirect_flip) = match direct {
+        Some(direct) => {
+            let part = metrics::difference(image, direct)?;
+            let indirect = metrics::compare(&part, &reference.indirect)?;
+            (indirect.rmse, indirect.nrmse, perceptual::mean_flip(&part, &reference.indirect, exposure))
+        }
+        None => (f64::NAN, f64::NAN, f64::NAN),
+    };
     Ok(Ok(Accuracy {
         rmse: combined.rmse,
         nrmse: combined.nrmse,
         flip: perceptual::mean_flip(image, &reference.combined, exposure),
-        indirect_rmse: indirect.rmse,
-        indirect_nrmse: indirect.nrmse,
-        indirect_flip: perceptual::mean_flip(&indirect_part, &reference.indirect, exposure),
+        indirect_rmse,
+        indirect_nrmse,
+        indirect_flip,
     }))
+}
+
+/// A reference's own noise as an NRMSE against the truth, of the image and of its indirect
+/// layer: two references of other seeds differ by sqrt(2) times it (their noise independent).
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub(crate) struct ReferenceNoise {
+    pub scene_nrmse: f64,
+    pub indirect_nrmse: f64,
+}
+
+/// The noise of `a`, from `b` traced with another seed: NRMSE(a, b) / sqrt(2), measured
+/// against `a` (the scale NRMSE of a method is measured at).
+fn reference_noise(a: &Reference, b: &Reference) -> Result<ReferenceNoise> {
+    let noise = |of: &Image, again: &Image| -> Result<f64> {
+        let e = metrics::compare(again, of)?;
+        Ok(e.nrmse / std::f64::consts::SQRT_2)
+    };
+    Ok(ReferenceNoise { scene_nrmse: noise(&a.combined, &b.combined)?, indirect_nrmse: noise(&a.indirect, &b.indirect)? })
 }
 
 /// One configuration of a scene: its lights, and where the moving light or occluder is, or
@@ -633,15 +714,18 @@ mod tests {
     fn a_nan_pixel_fails_the_point_and_is_counted() {
         let grey = Image { width: 4, height: 4, pixels: vec![Vec3::splat(0.5); 16] };
         let reference = Reference { indirect: grey.clone(), combined: grey.clone() };
-        assert!(accuracy(&grey, &reference, &Image::new(4, 4)).unwrap().is_ok());
+        let black = Image::new(4, 4);
+        assert!(accuracy(&grey, &reference, Some(&black)).unwrap().is_ok());
+        let environment_lit = accuracy(&grey, &reference, None).unwrap().unwrap();
+        assert!(environment_lit.nrmse == 0.0 && environment_lit.indirect_nrmse.is_nan(), "no direct-only frame, no indirect part");
         let mut image = grey.clone();
         image.pixels[5] = Vec3::new(f32::NAN, 0.0, 0.0);
         image.pixels[6] = Vec3::splat(f32::INFINITY);
         assert_eq!(count_non_finite(&image), 2);
-        let failure = accuracy(&image, &reference, &Image::new(4, 4)).unwrap().unwrap_err();
+        let failure = accuracy(&image, &reference, Some(&black)).unwrap().unwrap_err();
         assert!(failure.contains("2 NaN"), "a NaN image must not be scored: {failure}");
         let black = Reference { indirect: Image::new(4, 4), combined: Image::new(4, 4) };
-        assert!(accuracy(&grey, &black, &Image::new(4, 4)).unwrap().unwrap_err().contains("black"));
+        assert!(accuracy(&grey, &black, Some(&Image::new(4, 4))).unwrap().unwrap_err().contains("black"));
     }
 
     #[test]

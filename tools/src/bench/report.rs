@@ -7,16 +7,23 @@ use super::{pareto, Outcome};
 use anyhow::Result;
 use relume_bake::outputs::Outputs;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// One method configuration on one scene, over its light configurations.
 pub(super) struct Summary<'r> {
     rows: Vec<&'r Row>,
+    /// Its place among its method's configurations on its scene, from 1: its label in charts.
+    number: usize,
     mean_nrmse: f64,
     mean_flip: f64,
     pub(super) mean_indirect_nrmse: f64,
     max_flicker: Option<f64>,
     gpu_ms: f64,
+    /// The medians over its points of the frames' 10th and 90th percentiles.
+    gpu_p10_ms: f64,
+    gpu_p90_ms: f64,
+    /// The median over its points of the frame less the shadow maps' passes.
+    gpu_without_shadow_maps_ms: f64,
     cpu_ms: f64,
     failed: usize,
 }
@@ -45,8 +52,11 @@ fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
             keys.push((&r.scene, &r.method, &r.params));
         }
     }
+    let mut numbers: Vec<(&str, &str)> = Vec::new();
     keys.into_iter()
         .map(|key| {
+            numbers.push((key.0, key.1));
+            let number = numbers.iter().filter(|n| **n == (key.0, key.1)).count();
             let rows: Vec<&Row> = rows.iter().filter(|r| (r.scene.as_str(), r.method.as_str(), r.params.as_str()) == key).collect();
             let scored: Vec<_> = rows.iter().filter_map(|r| r.accuracy).collect();
             let mean = |f: &dyn Fn(&results::Accuracy) -> f64| {
@@ -57,13 +67,18 @@ fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
                 }
             };
             let flickers: Vec<f64> = rows.iter().filter_map(|r| r.flicker).collect();
+            let median = |f: &dyn Fn(&Row) -> f64| percentile(&rows.iter().map(|r| f(r)).collect::<Vec<_>>(), 0.5);
             Summary {
+                number,
                 mean_nrmse: mean(&|a| a.nrmse),
                 mean_flip: mean(&|a| a.flip),
                 mean_indirect_nrmse: mean(&|a| a.indirect_nrmse),
                 max_flicker: flickers.iter().copied().reduce(f64::max),
-                gpu_ms: percentile(&rows.iter().map(|r| r.frame.gpu_ms).collect::<Vec<_>>(), 0.5),
-                cpu_ms: percentile(&rows.iter().map(|r| r.frame.cpu_ms).collect::<Vec<_>>(), 0.5),
+                gpu_ms: median(&|r| r.frame.gpu_ms),
+                gpu_p10_ms: median(&|r| r.frame.gpu_p10_ms),
+                gpu_p90_ms: median(&|r| r.frame.gpu_p90_ms),
+                gpu_without_shadow_maps_ms: median(&|r| r.frame.without_shadow_maps_ms()),
+                cpu_ms: median(&|r| r.frame.cpu_ms),
                 failed: rows.len() - scored.len(),
                 rows,
             }
@@ -127,7 +142,7 @@ fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
 }
 
 /// Writes the results, summary, charts and report, all or none.
-pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> Result<()> {
+pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, overview: Option<&Overview>) -> Result<()> {
     let mut outputs = Outputs::new();
     let mut save = |name: &str, text: &str| outputs.bytes(&out.join(name), text.as_bytes());
     save("results.csv", &results::csv(&outcome.rows))?;
@@ -140,16 +155,24 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
         "seconds": outcome.seconds,
         "references": { "traced": outcome.references_traced, "from_cache": outcome.references_found },
         "skipped": outcome.skipped,
+        "not_applicable": outcome.not_applicable,
+        "reference_noise": outcome.noise.iter().map(|(scene, n)| serde_json::json!({ "scene": scene, "nrmse": n.scene_nrmse, "indirect_nrmse": n.indirect_nrmse })).collect::<Vec<_>>(),
         "rows": outcome.rows,
     });
     save("results.json", &serde_json::to_string_pretty(&json)?)?;
     let summaries = summaries(&outcome.rows);
     let fronts = fronts(&summaries);
     save("summary.csv", &summary_csv(&summaries, &fronts))?;
-    let recommendations = budget.map(|b| recommend(&summaries, b));
-    let choices = recommendations.as_deref().map(choose);
+    // The CSV leaves empty what the report marks "-".
+    let blank = |row: [String; 13]| row.map(|c| if c == "-" { String::new() } else { c });
+    let methods_csv: String = std::iter::once(results::csv_line(&METHODS_HEADER))
+        .chain(methods_rows(&summaries, &fronts).into_iter().map(|r| results::csv_line(&blank(r))))
+        .collect();
+    save("methods.csv", &methods_csv)?;
+    let recommendations = budget.map(|b| recommend(&summaries, &b));
+    let choices = recommendations.as_deref().zip(budget).map(|(r, b)| choose(r, &b));
     if let (Some(recommendations), Some(choices)) = (&recommendations, &choices) {
-        save("recommended.toml", &recommended_toml(recommendations, choices))?;
+        save("recommended.toml", &recommended_toml(recommendations, choices, &budget.unwrap_or_default()))?;
     }
     let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
     scenes.dedup();
@@ -165,12 +188,78 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<f64>) -> R
     let budgeted = recommendations.as_deref().zip(choices.as_deref()).zip(budget).map(|((r, c), b)| (r, c, b));
     let report = report_text(outcome, &summaries, &fronts, &charts_md, budgeted);
     outputs.bytes(&out.join("report.md"), report.as_bytes())?;
+    if let Some(overview) = overview {
+        let text = overview.text(out, outcome, &summaries, &fronts, &scenes, budgeted);
+        outputs.bytes(&overview.path, text.as_bytes())?;
+    }
     outputs.commit()?;
     if recommendations.is_none() {
         // An earlier run's choices must not pass for this run's.
         remove_stale(&out.join("recommended.toml"))?;
     }
     Ok(())
+}
+
+/// `relume bench --overview`: one page that leads with the budget's answer and the charts
+/// across methods, then the table across methods, and links the reports given (the main job's
+/// out/report.md).
+pub(crate) struct Overview {
+    pub path: PathBuf,
+    pub links: Vec<PathBuf>,
+}
+
+impl Overview {
+    /// `target` as a link from the overview's folder.
+    fn link(&self, target: &Path) -> String {
+        let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let from = absolute(self.path.parent().unwrap_or(Path::new(".")));
+        let target = absolute(target);
+        target.strip_prefix(&from).unwrap_or(&target).display().to_string()
+    }
+
+    fn text(
+        &self,
+        out: &Path,
+        outcome: &Outcome,
+        summaries: &[Summary],
+        fronts: &[bool],
+        scenes: &[&str],
+        budgeted: Option<(&[Recommendation], &[SceneChoice], Budget)>,
+    ) -> String {
+        let mut r = String::new();
+        let _ = writeln!(r, "# relume: every method against the reference\n");
+        let _ = writeln!(
+            r,
+            "The sweep `{}` on {}: every method that applies on each scene, at a small ladder of configurations, against the reference path tracer. Device: {}. Machine: {}. The whole sweep: [{}]({}).\n",
+            outcome.sweep.name,
+            scenes.join(", "),
+            outcome.device,
+            machine(),
+            self.link(&out.join("report.md")),
+            self.link(&out.join("report.md"))
+        );
+        if let Some((recommendations, choices, budget)) = budgeted {
+            let _ = writeln!(r, "## The budget's answer: {}\n", budget.text());
+            scene_choices_text(&mut r, recommendations, choices);
+            let _ = writeln!(r, "\n`relume bake SCENE --recommended {0}` bakes a scene's choice; `relume run SCENE --recommended {0}` bakes and renders it against the reference.\n", out.join("recommended.toml").display());
+        }
+        let _ = writeln!(r, "## Error against frame time, every method\n");
+        for scene in scenes {
+            let stem = out.join(format!("{scene}_error_vs_frame_time"));
+            // write_scene_charts drew it where the scene has a configuration scored throughout.
+            if summaries.iter().any(|s| s.first().scene == *scene && s.ok()) {
+                let _ = writeln!(r, "![{scene}]({}.png)\n", self.link(&stem));
+            }
+        }
+        methods_text(&mut r, summaries, fronts, outcome);
+        if !self.links.is_empty() {
+            let _ = writeln!(r, "## Each scene's own report\n");
+            for link in &self.links {
+                let _ = writeln!(r, "- [{0}]({0})", self.link(link));
+            }
+        }
+        r
+    }
 }
 
 fn remove_stale(path: &Path) -> Result<()> {
@@ -182,15 +271,23 @@ fn remove_stale(path: &Path) -> Result<()> {
     }
 }
 
-/// One chart's points per method: (x, mean NRMSE) of each of its configurations.
+/// One chart's points per method: (x, mean NRMSE) of each of its configurations, labelled by
+/// their numbers, each method in the style of its place in the registry.
 fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>, Vec<(f64, f64)>) {
     let mut series: Vec<Series> = Vec::new();
     for s in of_scene {
-        let point = (x(s), s.mean_nrmse);
-        match series.iter_mut().find(|series| series.label == s.first().method) {
-            Some(series) => series.points.push(point),
-            None => series.push(Series { label: s.first().method.clone(), points: vec![point] }),
-        }
+        let method = &s.first().method;
+        let at = match series.iter().position(|series| series.label == *method) {
+            Some(at) => at,
+            None => {
+                let mut new = Series::new(method.clone(), Vec::new());
+                new.style = crate::methods::METHODS.iter().position(|m| m.name() == method);
+                series.push(new);
+                series.len() - 1
+            }
+        };
+        series[at].points.push((x(s), s.mean_nrmse));
+        series[at].point_labels.push(s.number.to_string());
     }
     let points: Vec<(f64, f64)> = of_scene.iter().map(|s| (x(s), s.mean_nrmse)).collect();
     let front = pareto::front_in_cost_order(&points).into_iter().map(|i| points[i]).collect();
@@ -225,9 +322,11 @@ fn write_scene_charts(outputs: &mut Outputs, out: &Path, scene: &str, of_scene: 
     if of_scene[0].rows.len() > 1 {
         let series = of_scene
             .iter()
-            .map(|s| Series {
-                label: format!("{} [{}]", s.first().method, s.first().params),
-                points: s.rows.iter().filter_map(|r| r.accuracy.map(|a| (r.light as f64, a.nrmse))).collect(),
+            .map(|s| {
+                Series::new(
+                    format!("{} [{}]", s.first().method, s.first().params),
+                    s.rows.iter().filter_map(|r| r.accuracy.map(|a| (r.light as f64, a.nrmse))).collect(),
+                )
             })
             .collect();
         let stem = format!("{scene}_error_along_path");
@@ -265,9 +364,53 @@ fn cost_order(a: &Summary, b: &Summary) -> std::cmp::Ordering {
     size(a).total_cmp(&size(b)).then(a.first().bake.seconds.total_cmp(&b.first().bake.seconds)).then(a.gpu_ms.total_cmp(&b.gpu_ms))
 }
 
-/// Per scene and method: the configurations in cost order, and the first whose mean NRMSE is
-/// within the budget.
-fn recommend<'s>(summaries: &'s [Summary<'s>], budget: f64) -> Vec<Recommendation<'s>> {
+/// `relume bench --budget`: a bound on the error, under which the cheapest configuration is
+/// chosen, and bounds on the frame time and the artifact's size, beyond which none is; with
+/// no bound on the error, the most accurate within the others is chosen.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Budget {
+    pub nrmse: Option<f64>,
+    pub frame_ms: Option<f64>,
+    pub artifact_mib: Option<f64>,
+}
+
+impl Budget {
+    /// None when no bound is given.
+    pub fn given(self) -> Option<Budget> {
+        (self.nrmse.is_some() || self.frame_ms.is_some() || self.artifact_mib.is_some()).then_some(self)
+    }
+
+    fn within(&self, s: &Summary) -> bool {
+        let under = |bound: Option<f64>, value: f64| bound.is_none_or(|b| value <= b);
+        under(self.nrmse, s.mean_nrmse) && under(self.frame_ms, s.gpu_ms) && under(self.artifact_mib, s.artifact_mib())
+    }
+
+    /// Of two configurations within the budget, the better first: the cheaper under a bound on
+    /// the error, else the more accurate.
+    fn order(&self, a: &Summary, b: &Summary) -> std::cmp::Ordering {
+        match self.nrmse {
+            Some(_) => cost_order(a, b),
+            None => a.mean_nrmse.total_cmp(&b.mean_nrmse).then(cost_order(a, b)),
+        }
+    }
+
+    /// What it asks, in words.
+    fn text(&self) -> String {
+        let bounds: Vec<String> = [
+            self.nrmse.map(|b| format!("NRMSE <= {b}")),
+            self.frame_ms.map(|b| format!("GPU frame <= {b} ms")),
+            self.artifact_mib.map(|b| format!("artifact <= {b} MiB")),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let goal = if self.nrmse.is_some() { "the cheapest" } else { "the most accurate" };
+        format!("{goal} within {}", bounds.join(", "))
+    }
+}
+
+/// Per scene and method: the configurations in cost order, and the best within the budget.
+fn recommend<'s>(summaries: &'s [Summary<'s>], budget: &Budget) -> Vec<Recommendation<'s>> {
     let mut recommendations: Vec<Recommendation> = Vec::new();
     for s in summaries.iter().filter(|s| s.ok()) {
         let row = s.first();
@@ -278,7 +421,7 @@ fn recommend<'s>(summaries: &'s [Summary<'s>], budget: f64) -> Vec<Recommendatio
     }
     for r in &mut recommendations {
         r.ladder.sort_by(|a, b| cost_order(a, b));
-        r.chosen = r.ladder.iter().position(|s| s.mean_nrmse <= budget);
+        r.chosen = (0..r.ladder.len()).filter(|&i| budget.within(r.ladder[i])).min_by(|&a, &b| budget.order(r.ladder[a], r.ladder[b]));
     }
     recommendations
 }
@@ -293,9 +436,9 @@ pub(crate) struct SceneChoice<'s> {
     runner_up: Option<usize>,
 }
 
-/// Per scene, in the order the scenes ran: the method the budget picks (the cheapest of the
-/// methods' choices) and the next cheapest within the budget.
-fn choose<'s>(recommendations: &[Recommendation<'s>]) -> Vec<SceneChoice<'s>> {
+/// Per scene, in the order the scenes ran: the method the budget picks (the best of the
+/// methods' choices) and the next best within the budget.
+fn choose<'s>(recommendations: &[Recommendation<'s>], budget: &Budget) -> Vec<SceneChoice<'s>> {
     let mut scenes: Vec<&str> = recommendations.iter().map(|r| r.scene).collect();
     scenes.dedup();
     scenes
@@ -303,7 +446,7 @@ fn choose<'s>(recommendations: &[Recommendation<'s>]) -> Vec<SceneChoice<'s>> {
         .map(|scene| {
             let mut within: Vec<usize> =
                 (0..recommendations.len()).filter(|&i| recommendations[i].scene == scene && recommendations[i].chosen.is_some()).collect();
-            within.sort_by(|&a, &b| cost_order(recommendations[a].choice().unwrap(), recommendations[b].choice().unwrap()));
+            within.sort_by(|&a, &b| budget.order(recommendations[a].choice().unwrap(), recommendations[b].choice().unwrap()));
             SceneChoice { scene, chosen: within.first().copied(), runner_up: within.get(1).copied() }
         })
         .collect()
@@ -316,7 +459,7 @@ impl<'s> Recommendation<'s> {
     }
 }
 
-fn recommended_toml(recommendations: &[Recommendation], choices: &[SceneChoice]) -> String {
+fn recommended_toml(recommendations: &[Recommendation], choices: &[SceneChoice], budget: &Budget) -> String {
     let mut root = toml::Table::new();
     for c in choices {
         if let Some(i) = c.chosen {
@@ -340,7 +483,8 @@ fn recommended_toml(recommendations: &[Recommendation], choices: &[SceneChoice])
         }
     }
     format!(
-        "# relume bench --budget: per scene, the method whose cheapest parameter set within the budget is cheapest\n# of all (`method`), and per method its cheapest parameter set within the budget.\n{}",
+        "# relume bench, the budget: {}.\n# Per scene the method whose choice is best of all (`method`), and per method its best parameter set.\n{}",
+        budget.text(),
         toml::to_string(&root).unwrap_or_default()
     )
 }
@@ -359,7 +503,7 @@ fn report_text(
     summaries: &[Summary],
     fronts: &[bool],
     charts_md: &str,
-    budgeted: Option<(&[Recommendation], &[SceneChoice], f64)>,
+    budgeted: Option<(&[Recommendation], &[SceneChoice], Budget)>,
 ) -> String {
     let sweep = &outcome.sweep;
     let mut r = String::new();
@@ -381,9 +525,10 @@ fn report_text(
         }
         let _ = writeln!(r);
     }
+    methods_text(&mut r, summaries, fronts, outcome);
     let _ = writeln!(r, "## Summary per method configuration\n");
-    let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect`; flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene.\n");
-    let _ = writeln!(r, "| scene | method | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
+    let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect` (none under an environment, where the direct-only frame lacks the environment's direct light: -); flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene. The label is the configuration's number in the charts.\n");
+    let _ = writeln!(r, "| scene | method (label) | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
     let _ = writeln!(r, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (s, &on) in summaries.iter().zip(fronts) {
         let row = s.first();
@@ -391,13 +536,14 @@ fn report_text(
         let failed = if s.failed > 0 { format!(" ({} of {} failed)", s.failed, s.rows.len()) } else { String::new() };
         let _ = writeln!(
             r,
-            "| {} | {} | {} | {:.4}{failed} | {:.4} | {:.4} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
+            "| {} | {} {} | {} | {:.4}{failed} | {:.4} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
             row.scene,
             row.method,
+            s.number,
             row.params,
             s.mean_nrmse,
             s.mean_flip,
-            s.mean_indirect_nrmse,
+            cell(s.mean_indirect_nrmse, 4),
             s.max_flicker.map_or("-".into(), |f| format!("{f:.4}")),
             s.gpu_ms,
             s.cpu_ms,
@@ -409,7 +555,7 @@ fn report_text(
     }
     let _ = writeln!(r, "\n## Charts\n\n{charts_md}");
     if let Some((recommendations, choices, budget)) = budgeted {
-        budget_text(&mut r, recommendations, choices, budget);
+        budget_text(&mut r, recommendations, choices, &budget);
     }
     let _ = writeln!(r, "## Every point: method image, reference, false-colour error\n");
     let _ = writeln!(r, "| point | method | reference | error | NRMSE |\n|---|---|---|---|---|");
@@ -429,6 +575,159 @@ fn report_text(
     r
 }
 
+/// A number with `decimals`, or "-" where it means nothing (NaN).
+fn cell(value: f64, decimals: usize) -> String {
+    if value.is_finite() {
+        format!("{value:.decimals$}")
+    } else {
+        "-".into()
+    }
+}
+
+/// One method on one scene: its configurations, the most accurate first.
+struct MethodCell<'a, 's> {
+    configurations: Vec<(&'a Summary<'s>, bool)>,
+}
+
+impl MethodCell<'_, '_> {
+    fn best(&self) -> &Summary<'_> {
+        self.configurations[0].0
+    }
+    fn best_indirect(&self) -> f64 {
+        self.configurations.iter().map(|c| c.0.mean_indirect_nrmse).filter(|v| v.is_finite()).fold(f64::NAN, f64::min)
+    }
+    /// The labels of its configurations on the scene's front.
+    fn on_front(&self) -> Vec<String> {
+        let mut labels: Vec<usize> = self.configurations.iter().filter(|c| c.1).map(|c| c.0.number).collect();
+        labels.sort();
+        labels.iter().map(|n| n.to_string()).collect()
+    }
+}
+
+/// Per scene and method (in the order they ran), its configurations scored at every light
+/// configuration, with whether each is on the scene's front.
+fn method_cells<'a, 's>(summaries: &'a [Summary<'s>], fronts: &[bool]) -> Vec<MethodCell<'a, 's>> {
+    let mut cells: Vec<MethodCell> = Vec::new();
+    for (s, &on) in summaries.iter().zip(fronts).filter(|(s, _)| s.ok()) {
+        let same = |c: &&mut MethodCell| c.best().first().scene == s.first().scene && c.best().first().method == s.first().method;
+        match cells.iter_mut().find(|c| same(c)) {
+            Some(c) => c.configurations.push((s, on)),
+            None => cells.push(MethodCell { configurations: vec![(s, on)] }),
+        }
+    }
+    for c in &mut cells {
+        c.configurations.sort_by(|a, b| a.0.mean_nrmse.total_cmp(&b.0.mean_nrmse));
+    }
+    cells
+}
+
+/// methods.csv and the report's table across methods: per scene and method, the best image and
+/// indirect NRMSE, and the costs of its most accurate configuration.
+fn methods_rows(summaries: &[Summary], fronts: &[bool]) -> Vec<[String; 13]> {
+    method_cells(summaries, fronts)
+        .iter()
+        .map(|c| {
+            let best = c.best();
+            let row = best.first();
+            [
+                row.scene.clone(),
+                row.method.clone(),
+                c.configurations.len().to_string(),
+                cell(best.mean_nrmse, 4),
+                cell(c.best_indirect(), 4),
+                best.number.to_string(),
+                cell(row.bake.seconds, 2),
+                cell(row.bake.peak_memory_bytes as f64 / (1 << 20) as f64, 1),
+                cell(best.artifact_mib(), 2),
+                cell(best.gpu_ms, 2),
+                format!("{}-{}", cell(best.gpu_p10_ms, 2), cell(best.gpu_p90_ms, 2)),
+                cell(best.gpu_without_shadow_maps_ms, 3),
+                c.on_front().join(" "),
+            ]
+        })
+        .collect()
+}
+
+const METHODS_HEADER: [&str; 13] = [
+    "scene",
+    "method",
+    "configurations",
+    "best NRMSE",
+    "best indirect NRMSE",
+    "its label",
+    "bake s",
+    "bake peak MiB",
+    "artifact MiB",
+    "GPU ms",
+    "GPU ms p10-p90",
+    "GPU ms without shadow maps",
+    "labels on the front",
+];
+
+fn methods_text(r: &mut String, summaries: &[Summary], fronts: &[bool], outcome: &Outcome) {
+    let _ = writeln!(r, "## Across methods\n");
+    let _ = writeln!(r, "Per scene and method: the lowest mean NRMSE of its configurations and the costs of that configuration (its label), the lowest mean indirect NRMSE of any, and which of its configurations are on the scene's Pareto front of (GPU frame time, mean NRMSE). Empty cells mean nothing for the method or scene (-). Also in methods.csv.\n");
+    let _ = writeln!(r, "| {} |\n|{}", METHODS_HEADER.join(" | "), "---|".repeat(METHODS_HEADER.len()));
+    for row in methods_rows(summaries, fronts) {
+        let _ = writeln!(r, "| {} |", row.join(" | "));
+    }
+    noise_text(r, summaries, fronts, &outcome.noise);
+    timing_text(r, &method_cells(summaries, fronts));
+    if !outcome.not_applicable.is_empty() {
+        let _ = writeln!(r, "\nNot run where they do not apply:\n");
+        for line in &outcome.not_applicable {
+            let _ = writeln!(r, "- {line}");
+        }
+    }
+    let _ = writeln!(r);
+}
+
+/// Per scene that measured it, the references' own noise, and the methods whose best NRMSE is
+/// nearer the scene's best than three times that noise: not told apart by this reference.
+fn noise_text(r: &mut String, summaries: &[Summary], fronts: &[bool], noise: &[(String, super::ReferenceNoise)]) {
+    if noise.is_empty() {
+        return;
+    }
+    let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced again with the next seed: their NRMSE / sqrt 2), beside the errors ranked:\n");
+    let cells = method_cells(summaries, fronts);
+    for (scene, n) in noise {
+        let mut bests: Vec<(f64, &str)> = cells
+            .iter()
+            .filter(|c| c.best().first().scene == *scene)
+            .map(|c| (c.best().mean_nrmse, c.best().first().method.as_str()))
+            .collect();
+        bests.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let close: Vec<&str> =
+            bests.iter().skip(1).filter(|b| bests.first().is_some_and(|first| b.0 - first.0 < 3.0 * n.scene_nrmse)).map(|b| b.1).collect();
+        let verdict = match (bests.first(), close.is_empty()) {
+            (Some(first), false) => format!("; within 3x the noise of the best ({}): {}", first.1, close.join(", ")),
+            (Some(first), true) => format!("; the best ({}) is apart from the rest by more than 3x the noise", first.1),
+            (None, _) => String::new(),
+        };
+        let _ = writeln!(r, "- {scene}: image NRMSE {:.4}, indirect {}{verdict}", n.scene_nrmse, cell(n.indirect_nrmse, 4));
+    }
+}
+
+/// Per scene, the pairs of methods (their most accurate configurations) whose frame times
+/// 10th-90th percentile spreads overlap: this run does not tell their frame times apart.
+fn timing_text(r: &mut String, cells: &[MethodCell]) {
+    let mut scenes: Vec<&str> = cells.iter().map(|c| c.best().first().scene.as_str()).collect();
+    scenes.dedup();
+    let _ = writeln!(r, "\nFrame times this run does not tell apart (the 10th-90th percentile spreads of the methods' most accurate configurations overlap):\n");
+    for scene in scenes {
+        let of: Vec<&Summary> = cells.iter().map(|c| c.best()).filter(|s| s.first().scene == scene).collect();
+        let mut pairs = Vec::new();
+        for (i, a) in of.iter().enumerate() {
+            for b in &of[i + 1..] {
+                if a.gpu_p10_ms <= b.gpu_p90_ms && b.gpu_p10_ms <= a.gpu_p90_ms {
+                    pairs.push(format!("{} ~ {}", a.first().method, b.first().method));
+                }
+            }
+        }
+        let _ = writeln!(r, "- {scene}: {}", if pairs.is_empty() { "none".to_string() } else { pairs.join(", ") });
+    }
+}
+
 /// A configuration as the budget's text names it.
 fn describe(s: &Summary) -> String {
     format!(
@@ -442,37 +741,13 @@ fn describe(s: &Summary) -> String {
     )
 }
 
-/// The report's budget section: per scene the method chosen across methods, the next
-/// cheapest and what one step more of the chosen method buys; then per scene and method.
-fn budget_text(r: &mut String, recommendations: &[Recommendation], choices: &[SceneChoice], budget: f64) {
-    let _ = writeln!(r, "## Within the budget: NRMSE <= {budget}\n");
-    let _ = writeln!(r, "Per scene, across methods: the cheapest of each method's choice (below), the next cheapest method within the budget, and what one step dearer of the chosen method would cost and give. Written to recommended.toml as the scene's `method`.\n");
-    for c in choices {
-        let Some(i) = c.chosen else {
-            let best = recommendations
-                .iter()
-                .filter(|rec| rec.scene == c.scene)
-                .flat_map(|rec| rec.ladder.iter())
-                .min_by(|a, b| a.mean_nrmse.total_cmp(&b.mean_nrmse));
-            let _ = writeln!(
-                r,
-                "- {}: no method within the budget (the most accurate: {})",
-                c.scene,
-                best.map_or("none".into(), |s| describe(s))
-            );
-            continue;
-        };
-        let rec = &recommendations[i];
-        let next = c.runner_up.and_then(|j| recommendations[j].choice()).map_or("no other method within the budget".into(), describe);
-        let more = rec.chosen.and_then(|k| rec.ladder.get(k + 1)).map_or("none".into(), |s| describe(s));
-        let _ = writeln!(
-            r,
-            "- {}: **{}**; the next cheapest method: {next}; one step dearer: {more}",
-            c.scene,
-            describe(rec.choice().unwrap())
-        );
-    }
-    let _ = writeln!(r, "\nPer scene and method, the configurations in order of cost (artifact size to 3 digits, then bake time, then GPU frame time); the first within the budget is chosen and written to recommended.toml.\n");
+/// The report's budget section: per scene the method chosen across methods, the next best
+/// and what one step more of the chosen method buys; then per scene and method.
+fn budget_text(r: &mut String, recommendations: &[Recommendation], choices: &[SceneChoice], budget: &Budget) {
+    let _ = writeln!(r, "## The budget: {}\n", budget.text());
+    let _ = writeln!(r, "Per scene, across methods: the best of each method's choice (below), the next best method within the budget, and what one step dearer of the chosen method would cost and give. Written to recommended.toml as the scene's `method`.\n");
+    scene_choices_text(r, recommendations, choices);
+    let _ = writeln!(r, "\nPer scene and method, the configurations in order of cost (artifact size to 3 digits, then bake time, then GPU frame time); the best within the budget is chosen and written to recommended.toml.\n");
     for rec in recommendations {
         match rec.chosen {
             Some(i) => {
@@ -495,10 +770,39 @@ fn budget_text(r: &mut String, recommendations: &[Recommendation], choices: &[Sc
     let _ = writeln!(r);
 }
 
+/// The budget's answer per scene: the method chosen, the next best, one step dearer.
+fn scene_choices_text(r: &mut String, recommendations: &[Recommendation], choices: &[SceneChoice]) {
+    for c in choices {
+        let Some(i) = c.chosen else {
+            let best = recommendations
+                .iter()
+                .filter(|rec| rec.scene == c.scene)
+                .flat_map(|rec| rec.ladder.iter())
+                .min_by(|a, b| a.mean_nrmse.total_cmp(&b.mean_nrmse));
+            let _ = writeln!(
+                r,
+                "- {}: no method within the budget (the most accurate: {})",
+                c.scene,
+                best.map_or("none".into(), |s| describe(s))
+            );
+            continue;
+        };
+        let rec = &recommendations[i];
+        let next = c.runner_up.and_then(|j| recommendations[j].choice()).map_or("no other method within the budget".into(), describe);
+        let more = rec.chosen.and_then(|k| rec.ladder.get(k + 1)).map_or("none".into(), |s| describe(s));
+        let _ =
+            writeln!(r, "- {}: **{}**; the next best method: {next}; one step dearer: {more}", c.scene, describe(rec.choice().unwrap()));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bench::results::{Accuracy, BakeCost, FrameCost};
+
+    fn error(nrmse: f64) -> Budget {
+        Budget { nrmse: Some(nrmse), ..Budget::default() }
+    }
 
     /// A point of method "m" with parameter set `params` at light `light`; `nrmse` None: failed.
     fn point(params: &str, light: usize, nrmse: Option<f64>) -> Row {
@@ -540,7 +844,7 @@ mod tests {
         let summaries = summaries(&rows);
         assert_eq!((summaries[0].failed, summaries[0].ok(), summaries[0].mean_nrmse), (1, false, 0.1));
         assert_eq!(fronts(&summaries), [false, true]);
-        let recommendations = recommend(&summaries, 0.5);
+        let recommendations = recommend(&summaries, &error(0.5));
         assert_eq!(recommendations[0].ladder.len(), 1, "a configuration with a failed point is never recommended");
         assert_eq!(recommendations[0].ladder[0].first().params, "b");
 
@@ -565,26 +869,55 @@ mod tests {
         };
         let rows = [of("small", "a", 0.15, 1_000), of("small", "b", 0.12, 4_000), of("large", "c", 0.05, 50_000)];
         let summaries = summaries(&rows);
-        let recommendations = recommend(&summaries, 0.2);
-        let choices = choose(&recommendations);
+        let recommendations = recommend(&summaries, &error(0.2));
+        let choices = choose(&recommendations, &error(0.2));
         assert_eq!(choices.len(), 1);
         let chosen = &recommendations[choices[0].chosen.unwrap()];
         assert_eq!((chosen.method, chosen.choice().unwrap().first().params.as_str()), ("small", "a"), "both meet 0.2: the cheaper");
         assert_eq!(recommendations[choices[0].runner_up.unwrap()].method, "large");
-        let written: toml::Table = toml::from_str(&recommended_toml(&recommendations, &choices)).unwrap();
+        let written: toml::Table = toml::from_str(&recommended_toml(&recommendations, &choices, &error(0.2))).unwrap();
         assert_eq!(written["s"]["method"].as_str(), Some("small"));
         assert_eq!(written["s"]["large"]["mean_nrmse"].as_float(), Some(0.05));
 
-        let recommendations = recommend(&summaries, 0.1);
-        let choices = choose(&recommendations);
+        let recommendations = recommend(&summaries, &error(0.1));
+        let choices = choose(&recommendations, &error(0.1));
         assert_eq!(recommendations[choices[0].chosen.unwrap()].method, "large", "only the dearer meets 0.1");
         assert!(choices[0].runner_up.is_none());
 
-        let recommendations = recommend(&summaries, 0.01);
-        let choices = choose(&recommendations);
+        let recommendations = recommend(&summaries, &error(0.01));
+        let choices = choose(&recommendations, &error(0.01));
         assert!(choices[0].chosen.is_none());
         let mut text = String::new();
-        budget_text(&mut text, &recommendations, &choices, 0.01);
+        budget_text(&mut text, &recommendations, &choices, &error(0.01));
         assert!(text.contains("- s: no method within the budget (the most accurate: large [c] NRMSE 0.0500"), "{text}");
+    }
+
+    /// With bounds on the frame time and the artifact and none on the error, the budget picks
+    /// the most accurate configuration within them, across methods.
+    #[test]
+    fn a_budget_on_frame_time_and_memory_picks_the_most_accurate_within_it() {
+        let of = |method: &str, params: &str, nrmse: f64, mib: u64, ms: f64| Row {
+            method: method.into(),
+            bake: BakeCost { artifact_bytes: mib << 20, ..BakeCost::default() },
+            frame: FrameCost { gpu_ms: ms, gpu_p10_ms: ms, gpu_p90_ms: ms, cpu_ms: ms, passes_ms: Vec::new() },
+            ..point(params, 0, Some(nrmse))
+        };
+        let rows = [
+            of("fast", "a", 0.30, 1, 0.5),
+            of("fast", "b", 0.20, 8, 1.5),
+            of("exact", "c", 0.05, 12, 3.0),
+            of("exact", "d", 0.10, 32, 1.0),
+            of("exact", "e", 0.15, 4, 1.8),
+        ];
+        let summaries = summaries(&rows);
+        let budget = Budget { frame_ms: Some(2.0), artifact_mib: Some(16.0), ..Budget::default() };
+        let recommendations = recommend(&summaries, &budget);
+        let choices = choose(&recommendations, &budget);
+        let chosen = recommendations[choices[0].chosen.unwrap()].choice().unwrap();
+        assert_eq!(chosen.first().params, "e", "c is too slow, d too large: e is the most accurate within both");
+        assert_eq!(recommendations[choices[0].runner_up.unwrap()].choice().unwrap().first().params, "b");
+        assert_eq!(budget.text(), "the most accurate within GPU frame <= 2 ms, artifact <= 16 MiB");
+        let tight = Budget { frame_ms: Some(0.1), ..Budget::default() };
+        assert!(choose(&recommend(&summaries, &tight), &tight)[0].chosen.is_none());
     }
 }

@@ -69,6 +69,17 @@ pub(crate) struct FrameCost {
 }
 
 impl FrameCost {
+    /// The medians of the passes other than the shadow maps' (`vsm_*`, the same work for every
+    /// method, which dominates a frame on lavapipe); NaN without timestamps.
+    pub fn without_shadow_maps_ms(&self) -> f64 {
+        let own = self.passes_ms.iter().filter(|(name, _)| !name.starts_with("vsm_"));
+        if self.passes_ms.is_empty() {
+            f64::NAN
+        } else {
+            own.map(|(_, ms)| ms).sum()
+        }
+    }
+
     /// The cost of a configuration that never rendered: NaN (empty in the CSV, null in JSON).
     pub fn unknown() -> FrameCost {
         FrameCost { passes_ms: Vec::new(), gpu_ms: f64::NAN, gpu_p10_ms: f64::NAN, gpu_p90_ms: f64::NAN, cpu_ms: f64::NAN }

@@ -18,6 +18,10 @@ pub(crate) struct Sweep {
     /// Samples per pixel of the reference path tracer.
     #[serde(default = "default_spp")]
     pub reference_spp: u32,
+    /// Trace each scene's first light configuration again with the next seed, and report the
+    /// references' own noise (docs/BENCH.md, "Reference noise").
+    #[serde(default)]
+    pub reference_noise: bool,
     /// Timed frames per point.
     #[serde(default = "default_frames")]
     pub frames: u32,

@@ -111,7 +111,15 @@ pub(crate) enum Models {
 /// Whether the main job runs `method` on `scene`: the scene has light it models, and what it
 /// needs from the scene is there or can be derived (relume models no more than a scene needs).
 pub(crate) fn suits(method: &dyn Method, scene: &Scene) -> bool {
-    refusal(method, scene).is_none() && method.suits(scene)
+    unsuited(method, scene).is_none()
+}
+
+/// Why `method` does not suit `scene` (see `suits`), for a report's list of what did not run.
+pub(crate) fn unsuited(method: &dyn Method, scene: &Scene) -> Option<String> {
+    refusal(method, scene).or_else(|| {
+        (!method.suits(scene))
+            .then(|| format!("{} needs settings this scene neither declares nor lets it derive (its bake would refuse it)", method.name()))
+    })
 }
 
 /// Whether a distant environment lights `scene` (one whose light is not all zero).
