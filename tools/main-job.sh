@@ -8,7 +8,7 @@
 #    Debian's blender-data): fullsphere irradiance vectors and their competitors, constant and
 #    obscurance ambient light by the probe's irradiance, into out/fiv-blobs/report.md;
 # 3. runs the cross-method sweep (every method on five scenes where it applies, at two
-#    configurations each: costs, errors, a chart per scene with every method and its Pareto
+#    configurations of each method with parameters: costs, errors, a chart per scene with every method and its Pareto
 #    front, and per scene the cheapest method within NRMSE 0.2 in out/bench/recommended.toml)
 #    into out/bench/report.md, and out/report.md, the page to open first: the budget's
 #    answer, the charts across methods and the table across methods, linking the reports.

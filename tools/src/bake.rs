@@ -78,7 +78,7 @@ fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, Vec<(Str
             file.display()
         )
     })?;
-    let (_, pairs) = crate::bench::config::split(&table)?;
+    let (_, pairs) = crate::bench::config::split(&table).map_err(|e| anyhow::anyhow!("{}: scene \"{name}\": {e:#}", file.display()))?;
     let baked: Vec<&str> = method.params().iter().filter(|p| p.stage == Stage::Bake).map(|p| p.name).collect();
     Ok((method, pairs.into_iter().filter(|(key, _)| baked.contains(&key.as_str())).collect()))
 }

@@ -88,9 +88,13 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
 
     let names: Vec<&str> = models.iter().map(|m| m.method.name()).collect();
     println!("rendering with Vulkan: {} ({frames} timed frames each)", names.join(", "));
-    // Direct light alone, with the same shadow maps: what each method's indirect part is measured against.
+    // Direct light alone, with the same shadow maps (a recommended configuration's own):
+    // what each method's indirect part is measured against.
     let direct_only = Plain(scene.clone());
-    let direct_settings = render_settings(&args.scene, &args.gpu, None, false)?;
+    let direct_settings = match models.first() {
+        Some(m) => RenderSettings { ambient: glam::Vec3::ZERO, beta: 0.0, environment_ambient: false, ..m.settings.clone() },
+        None => render_settings(&args.scene, &args.gpu, None, false)?,
+    };
     let mut jobs = vec![GpuJob { loaded: &direct_only, settings: direct_settings, frames: 1 }];
     jobs.extend(models.iter().map(|m| GpuJob { loaded: m.loaded.as_ref(), settings: m.settings.clone(), frames }));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;

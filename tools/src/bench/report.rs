@@ -39,6 +39,9 @@ impl Summary<'_> {
     fn artifact_mib(&self) -> f64 {
         self.first().bake.artifact_bytes as f64 / (1 << 20) as f64
     }
+    fn peak_mib(&self) -> f64 {
+        self.first().bake.peak_memory_bytes as f64 / (1 << 20) as f64
+    }
     /// Usable in charts and budgets: every light configuration scored.
     fn ok(&self) -> bool {
         self.failed == 0
@@ -162,17 +165,18 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, o
     save("results.json", &serde_json::to_string_pretty(&json)?)?;
     let summaries = summaries(&outcome.rows);
     let fronts = fronts(&summaries);
+    let cells = method_cells(&summaries, &fronts);
     save("summary.csv", &summary_csv(&summaries, &fronts))?;
     // The CSV leaves empty what the report marks "-".
     let blank = |row: [String; 13]| row.map(|c| if c == "-" { String::new() } else { c });
     let methods_csv: String = std::iter::once(results::csv_line(&METHODS_HEADER))
-        .chain(methods_rows(&summaries, &fronts).into_iter().map(|r| results::csv_line(&blank(r))))
+        .chain(methods_rows(&cells).into_iter().map(|r| results::csv_line(&blank(r))))
         .collect();
     save("methods.csv", &methods_csv)?;
     let recommendations = budget.map(|b| recommend(&summaries, &b));
     let choices = recommendations.as_deref().zip(budget).map(|(r, b)| choose(r, &b));
-    if let (Some(recommendations), Some(choices)) = (&recommendations, &choices) {
-        save("recommended.toml", &recommended_toml(recommendations, choices, &budget.unwrap_or_default()))?;
+    if let (Some(recommendations), Some(choices), Some(budget)) = (&recommendations, &choices, &budget) {
+        save("recommended.toml", &recommended_toml(recommendations, choices, budget))?;
     }
     let mut scenes: Vec<&str> = summaries.iter().map(|s| s.first().scene.as_str()).collect();
     scenes.dedup();
@@ -186,10 +190,10 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, o
         }
     }
     let budgeted = recommendations.as_deref().zip(choices.as_deref()).zip(budget).map(|((r, c), b)| (r, c, b));
-    let report = report_text(outcome, &summaries, &fronts, &charts_md, budgeted);
+    let report = report_text(outcome, &summaries, &fronts, &cells, &charts_md, budgeted);
     outputs.bytes(&out.join("report.md"), report.as_bytes())?;
     if let Some(overview) = overview {
-        let text = overview.text(out, outcome, &summaries, &fronts, &scenes, budgeted);
+        let text = overview.text(out, outcome, &summaries, &cells, &scenes, budgeted);
         outputs.bytes(&overview.path, text.as_bytes())?;
     }
     outputs.commit()?;
@@ -211,10 +215,8 @@ pub(crate) struct Overview {
 impl Overview {
     /// `target` as a link from the overview's folder.
     fn link(&self, target: &Path) -> String {
-        let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        let from = absolute(self.path.parent().unwrap_or(Path::new(".")));
-        let target = absolute(target);
-        target.strip_prefix(&from).unwrap_or(&target).display().to_string()
+        let folder = self.path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        relative(target, folder).display().to_string()
     }
 
     fn text(
@@ -222,7 +224,7 @@ impl Overview {
         out: &Path,
         outcome: &Outcome,
         summaries: &[Summary],
-        fronts: &[bool],
+        cells: &[MethodCell],
         scenes: &[&str],
         budgeted: Option<(&[Recommendation], &[SceneChoice], Budget)>,
     ) -> String {
@@ -251,7 +253,7 @@ impl Overview {
                 let _ = writeln!(r, "![{scene}]({}.png)\n", self.link(&stem));
             }
         }
-        methods_text(&mut r, summaries, fronts, outcome);
+        methods_text(&mut r, cells, outcome);
         if !self.links.is_empty() {
             let _ = writeln!(r, "## Each scene's own report\n");
             for link in &self.links {
@@ -260,6 +262,31 @@ impl Overview {
         }
         r
     }
+}
+
+/// `target` as a path relative to the folder `from` (both as given, from the working folder):
+/// the common folders dropped, a `..` for each folder of `from` left.
+fn relative(target: &Path, from: &Path) -> PathBuf {
+    // The folders from the root, `..` resolved by name (the report's folders are no links).
+    let parts = |p: &Path| -> Vec<std::ffi::OsString> {
+        let whole = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let mut parts = Vec::new();
+        for c in whole.components() {
+            match c {
+                std::path::Component::Normal(name) => parts.push(name.to_os_string()),
+                std::path::Component::ParentDir => {
+                    parts.pop();
+                }
+                _ => {}
+            }
+        }
+        parts
+    };
+    let (target, from) = (parts(target), parts(from));
+    let common = target.iter().zip(&from).take_while(|(a, b)| a == b).count();
+    let mut path: PathBuf = from[common..].iter().map(|_| "..").collect();
+    path.extend(&target[common..]);
+    path
 }
 
 fn remove_stale(path: &Path) -> Result<()> {
@@ -281,7 +308,7 @@ fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>
             Some(at) => at,
             None => {
                 let mut new = Series::new(method.clone(), Vec::new());
-                new.style = crate::methods::METHODS.iter().position(|m| m.name() == method);
+                new.style = method_style(method);
                 series.push(new);
                 series.len() - 1
             }
@@ -292,6 +319,11 @@ fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>
     let points: Vec<(f64, f64)> = of_scene.iter().map(|s| (x(s), s.mean_nrmse)).collect();
     let front = pareto::front_in_cost_order(&points).into_iter().map(|i| points[i]).collect();
     (series, front)
+}
+
+/// A method's colour and marker in every chart: its place in the registry.
+fn method_style(method: &str) -> Option<usize> {
+    crate::methods::METHODS.iter().position(|m| m.name() == method)
 }
 
 /// A cost axis: (file-name part, axis label, the cost of a configuration).
@@ -323,10 +355,13 @@ fn write_scene_charts(outputs: &mut Outputs, out: &Path, scene: &str, of_scene: 
         let series = of_scene
             .iter()
             .map(|s| {
-                Series::new(
-                    format!("{} [{}]", s.first().method, s.first().params),
+                let mut line = Series::new(
+                    format!("{} {} [{}]", s.first().method, s.number, s.first().params),
                     s.rows.iter().filter_map(|r| r.accuracy.map(|a| (r.light as f64, a.nrmse))).collect(),
-                )
+                );
+                // Its method's colour and marker, as in the other charts.
+                line.style = method_style(&s.first().method);
+                line
             })
             .collect();
         let stem = format!("{scene}_error_along_path");
@@ -426,9 +461,9 @@ fn recommend<'s>(summaries: &'s [Summary<'s>], budget: &Budget) -> Vec<Recommend
     recommendations
 }
 
-/// The `--budget` choice for one scene across its methods: of each method's choice, the
-/// cheapest in cost order; the next cheapest method within the budget beside it. Without any
-/// within the budget, neither.
+/// The budget's choice for one scene across its methods: of each method's choice, the best
+/// (`Budget::order`); the next best method within the budget beside it. Without any within
+/// the budget, neither.
 pub(crate) struct SceneChoice<'s> {
     scene: &'s str,
     /// Indices into the recommendations: the chosen method's, then the next cheapest's.
@@ -502,6 +537,7 @@ fn report_text(
     outcome: &Outcome,
     summaries: &[Summary],
     fronts: &[bool],
+    cells: &[MethodCell],
     charts_md: &str,
     budgeted: Option<(&[Recommendation], &[SceneChoice], Budget)>,
 ) -> String {
@@ -525,7 +561,7 @@ fn report_text(
         }
         let _ = writeln!(r);
     }
-    methods_text(&mut r, summaries, fronts, outcome);
+    methods_text(&mut r, cells, outcome);
     let _ = writeln!(r, "## Summary per method configuration\n");
     let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect` (none under an environment, where the direct-only frame lacks the environment's direct light: -); flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene. The label is the configuration's number in the charts.\n");
     let _ = writeln!(r, "| scene | method (label) | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
@@ -536,19 +572,19 @@ fn report_text(
         let failed = if s.failed > 0 { format!(" ({} of {} failed)", s.failed, s.rows.len()) } else { String::new() };
         let _ = writeln!(
             r,
-            "| {} | {} {} | {} | {:.4}{failed} | {:.4} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {} |",
+            "| {} | {} {} | {} | {}{failed} | {} | {} | {} | {} | {} | {:.2} | {:.1} | {:.2} | {} |",
             row.scene,
             row.method,
             s.number,
             row.params,
-            s.mean_nrmse,
-            s.mean_flip,
+            cell(s.mean_nrmse, 4),
+            cell(s.mean_flip, 4),
             cell(s.mean_indirect_nrmse, 4),
             s.max_flicker.map_or("-".into(), |f| format!("{f:.4}")),
-            s.gpu_ms,
-            s.cpu_ms,
+            cell(s.gpu_ms, 2),
+            cell(s.cpu_ms, 2),
             row.bake.seconds,
-            row.bake.peak_memory_bytes as f64 / (1 << 20) as f64,
+            s.peak_mib(),
             s.artifact_mib(),
             if on { "yes" } else { "" }
         );
@@ -623,8 +659,8 @@ fn method_cells<'a, 's>(summaries: &'a [Summary<'s>], fronts: &[bool]) -> Vec<Me
 
 /// methods.csv and the report's table across methods: per scene and method, the best image and
 /// indirect NRMSE, and the costs of its most accurate configuration.
-fn methods_rows(summaries: &[Summary], fronts: &[bool]) -> Vec<[String; 13]> {
-    method_cells(summaries, fronts)
+fn methods_rows(cells: &[MethodCell]) -> Vec<[String; 13]> {
+    cells
         .iter()
         .map(|c| {
             let best = c.best();
@@ -637,10 +673,13 @@ fn methods_rows(summaries: &[Summary], fronts: &[bool]) -> Vec<[String; 13]> {
                 cell(c.best_indirect(), 4),
                 best.number.to_string(),
                 cell(row.bake.seconds, 2),
-                cell(row.bake.peak_memory_bytes as f64 / (1 << 20) as f64, 1),
+                cell(best.peak_mib(), 1),
                 cell(best.artifact_mib(), 2),
                 cell(best.gpu_ms, 2),
-                format!("{}-{}", cell(best.gpu_p10_ms, 2), cell(best.gpu_p90_ms, 2)),
+                match best.gpu_p10_ms.is_finite() && best.gpu_p90_ms.is_finite() {
+                    true => format!("{:.2}-{:.2}", best.gpu_p10_ms, best.gpu_p90_ms),
+                    false => "-".into(),
+                },
                 cell(best.gpu_without_shadow_maps_ms, 3),
                 c.on_front().join(" "),
             ]
@@ -664,15 +703,15 @@ const METHODS_HEADER: [&str; 13] = [
     "labels on the front",
 ];
 
-fn methods_text(r: &mut String, summaries: &[Summary], fronts: &[bool], outcome: &Outcome) {
+fn methods_text(r: &mut String, cells: &[MethodCell], outcome: &Outcome) {
     let _ = writeln!(r, "## Across methods\n");
     let _ = writeln!(r, "Per scene and method: the lowest mean NRMSE of its configurations and the costs of that configuration (its label), the lowest mean indirect NRMSE of any, and which of its configurations are on the scene's Pareto front of (GPU frame time, mean NRMSE). Empty cells mean nothing for the method or scene (-). Also in methods.csv.\n");
     let _ = writeln!(r, "| {} |\n|{}", METHODS_HEADER.join(" | "), "---|".repeat(METHODS_HEADER.len()));
-    for row in methods_rows(summaries, fronts) {
+    for row in methods_rows(cells) {
         let _ = writeln!(r, "| {} |", row.join(" | "));
     }
-    noise_text(r, summaries, fronts, &outcome.noise);
-    timing_text(r, &method_cells(summaries, fronts));
+    noise_text(r, cells, &outcome.noise);
+    timing_text(r, cells);
     if !outcome.not_applicable.is_empty() {
         let _ = writeln!(r, "\nNot run where they do not apply:\n");
         for line in &outcome.not_applicable {
@@ -684,12 +723,11 @@ fn methods_text(r: &mut String, summaries: &[Summary], fronts: &[bool], outcome:
 
 /// Per scene that measured it, the references' own noise, and the methods whose best NRMSE is
 /// nearer the scene's best than three times that noise: not told apart by this reference.
-fn noise_text(r: &mut String, summaries: &[Summary], fronts: &[bool], noise: &[(String, super::ReferenceNoise)]) {
+fn noise_text(r: &mut String, cells: &[MethodCell], noise: &[(String, super::ReferenceNoise)]) {
     if noise.is_empty() {
         return;
     }
     let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced again with the next seed: their NRMSE / sqrt 2), beside the errors ranked:\n");
-    let cells = method_cells(summaries, fronts);
     for (scene, n) in noise {
         let mut bests: Vec<(f64, &str)> = cells
             .iter()
@@ -700,6 +738,7 @@ fn noise_text(r: &mut String, summaries: &[Summary], fronts: &[bool], noise: &[(
         let close: Vec<&str> =
             bests.iter().skip(1).filter(|b| bests.first().is_some_and(|first| b.0 - first.0 < 3.0 * n.scene_nrmse)).map(|b| b.1).collect();
         let verdict = match (bests.first(), close.is_empty()) {
+            _ if bests.len() < 2 || !n.scene_nrmse.is_finite() => String::new(),
             (Some(first), false) => format!("; within 3x the noise of the best ({}): {}", first.1, close.join(", ")),
             (Some(first), true) => format!("; the best ({}) is apart from the rest by more than 3x the noise", first.1),
             (None, _) => String::new(),
@@ -716,6 +755,10 @@ fn timing_text(r: &mut String, cells: &[MethodCell]) {
     let _ = writeln!(r, "\nFrame times this run does not tell apart (the 10th-90th percentile spreads of the methods' most accurate configurations overlap):\n");
     for scene in scenes {
         let of: Vec<&Summary> = cells.iter().map(|c| c.best()).filter(|s| s.first().scene == scene).collect();
+        if of.iter().any(|s| !(s.gpu_p10_ms.is_finite() && s.gpu_p90_ms.is_finite())) {
+            let _ = writeln!(r, "- {scene}: unknown (the device gave no timestamps)");
+            continue;
+        }
         let mut pairs = Vec::new();
         for (i, a) in of.iter().enumerate() {
             for b in &of[i + 1..] {
@@ -890,6 +933,15 @@ mod tests {
         let mut text = String::new();
         budget_text(&mut text, &recommendations, &choices, &error(0.01));
         assert!(text.contains("- s: no method within the budget (the most accurate: large [c] NRMSE 0.0500"), "{text}");
+    }
+
+    #[test]
+    fn overview_links_are_relative_to_its_folder() {
+        assert_eq!(relative(Path::new("out/bench/report.md"), Path::new("out")), Path::new("bench/report.md"));
+        assert_eq!(relative(Path::new("out/cornell/report.md"), Path::new("docs/../out/x")), Path::new("../cornell/report.md"));
+        assert_eq!(relative(Path::new("a.png"), Path::new(".")), Path::new("a.png"));
+        let page = Overview { path: PathBuf::from("overview.md"), links: Vec::new() };
+        assert_eq!(page.link(Path::new("out/report.md")), "out/report.md");
     }
 
     /// With bounds on the frame time and the artifact and none on the error, the budget picks

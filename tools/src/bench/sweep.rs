@@ -19,7 +19,7 @@ pub(crate) struct Sweep {
     #[serde(default = "default_spp")]
     pub reference_spp: u32,
     /// Trace each scene's first light configuration again with the next seed, and report the
-    /// references' own noise (docs/BENCH.md, "Reference noise").
+    /// references' own noise (docs/BENCH.md, the sweep keys).
     #[serde(default)]
     pub reference_noise: bool,
     /// Timed frames per point.
