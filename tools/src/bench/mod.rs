@@ -3,9 +3,12 @@
 //! frame costs on the GPU, and how far the image is from the reference path tracer; then
 //! writes results.csv, results.json, the charts and report.md into one folder.
 
+mod budget;
 mod charts;
 pub(crate) mod config;
 mod figures;
+mod methods_table;
+mod overview;
 mod pareto;
 mod perceptual;
 mod reference_cache;
@@ -105,8 +108,8 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
     std::fs::create_dir_all(args.out.join("images")).with_context(|| format!("{}: cannot create the report folder", args.out.display()))?;
     let outcome = run_sweep(sweep, &configs, args)?;
     let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();
-    let budget = report::Budget { nrmse: args.budget, frame_ms: args.budget_ms, artifact_mib: args.budget_mib };
-    let overview = args.overview.as_ref().map(|path| report::Overview { path: path.clone(), links: args.link.clone() });
+    let budget = budget::Budget { nrmse: args.budget, frame_ms: args.budget_ms, artifact_mib: args.budget_mib };
+    let overview = args.overview.as_ref().map(|path| overview::Overview { path: path.clone(), links: args.link.clone() });
     report::write_all(&args.out, &outcome, budget.given(), overview.as_ref())?;
     if let Some(first) = outcome.validation_messages.first() {
         bail!("{} Vulkan validation message(s), first: {first}", outcome.validation_messages.len());

@@ -156,7 +156,7 @@ pub(crate) struct SweepMethod {
 impl SweepScene {
     /// The name rows, pictures and charts carry: `name`, else the file's stem.
     pub fn name(&self) -> String {
-        self.name.clone().unwrap_or_else(|| self.path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()))
+        self.name.clone().unwrap_or_else(|| crate::bake::scene_name(&self.path))
     }
 }
 
