@@ -24,7 +24,7 @@ use std::any::Any;
 use std::sync::Arc;
 
 /// Everything that shapes a frame; validated by [`RenderSettings::validate`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,

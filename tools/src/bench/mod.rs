@@ -6,6 +6,7 @@
 mod budget;
 mod charts;
 pub(crate) mod config;
+mod configuration;
 mod figures;
 mod methods_table;
 mod overview;
@@ -15,13 +16,15 @@ mod reference_cache;
 mod report;
 mod results;
 mod sweep;
+mod timing;
 
 use crate::args::{load_scene, positive, threads, SceneArgs};
-use crate::gpu::{self, median_timings, warm_up};
+use crate::gpu;
 use crate::methods;
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use config::Config;
+use configuration::{configurations, Configuration};
 use glam::Vec3;
 use reference_cache::{Reference, ReferenceCache};
 use relume_bake::artifact::Artifact;
@@ -30,7 +33,7 @@ use relume_bake::image::{self, Image};
 use relume_bake::metrics;
 use relume_bake::outputs::Outputs;
 use relume_bake::reference::ReferenceSettings;
-use relume_bake::scene::{Light, LightKind, Scene};
+use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use relume_renderer::vk::{Context, ContextOptions};
 use relume_renderer::{Headless, RenderSettings, Renderer};
@@ -214,7 +217,9 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
         }
         let mut bench = SceneBench::new(&sweep, entry, &ctx, &mut cache, args)?;
         noise.extend(bench.noise.map(|n| (bench.name.clone(), n)));
-        for config in configs {
+        let mut prepared = Vec::new();
+        let mut scene_rows = Vec::new();
+        for (order, config) in configs.iter().enumerate() {
             if let Some(why) = methods::unsuited(config.method, &bench.scene) {
                 let line = format!("{} {}: {why}", bench.name, config.method.name());
                 if !not_applicable.contains(&line) {
@@ -228,14 +233,14 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
                 continue;
             }
             // A configuration that cannot be baked or rendered fails its points; the sweep goes on.
-            match bench.run(config, &device) {
-                Ok(scored) => rows.extend(scored),
-                Err(why) => {
-                    eprintln!("{}: {} [{}] failed: {why:#}", bench.name, config.method.name(), config.label);
-                    rows.extend(bench.failed(config, &format!("{why:#}")));
-                }
+            match bench.prepare(order, config) {
+                Ok(p) => prepared.push(p),
+                Err(why) => scene_rows.push(bench.fail(order, config, &why)),
             }
         }
+        scene_rows.extend(bench.measure(prepared, &device));
+        scene_rows.sort_by_key(|(order, _)| *order);
+        rows.extend(scene_rows.into_iter().flat_map(|(_, r)| r));
     }
     drop(ctx);
     let validation_messages = log.lock().map(|m| m.clone()).unwrap_or_default();
@@ -338,8 +343,9 @@ impl<'s> SceneBench<'s> {
         })
     }
 
-    /// Bakes `config` if it needs a bake, then renders and scores every light configuration.
-    fn run(&mut self, config: &Config, device: &str) -> Result<Vec<Row>> {
+    /// `config` baked if it needs a bake, its renderer made: ready to be measured with the
+    /// scene's other configurations.
+    fn prepare<'c>(&mut self, order: usize, config: &'c Config) -> Result<Prepared<'c>> {
         let method = config.method;
         println!("{}: {} [{}]", self.name, method.name(), config.label);
         let id = self.config_id(config);
@@ -354,56 +360,98 @@ impl<'s> SceneBench<'s> {
         let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ..RenderSettings::default() };
         let settings = config.frame.settings(method, &self.scene, base);
         settings.validate().map_err(|e| anyhow::anyhow!("{} [{}]: render settings: {e}", method.name(), config.label))?;
-        let mut renderer = gpu::renderer(self.ctx, loaded.as_ref(), &settings)?;
+        let renderer = gpu::renderer(self.ctx, loaded.as_ref(), &settings)?;
         // Direct light alone with the same shadow maps: what the indirect part is measured
         // against. Under an environment it lacks the environment's direct light, so no
         // indirect part can be told apart (its columns stay empty).
-        let direct_settings = RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings.clone() };
-        let mut direct_renderer = match methods::environment_lit(&self.scene) {
-            false => Some(gpu::renderer(self.ctx, &methods::Plain(self.scene.clone()), &direct_settings)?),
-            true => None,
-        };
-        let mut rows: Vec<Row> = Vec::new();
-        let mut previous: Option<Image> = None;
-        for (k, configuration) in self.configurations.iter().enumerate() {
-            match (self.continuous, k.checked_sub(1)) {
-                (Some(seconds), Some(before)) => self.configurations[before].move_to(configuration, seconds, &mut renderer)?,
-                _ => configuration.apply(&mut renderer)?,
+        let direct = (!methods::environment_lit(&self.scene)).then(|| RenderSettings { ambient: Vec3::ZERO, beta: 0.0, ..settings });
+        Ok(Prepared { order, config, bake, renderer, direct, rows: Vec::new(), previous: None })
+    }
+
+    /// Every prepared configuration at every light configuration: set to it, timed in turn
+    /// with the others (timing::time_interleaved), then its image scored. The rows of each,
+    /// by its order in the sweep; a configuration that fails at any light fails all its points.
+    fn measure(&self, prepared: Vec<Prepared>, device: &str) -> Vec<(usize, Vec<Row>)> {
+        let mut done = Vec::new();
+        let mut live = prepared;
+        let mut direct = DirectFrames::default();
+        for k in 0..self.configurations.len() {
+            let mut set = Vec::new();
+            for mut p in live {
+                match self.set(k, &mut p.renderer) {
+                    Ok(()) => set.push(p),
+                    Err(why) => done.push(self.fail(p.order, p.config, &why)),
+                }
             }
-            let frames = time_frames(&mut renderer, self.sweep.frames, self.sweep.warmup_seconds)?;
-            let image = frame_image(&mut renderer)?;
-            let direct = match &mut direct_renderer {
-                Some(renderer) => {
-                    configuration.apply(renderer)?;
-                    Some(frame_image(renderer)?)
+            println!(
+                "{}: light configuration {}/{}: {} configuration(s) timed in turn",
+                self.name,
+                k + 1,
+                self.configurations.len(),
+                set.len()
+            );
+            let mut renderers: Vec<&mut Headless> = set.iter_mut().map(|p| &mut p.renderer).collect();
+            let costs = timing::time_interleaved(&mut renderers, self.sweep.frames, self.sweep.warmup_seconds);
+            direct.images.clear();
+            live = Vec::new();
+            for (mut p, cost) in set.into_iter().zip(costs) {
+                match cost.and_then(|frame| self.record(k, &mut p, frame, &mut direct, device)) {
+                    Ok(()) => live.push(p),
+                    Err(why) => done.push(self.fail(p.order, p.config, &why)),
                 }
-                None => None,
-            };
-            let scored = self.score(k, &image, direct.as_ref(), &self.point_id(config, k))?;
-            let accuracy = scored.as_ref().ok().copied();
-            let flicker = match (&previous, &accuracy) {
-                (Some(before), Some(_)) => {
-                    Some(metrics::flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined))
-                }
-                _ => None,
-            };
-            rows.push(Row {
-                status: match scored {
-                    Ok(_) => "ok".into(),
-                    Err(why) => format!("failed: {why}"),
-                },
-                bake: bake.clone(),
-                frame: frames,
-                accuracy,
-                flicker,
-                non_finite_pixels: count_non_finite(&image),
-                device: device.to_string(),
-                ..self.row(config, k)
-            });
-            // Flicker compares scored images only: after a failed point the next has none.
-            previous = accuracy.is_some().then_some(image);
+            }
         }
-        Ok(rows)
+        done.extend(live.into_iter().map(|p| (p.order, p.rows)));
+        done
+    }
+
+    /// A renderer set to light configuration `k`: moved there from `k - 1` when the light
+    /// moves continuously.
+    fn set(&self, k: usize, renderer: &mut Renderer) -> Result<()> {
+        match (self.continuous, k.checked_sub(1)) {
+            (Some(seconds), Some(before)) => self.configurations[before].move_to(&self.configurations[k], seconds, renderer),
+            _ => self.configurations[k].apply(renderer),
+        }
+    }
+
+    /// The point of `p` at light configuration `k`, its frames timed: its image scored
+    /// against the reference (and against the direct-only frame of its settings).
+    fn record(&self, k: usize, p: &mut Prepared, frame: FrameCost, direct: &mut DirectFrames, device: &str) -> Result<()> {
+        let image = frame_image(&mut p.renderer)?;
+        let direct = match &p.direct {
+            Some(settings) => Some(direct.image(self, k, settings)?),
+            None => None,
+        };
+        let scored = self.score(k, &image, direct, &self.point_id(p.config, k))?;
+        let accuracy = scored.as_ref().ok().copied();
+        let flicker = match (&p.previous, &accuracy) {
+            (Some(before), Some(_)) => {
+                Some(metrics::flicker(before, &image, &self.references[k - 1].combined, &self.references[k].combined))
+            }
+            _ => None,
+        };
+        p.rows.push(Row {
+            status: match scored {
+                Ok(_) => "ok".into(),
+                Err(why) => format!("failed: {why}"),
+            },
+            bake: p.bake.clone(),
+            frame,
+            accuracy,
+            flicker,
+            non_finite_pixels: count_non_finite(&image),
+            device: device.to_string(),
+            ..self.row(p.config, k)
+        });
+        // Flicker compares scored images only: after a failed point the next has none.
+        p.previous = accuracy.is_some().then_some(image);
+        Ok(())
+    }
+
+    /// Every point of `config` failed, saying why (the sweep goes on).
+    fn fail(&self, order: usize, config: &Config, why: &anyhow::Error) -> (usize, Vec<Row>) {
+        eprintln!("{}: {} [{}] failed: {why:#}", self.name, config.method.name(), config.label);
+        (order, self.failed(config, &format!("{why:#}")))
     }
 
     /// The stem of the configuration's files: its bake folder, its points' pictures.
@@ -476,6 +524,48 @@ impl<'s> SceneBench<'s> {
     }
 }
 
+/// A configuration of a scene baked and loaded: its renderer stays alive while the scene's
+/// configurations are measured together, and gathers its points.
+struct Prepared<'c> {
+    order: usize,
+    config: &'c Config,
+    bake: BakeCost,
+    renderer: Headless,
+    /// The settings of its direct-only frame (None under an environment).
+    direct: Option<RenderSettings>,
+    rows: Vec<Row>,
+    /// Its last scored image, for flicker.
+    previous: Option<Image>,
+}
+
+/// Direct-only frames of a scene: one renderer per settings (configurations that differ only
+/// in what they add share one), and its image at the current light configuration.
+#[derive(Default)]
+struct DirectFrames {
+    renderers: Vec<(RenderSettings, Headless)>,
+    /// Per renderer, its image at the light configuration being measured, once made.
+    images: Vec<(usize, Image)>,
+}
+
+impl DirectFrames {
+    fn image(&mut self, bench: &SceneBench, k: usize, settings: &RenderSettings) -> Result<&Image> {
+        let i = match self.renderers.iter().position(|(s, _)| s == settings) {
+            Some(i) => i,
+            None => {
+                let renderer = gpu::renderer(bench.ctx, &methods::Plain(bench.scene.clone()), settings)?;
+                self.renderers.push((settings.clone(), renderer));
+                self.renderers.len() - 1
+            }
+        };
+        if !self.images.iter().any(|(j, _)| *j == i) {
+            let renderer = &mut self.renderers[i].1;
+            bench.configurations[k].apply(renderer)?;
+            self.images.push((i, frame_image(renderer)?));
+        }
+        Ok(&self.images.iter().find(|(j, _)| *j == i).expect("made above").1)
+    }
+}
+
 /// The errors of a method's image against the reference, over the whole image and over its
 /// indirect part (the image minus the direct-only frame `direct`; NaN without one). The point fails (inner
 /// Err, saying why; nothing is averaged over it) when the image holds a NaN or an infinity,
@@ -526,178 +616,8 @@ fn reference_noise(a: &Reference, b: &Reference) -> Result<ReferenceNoise> {
     Ok(ReferenceNoise { scene_nrmse: noise(&a.combined, &b.combined)?, indirect_nrmse: noise(&a.indirect, &b.indirect)? })
 }
 
-/// One configuration of a scene: its lights, and where the moving light or occluder is, or
-/// the swept spot's outer cone and turn (degrees).
-struct Configuration {
-    lights: Vec<Light>,
-    light_position: Option<Vec3>,
-    occluder: Option<MovedMesh>,
-    spot: Option<(f32, f32)>,
-}
-
-/// A mesh moved by an occluder path: turned about the vertical axis through its bounds'
-/// centre, then translated from where the scene has it.
-struct MovedMesh {
-    mesh: usize,
-    translation: Vec3,
-    turn_degrees: f32,
-    /// Its vertices turned (None without a turn).
-    turned: Option<(Vec<Vec3>, Vec<Vec3>)>,
-}
-
-impl MovedMesh {
-    fn new(scene: &Scene, mesh: usize, translation: Vec3, turn_degrees: f32) -> Self {
-        let m = &scene.meshes[mesh];
-        let turned = (turn_degrees != 0.0).then(|| {
-            let (lo, hi) = m.bounds();
-            let (centre, turn) = ((lo + hi) * 0.5, glam::Quat::from_rotation_y(turn_degrees.to_radians()));
-            (m.positions.iter().map(|p| centre + turn * (*p - centre)).collect(), m.normals.iter().map(|n| turn * *n).collect())
-        });
-        MovedMesh { mesh, translation, turn_degrees, turned }
-    }
-}
-
-impl Configuration {
-    /// The scene as this configuration has it, for the reference.
-    fn apply_to(&self, scene: &Scene) -> Scene {
-        let mut moved = Scene { lights: self.lights.clone(), ..scene.clone() };
-        if let Some(o) = &self.occluder {
-            let mesh = &mut moved.meshes[o.mesh];
-            if let Some((positions, normals)) = &o.turned {
-                (mesh.positions, mesh.normals) = (positions.clone(), normals.clone());
-            }
-            mesh.positions.iter_mut().for_each(|p| *p += o.translation);
-        }
-        moved
-    }
-
-    /// The renderer set to this configuration (the occluder first: set_lights refits the
-    /// shadow maps to it).
-    fn apply(&self, renderer: &mut Renderer) -> Result<()> {
-        if let Some(o) = &self.occluder {
-            if let Some((positions, normals)) = &o.turned {
-                renderer.set_mesh_vertices(o.mesh, positions, normals)?;
-            }
-            renderer.set_mesh_translation(o.mesh, o.translation)?;
-        }
-        renderer.set_lights(&self.lights)?;
-        Ok(())
-    }
-
-    /// The lights moved from this configuration to `next` over `seconds`, in steps of 1/60 s
-    /// along the straight line between (light paths only).
-    fn move_to(&self, next: &Configuration, seconds: f32, renderer: &mut Renderer) -> Result<()> {
-        let steps = (seconds * 60.0).round().max(1.0) as usize;
-        let mut lights = self.lights.clone();
-        for step in 1..=steps {
-            let t = step as f32 / steps as f32;
-            for ((light, from), to) in lights.iter_mut().zip(&self.lights).zip(&next.lights) {
-                light.position = from.position.lerp(to.position, t);
-            }
-            renderer.move_lights(&lights, seconds / steps as f32)?;
-        }
-        Ok(())
-    }
-}
-
-/// The scene as it is, or one light or one mesh moved along the sweep's path.
-fn configurations(scene: &Scene, entry: &SweepScene) -> Result<Vec<Configuration>> {
-    let at_rest = || Configuration { lights: scene.lights.clone(), light_position: None, occluder: None, spot: None };
-    if let Some(path) = &entry.light_path {
-        if path.light >= scene.lights.len() {
-            bail!("{}: light_path.light {}: the scene has {} light(s)", entry.path.display(), path.light, scene.lights.len());
-        }
-        return Ok(sweep::spread(&path.points, path.frames)
-            .into_iter()
-            .map(|p| {
-                let mut configuration = at_rest();
-                configuration.lights[path.light].position = p;
-                configuration.light_position = Some(p);
-                configuration
-            })
-            .collect());
-    }
-    if let Some(path) = &entry.occluder_path {
-        let Some(mesh) = scene.meshes.iter().position(|m| m.name == path.mesh) else {
-            let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
-            bail!("{}: occluder_path.mesh \"{}\": no such mesh; the scene has {}", entry.path.display(), path.mesh, names.join(", "));
-        };
-        let turns = sweep::spread(&[[0.0; 3], [path.turn_degrees, 0.0, 0.0]], path.frames);
-        return Ok(sweep::spread(&path.points, path.frames)
-            .into_iter()
-            .zip(turns)
-            .map(|(t, turn)| Configuration { occluder: Some(MovedMesh::new(scene, mesh, t, turn.x)), ..at_rest() })
-            .collect());
-    }
-    if let Some(sweep) = &entry.spot_sweep {
-        return spot_configurations(scene, entry, sweep, &at_rest);
-    }
-    Ok(vec![at_rest()])
-}
-
-/// A spot sweep's configurations: the spot with each cone, or aimed at each target (a
-/// directional light too: from where its node stands).
-fn spot_configurations(
-    scene: &Scene,
-    entry: &SweepScene,
-    sweep: &sweep::SpotSweep,
-    at_rest: &dyn Fn() -> Configuration,
-) -> Result<Vec<Configuration>> {
-    let aimed = sweep.outer_degrees.is_empty();
-    let sweepable = |l: &&Light| matches!(l.kind, LightKind::Spot { .. }) || (aimed && l.kind == LightKind::Directional);
-    let Some(spot) = scene.lights.get(sweep.light).filter(sweepable) else {
-        bail!(
-            "{}: spot_sweep.light {}: not a spot light (nor, for targets, a directional light) of the scene's {}",
-            entry.path.display(),
-            sweep.light,
-            scene.lights.len()
-        );
-    };
-    let with = |kind: LightKind, direction: Vec3| {
-        let mut configuration = at_rest();
-        configuration.lights[sweep.light] = Light { kind, direction, ..spot.clone() };
-        let turn = direction.angle_between(spot.direction).to_degrees();
-        let outer = match kind {
-            LightKind::Spot { outer_cone, .. } => outer_cone.to_degrees(),
-            _ => 0.0,
-        };
-        configuration.spot = Some((outer, turn));
-        configuration
-    };
-    let cones = sweep.outer_degrees.iter().map(|&outer| {
-        let inner = (outer - sweep.softness_degrees).max(0.0);
-        with(LightKind::Spot { inner_cone: inner.to_radians(), outer_cone: outer.to_radians() }, spot.direction)
-    });
-    let aims = sweep.targets.iter().map(|t| {
-        let direction = (Vec3::from_array(*t) - spot.position).normalize_or(spot.direction);
-        with(spot.kind, direction)
-    });
-    Ok(cones.chain(aims).collect())
-}
-
 fn frame_image(renderer: &mut Headless) -> Result<Image> {
     Ok(renderer.render_and_read()?.0)
-}
-
-/// Warm-up frames (crate::warm_up), then `frames` timed ones: GPU time per pass from
-/// timestamps and the CPU's wall time of each `render` call (record, submit, wait for its fence).
-fn time_frames(renderer: &mut Headless, frames: u32, warm_up_seconds: f64) -> Result<FrameCost> {
-    warm_up(renderer, warm_up_seconds)?;
-    let mut timings = Vec::new();
-    let mut cpu_ms = Vec::new();
-    for _ in 0..frames {
-        let start = Instant::now();
-        timings.push(renderer.render()?);
-        cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
-    }
-    let totals: Vec<f64> = timings.iter().filter(|t| !t.passes().is_empty()).map(|t| t.total_ms()).collect();
-    Ok(FrameCost {
-        passes_ms: median_timings(&timings).into_iter().filter(|(name, _)| name != "frame").collect(),
-        gpu_ms: results::percentile(&totals, 0.5),
-        gpu_p10_ms: results::percentile(&totals, 0.1),
-        gpu_p90_ms: results::percentile(&totals, 0.9),
-        cpu_ms: results::percentile(&cpu_ms, 0.5),
-    })
 }
 
 fn count_non_finite(image: &Image) -> usize {
@@ -729,50 +649,5 @@ mod tests {
         assert!(failure.contains("2 NaN"), "a NaN image must not be scored: {failure}");
         let black = Reference { indirect: Image::new(4, 4), combined: Image::new(4, 4) };
         assert!(accuracy(&grey, &black, Some(&Image::new(4, 4))).unwrap().unwrap_err().contains("black"));
-    }
-
-    #[test]
-    fn a_spot_sweep_narrows_its_cone_or_turns_its_aim_where_it_stands() {
-        use relume_bake::testing::{look_at, point_light, scene, spot_light};
-        let spot = spot_light(Vec3::new(0.0, 2.0, 0.0), Vec3::NEG_Y, Vec3::ONE, 0.5, 0.7);
-        let s =
-            scene("spot", vec![], vec![], vec![point_light(Vec3::ONE, Vec3::ONE), spot], look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 0.8));
-        let entry = |text: &str| -> SweepScene { toml::from_str(&format!("path = 'a.gltf'\nspot_sweep = {text}")).unwrap() };
-        let cones = configurations(&s, &entry("{ light = 1, outer_degrees = [60, 5], softness_degrees = 10 }")).unwrap();
-        let kinds: Vec<LightKind> = cones.iter().map(|c| c.lights[1].kind).collect();
-        assert_eq!(
-            kinds,
-            [
-                LightKind::Spot { inner_cone: 50f32.to_radians(), outer_cone: 60f32.to_radians() },
-                LightKind::Spot { inner_cone: 0.0, outer_cone: 5f32.to_radians() }
-            ]
-        );
-        assert_eq!(cones.iter().map(|c| c.spot.unwrap().0.round()).collect::<Vec<_>>(), [60.0, 5.0]);
-        let aims = configurations(&s, &entry("{ light = 1, targets = [[0, 0, 0], [2, 2, 0]] }")).unwrap();
-        assert!(aims.iter().all(|c| c.lights[1].position == Vec3::new(0.0, 2.0, 0.0) && c.lights[0].position == Vec3::ONE));
-        assert_eq!(aims.iter().map(|c| c.spot.unwrap().1.round()).collect::<Vec<_>>(), [0.0, 90.0]);
-        assert!(aims[1].lights[1].direction.distance(Vec3::X) < 1e-6);
-        let refused =
-            configurations(&s, &entry("{ light = 0, outer_degrees = [30] }")).err().expect("a point light is no spot").to_string();
-        assert!(refused.contains("spot_sweep.light 0: not a spot light"), "{refused}");
-    }
-
-    #[test]
-    fn an_occluder_path_turns_its_mesh_about_its_bounds_centre_then_moves_it() {
-        use relume_bake::testing::{closed_box, look_at, scene, Facing};
-        let block = closed_box(Vec3::new(1.0, 0.0, 1.0), Vec3::new(3.0, 1.0, 2.0), 1, Facing::Outward, 0);
-        let s = scene("block", vec![block], vec![], vec![], look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y, 0.8));
-        let turned = MovedMesh::new(&s, 0, Vec3::new(0.0, 2.0, 0.0), 90.0);
-        let configuration = Configuration { lights: vec![], light_position: None, occluder: Some(turned), spot: None };
-        let moved = configuration.apply_to(&s).meshes.remove(0);
-        let (lo, hi) = moved.bounds();
-        // 2 x 1 x 1 about (2, 0.5, 1.5): turned a quarter, 1 x 1 x 2 about the same centre, 2 m up.
-        assert!(
-            (lo - Vec3::new(1.5, 2.0, 0.5)).abs().max_element() < 1e-5 && (hi - Vec3::new(2.5, 3.0, 2.5)).abs().max_element() < 1e-5,
-            "{lo} {hi}"
-        );
-        let x_face = s.meshes[0].normals.iter().position(|n| *n == Vec3::X).unwrap();
-        assert!((moved.normals[x_face] - Vec3::NEG_Z).length() < 1e-6, "{}", moved.normals[x_face]);
-        assert!(MovedMesh::new(&s, 0, Vec3::ZERO, 0.0).turned.is_none());
     }
 }

@@ -324,7 +324,7 @@ fn report_text(
     let _ = writeln!(r, "Device: {}. Machine: {}. relume {}.", outcome.device, machine(), env!("CARGO_PKG_VERSION"));
     let _ = writeln!(
         r,
-        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point after {} s of warm-up frames (3 at least); {:.1} s in all.\n",
+        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point, in rounds over the scene's configurations, after {} s of warm-up frames (3 at least); {:.1} s in all.\n",
         sweep.width, sweep.height, sweep.reference_spp, outcome.references_traced, outcome.references_found, sweep.frames, sweep.warmup_seconds, outcome.seconds
     );
     if !outcome.skipped.is_empty() {
