@@ -1,0 +1,302 @@
+#!/usr/bin/env bash
+# Reruns what the tables of docs/BENCHMARKS.md are made from: one figure (one section's
+# tables) at a time, into out/figures/ID/ (its outputs, and log.txt with every command and
+# what it printed). Each section of docs/BENCHMARKS.md names its ID. Not part of CI: on 2
+# cores a figure takes seconds to an hour, all of them about six hours.
+#   bash tools/figures.sh              every figure
+#   bash tools/figures.sh ID...        these figures
+#   bash tools/figures.sh --list       the IDs, in the document's order
+# Installs what is missing (tools/setup.sh) and builds relume (release) first. FIGURES_OUT
+# picks another folder. A figure that fails is reported and the others go on; the exit status
+# is 1 if any failed. Figures quoted from a GPU (the H100 columns) come from the same commands
+# run on a machine with one.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+OUT=${FIGURES_OUT:-$ROOT/out/figures}
+FOREST=/usr/share/blender/datafiles/studiolights/world/forest.exr
+
+FIGURES=(
+    reference-paths vulkan-passes direct-accuracy vsm-bleeding obscurance-bake
+    obscurance-passes obscurance-vs-reference lightmap-seams lpm-bake lpm-passes
+    lpm-vs-reference bench-four-methods bench-stability fiv light-clouds viewer mrt-blocks
+    mrt-levels every-method cross-method correctness-tests
+)
+
+bench() { "$RELUME" bench "$1" --out "$DIR/$2" --cache "$OUT/reference-cache" "${@:3}"; }
+release_test() { cargo test --release --locked "$@"; }
+
+figure_reference_paths() {
+    for t in 1 2; do
+        "$RELUME" reference scenes/cornell.gltf --width 256 --height 256 --spp 64 --threads $t --out "$DIR/pt$t.exr"
+    done
+    cmp "$DIR/pt1.exr" "$DIR/pt2.exr" && echo "the two references are byte-identical"
+}
+
+figure_vulkan_passes() {
+    "$RELUME" render scenes/cornell.gltf --frames 100 --out "$DIR/cornell.exr"
+    "$RELUME" render scenes/occluder-plane.gltf --frames 100 --out "$DIR/occluder-plane.exr"
+}
+
+figure_direct_accuracy() {
+    release_test -p relume-tests --test gpu_vs_reference --test renderer -- --nocapture
+    "$RELUME" render scenes/cornell.gltf --direct-only --out "$DIR/direct.exr"
+    "$RELUME" reference scenes/cornell.gltf --pixel-centres --spp 1 --max-bounces 1 --out "$DIR/pixel-centres.exr"
+    "$RELUME" reference scenes/cornell.gltf --out "$DIR/jittered.exr"
+    "$RELUME" compare "$DIR/direct.exr" "$DIR/pixel-centres.exr" --reference-layer direct
+    "$RELUME" compare "$DIR/direct.exr" "$DIR/jittered.exr" --reference-layer direct
+}
+
+figure_vsm_bleeding() {
+    local size=(--width 256 --height 256)
+    "$RELUME" reference scenes/occluder-stacked.gltf "${size[@]}" --pixel-centres --spp 1 --max-bounces 1 --out "$DIR/reference.exr"
+    for r in 0 0.2 0.4 0.6; do
+        "$RELUME" render scenes/occluder-stacked.gltf "${size[@]}" --direct-only --bleeding-reduction $r --out "$DIR/reduction-$r.exr"
+        "$RELUME" compare "$DIR/reduction-$r.exr" "$DIR/reference.exr" --reference-layer direct --error-image "$DIR/error-$r.png"
+    done
+}
+
+figure_obscurance_bake() {
+    for run in 1 2 3; do
+        for job in table-chair:2000 table-chair:15000 classroom:60000; do
+            "$RELUME" bake "scenes/${job%:*}.gltf" --method obscurance --patches "${job#*:}" --rays 256 --threads 2 --out "$DIR/${job%:*}-${job#*:}-run$run"
+        done
+    done
+}
+
+figure_obscurance_passes() {
+    "$RELUME" bake scenes/cornell.gltf --method obscurance --out "$DIR/cornell-bake"
+    "$RELUME" bake scenes/classroom.gltf --method obscurance --patches 60000 --rays 256 --out "$DIR/classroom-bake"
+    for s in cornell classroom; do
+        "$RELUME" render scenes/$s.gltf --bake "$DIR/$s-bake" --frames 20 --out "$DIR/$s-obscurance.exr"
+        "$RELUME" render scenes/$s.gltf --direct-only --frames 20 --out "$DIR/$s-direct.exr"
+    done
+}
+
+figure_obscurance_vs_reference() {
+    local size=(--width 256 --height 256)
+    for s in cornell cornell-wall-light; do
+        "$RELUME" run scenes/$s.gltf --out "$DIR/$s" "${size[@]}" --spp 256 --frames 10
+    done
+    for v in spectral obscurance ao; do
+        "$RELUME" bake scenes/cornell.gltf --method obscurance --variant $v --out "$DIR/variant-$v"
+        "$RELUME" render scenes/cornell.gltf "${size[@]}" --bake "$DIR/variant-$v" --out "$DIR/variant-$v.exr"
+        "$RELUME" compare "$DIR/variant-$v.exr" "$DIR/cornell/reference.exr"
+    done
+    "$RELUME" render scenes/cornell.gltf "${size[@]}" --out "$DIR/variant-constant.exr"
+    "$RELUME" compare "$DIR/variant-constant.exr" "$DIR/cornell/reference.exr"
+}
+
+figure_lightmap_seams() {
+    release_test -p relume-tests --test atlas_seam -- --nocapture
+}
+
+figure_lpm_bake() {
+    local lpm=(--method light-path-maps --clusters 32 --basis 2 --atlas-max 128)
+    for e in 1024 4096; do
+        "$RELUME" bake scenes/cornell.gltf "${lpm[@]}" --entry-points $e --patches 7000 --out "$DIR/cornell-e$e"
+        "$RELUME" bake scenes/classroom.gltf "${lpm[@]}" --entry-points $e --patches 4000 --out "$DIR/classroom-e$e"
+    done
+    for c in 8 16 32 64; do
+        for d in 1 2 4 8; do
+            "$RELUME" bake scenes/cornell.gltf --method light-path-maps --entry-points 4096 --clusters $c --basis $d \
+                --atlas-max 128 --patches 7000 --out "$DIR/cornell-c$c-d$d"
+        done
+    done
+    RELUME=$RELUME bash tools/light-path-maps-compression-grid.sh "$DIR/grid-2048"
+    RELUME=$RELUME bash tools/light-path-maps-compression-grid.sh "$DIR/grid-4096" 4096 7000
+}
+
+figure_lpm_passes() {
+    local lpm=(--method light-path-maps --entry-points 4096 --clusters 32 --basis 2 --atlas-max 128)
+    "$RELUME" bake scenes/cornell.gltf "${lpm[@]}" --patches 7000 --out "$DIR/lpm-cornell"
+    "$RELUME" bake scenes/classroom.gltf "${lpm[@]}" --patches 4000 --out "$DIR/lpm-classroom"
+    "$RELUME" bake scenes/cornell.gltf --method obscurance --out "$DIR/obscurance-cornell"
+    "$RELUME" render scenes/cornell.gltf --bake "$DIR/lpm-cornell" --frames 100 --out "$DIR/lpm-cornell.exr"
+    "$RELUME" render scenes/classroom.gltf --bake "$DIR/lpm-classroom" --frames 100 --out "$DIR/lpm-classroom.exr"
+    "$RELUME" render scenes/cornell.gltf --bake "$DIR/obscurance-cornell" --frames 100 --out "$DIR/obscurance-cornell.exr"
+}
+
+figure_lpm_vs_reference() {
+    release_test -p relume-tests --test light_path_maps_end_to_end --test light_path_maps_transfer -- --nocapture
+    "$RELUME" run scenes/cornell.gltf --width 256 --height 256 --spp 32 --frames 5 --out "$DIR/cornell"
+}
+
+figure_bench_four_methods() {
+    bench tools/sweeps/four-methods.toml bench --budget 0.2
+    for run in 1 2; do
+        bench tools/sweeps/overhead.toml overhead-$run
+        "$RELUME" render scenes/classroom.gltf --width 128 --height 128 --bake "$DIR/overhead-$run/bakes/classroom_obscurance_rays_256" \
+            --frames 100 --out "$DIR/overhead-$run.exr"
+    done
+}
+
+figure_bench_stability() {
+    for sweep in occluder-moving fig9-wall-light vsm-stacked outside-region; do
+        bench tools/sweeps/$sweep.toml $sweep
+    done
+}
+
+figure_fiv() {
+    release_test -p relume-bake --test environment --test fiv -- --nocapture
+    release_test -p relume-tests --test fiv_end_to_end -- --include-ignored --nocapture
+    "$RELUME" run scenes/fiv-blobs.gltf --out "$DIR/fiv-blobs-forest" --frames 10 --environment "$FOREST"
+    for g in 32x17x15 64x33x15 64x33x30 128x65x30 256x129x30; do
+        "$RELUME" bake scenes/fiv-crowd-1.gltf --method fiv --grid $g --threads 2 --out "$DIR/grid-$g"
+    done
+    for sweep in fiv-occluders fiv fiv-crossing fiv-overlap fiv-far fiv-sun fiv-turn fiv-self-shadow fiv-probes; do
+        bench tools/sweeps/$sweep.toml $sweep
+    done
+    "$RELUME" bake scenes/fiv-garden.gltf --method fiv --out "$DIR/garden-bake"
+    "$RELUME" reference scenes/fiv-garden.gltf --width 256 --height 256 --pixel-centres --out "$DIR/garden-reference.exr"
+    for s in surface paper off; do
+        "$RELUME" render scenes/fiv-garden.gltf --bake "$DIR/garden-bake" --width 256 --height 256 --self-shadow $s --out "$DIR/garden-$s.exr"
+        "$RELUME" compare "$DIR/garden-$s.exr" "$DIR/garden-reference.exr" --reference-layer direct
+        "$RELUME" compare "$DIR/garden-$s.exr" "$DIR/garden-reference.exr"
+    done
+}
+
+figure_light_clouds() {
+    for t in 1 2; do
+        "$RELUME" bake scenes/cornell-cloud.gltf --method light-cloud --samples 64 --threads $t --out "$DIR/cornell-cloud-threads$t"
+    done
+    "$RELUME" render scenes/cornell-cloud.gltf --bake "$DIR/cornell-cloud-threads2" --frames 100 --out "$DIR/cornell-cloud.exr"
+    "$RELUME" render scenes/cornell-cloud.gltf --frames 100 --direct-only --out "$DIR/cornell-cloud-direct.exr"
+    for sweep in light-cloud light-cloud-maze light-cloud-glossy light-cloud-stability; do
+        bench tools/sweeps/$sweep.toml $sweep
+    done
+    for d in 0 2 4 8 16; do
+        "$RELUME" bake scenes/cornell-cloud.gltf --method light-cloud --samples 16 --clusters 32 --vectors $d --out "$DIR/vectors-$d"
+    done
+    "$RELUME" bake scenes/cornell-cloud.gltf --method light-cloud --samples 256 --zones 1 --no-light-clustering --clusters 7 \
+        --explained-variance --out "$DIR/fig5"
+    for s in 16 64; do
+        "$RELUME" bake scenes/cornell-cloud.gltf --method light-cloud --samples $s --explained-variance --out "$DIR/explained-$s"
+    done
+    "$RELUME" bake scenes/cornell-window.gltf --method light-cloud --out "$DIR/window"
+    "$RELUME" bake scenes/maze.gltf --method light-cloud --samples 8 --zones 16 --w2 300 --threads 1 --out "$DIR/maze"
+    "$RELUME" render scenes/maze.gltf --bake "$DIR/maze" --frames 10 --out "$DIR/maze.exr"
+    "$RELUME" bake scenes/glossy-enclosure.gltf --method light-cloud --samples 32 --no-light-clustering --threads 1 --out "$DIR/glossy"
+    release_test -p relume-tests --test light_cloud_window --test light_cloud_end_to_end -- --include-ignored --nocapture
+}
+
+figure_viewer() {
+    Xvfb :91 -screen 0 1280x1024x24 &
+    local xvfb=$!
+    sleep 2
+    "$RELUME" bake scenes/cornell.gltf --method obscurance --out "$DIR/cornell-obscurance"
+    printf 'overlay off\nmethod obscurance\nframes 3\nframes 40\noverlay on\nframes 3\nframes 40\n' > "$DIR/overhead.txt"
+    for run in 1 2 3; do
+        DISPLAY=:91 "$RELUME" view scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --script "$DIR/overhead.txt"
+        "$RELUME" render scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --frames 40 --out "$DIR/render-$run.exr"
+    done
+    kill $xvfb
+}
+
+figure_mrt_blocks() {
+    cargo run --release --locked -p relume-bake --example mrt_blocks
+    cargo run --release --locked -p relume-bake --example mrt_interfaces
+    release_test -p relume-bake --test mrt -- --nocapture
+}
+
+figure_mrt_levels() {
+    release_test -p relume-tests --test mrt_level --test mrt_gpu --test mrt_end_to_end -- --nocapture
+    cargo run --release --locked -p relume-bake --example mrt_run_time
+    for s in mrt-maze mrt-maze-large; do
+        "$RELUME" bake scenes/$s.gltf --method mrt --dictionary-cache "$DIR/dictionary-$s" --out "$DIR/bake-$s"
+    done
+    "$RELUME" bake scenes/mrt-maze.gltf --method mrt --gather-rays 4096 --dictionary-cache "$DIR/dictionary-4096" --out "$DIR/dictionary"
+    for s in mrt-cube mrt-corridor mrt-maze mrt-cave mrt-maze-large mrt-figures; do
+        "$RELUME" bake scenes/$s.gltf --method mrt --gather-rays 4096 --dictionary "$DIR/dictionary" --out "$DIR/$s"
+        "$RELUME" render scenes/$s.gltf --bake "$DIR/$s" --width 512 --height 384 --frames 9 --out "$DIR/$s.exr"
+    done
+    for sweep in mrt mrt-local-lights mrt-stability; do
+        bench tools/sweeps/$sweep.toml $sweep
+    done
+    "$RELUME" bake scenes/mrt-maze-large.gltf --method light-cloud --out "$DIR/maze-large-light-cloud"
+    for seed in 1 2; do
+        "$RELUME" reference scenes/mrt-maze.gltf --width 96 --height 64 --spp 512 --seed $seed --out "$DIR/reference-$seed.exr"
+    done
+    "$RELUME" reference scenes/mrt-maze.gltf --width 96 --height 64 --spp 8192 --seed 3 --out "$DIR/reference-8192.exr"
+    "$RELUME" compare "$DIR/reference-1.exr" "$DIR/reference-2.exr" --layer indirect --reference-layer indirect
+    "$RELUME" compare "$DIR/reference-1.exr" "$DIR/reference-8192.exr" --layer indirect --reference-layer indirect
+}
+
+figure_every_method() {
+    release_test -p relume-tools --bin relume every_method -- --nocapture
+    release_test -p relume-tools --test bench light_clouds -- --nocapture
+    release_test -p relume-bake --test light_cloud_directions --test light_cloud_spots --test tessellation --test mrt_derive \
+        --test light_cloud_region -- --nocapture
+    release_test -p relume-tests --test environment_ambient --test light_cloud_gpu -- --nocapture
+    for sweep in spots light-cloud-spot mrt-derived sun; do
+        bench tools/sweeps/$sweep.toml $sweep
+    done
+    for s in cornell fiv-blobs fiv-garden courtyard sunroom; do
+        "$RELUME" run scenes/$s.gltf --out "$DIR/$s"
+    done
+    "$RELUME" run scenes/fiv-blobs.gltf --environment "$FOREST" --out "$DIR/fiv-blobs-forest"
+}
+
+figure_cross_method() {
+    "$RELUME" run scenes/cornell.gltf --out "$DIR/cornell" --frames 20
+    "$RELUME" run scenes/fiv-blobs.gltf --out "$DIR/fiv-blobs" --frames 10 --environment "$FOREST"
+    bench tools/sweeps/default.toml bench --budget 0.2 --overview "$DIR/report.md" --link "$DIR/cornell/report.md" --link "$DIR/fiv-blobs/report.md"
+    bash tools/timing-order.sh "$DIR/timing-order" "$RELUME" 3
+    for z in 8 16 32; do
+        "$RELUME" bake scenes/courtyard.gltf --method light-cloud --samples 8 --zones $z --out "$DIR/courtyard-zones-$z"
+    done
+    # The 32-zone points under spots fail by design (the renderer's refusal): the bench exits 1.
+    bench tools/sweeps/light-cloud-zones.toml light-cloud-zones || true
+}
+
+figure_correctness_tests() {
+    cargo test --locked -p relume-bake --test glossy --test environment --test fiv --test light_cloud --test light_clustering -- --nocapture
+    cargo test --locked -p relume-bake --lib -- --nocapture cpca sh:: hemisphere
+    cargo test --locked -p relume-tests --test gpu_vs_reference --test obscurance_render --test atlas_padding_classroom \
+        --test obscurance_end_to_end --test atlas_seam --test light_path_maps_transfer --test light_path_maps_end_to_end \
+        --test light_path_maps_gpu --test frame_allocations --test technique_terms --test integrator --test light_cloud_gpu \
+        --test fiv_gpu --test fiv_end_to_end -- --nocapture
+    cargo test --locked -p relume-tools -- --nocapture
+}
+
+if [ "${1:-}" = --list ]; then
+    printf '%s\n' "${FIGURES[@]}"
+    exit 0
+fi
+selected=("$@")
+[ ${#selected[@]} -gt 0 ] || selected=("${FIGURES[@]}")
+for id in "${selected[@]}"; do
+    if ! printf '%s\n' "${FIGURES[@]}" | grep -qx -- "$id"; then
+        echo "figures: no figure \"$id\"; bash tools/figures.sh --list names them" >&2
+        exit 2
+    fi
+done
+bash tools/setup.sh probes
+echo "figures: building relume (release)"
+cargo build --release --locked -p relume-tools
+RELUME=$ROOT/target/release/relume
+mkdir -p "$OUT"
+failed=()
+n=0
+for id in "${selected[@]}"; do
+    n=$((n + 1))
+    DIR=$OUT/$id
+    rm -rf "$DIR"
+    mkdir -p "$DIR"
+    echo "figures: $n/${#selected[@]} $id (log: $DIR/log.txt)"
+    start=$SECONDS
+    # Not an `if` condition: bash turns errexit off inside one, and a failed step must stop its figure.
+    set +e
+    (set -ex; "figure_${id//-/_}") > "$DIR/log.txt" 2>&1
+    status=$?
+    set -e
+    if [ $status -eq 0 ]; then
+        echo "figures: $id done in $((SECONDS - start)) s"
+    else
+        echo "figures: $id FAILED after $((SECONDS - start)) s; the end of its log:"
+        tail -5 "$DIR/log.txt"
+        failed+=("$id")
+    fi
+done
+[ ${#failed[@]} -eq 0 ] || { echo "figures: failed: ${failed[*]}"; exit 1; }
+echo "figures: all ${#selected[@]} done, in $OUT"
