@@ -85,6 +85,8 @@ figure_obscurance_vs_reference() {
     done
     "$RELUME" render scenes/cornell.gltf "${size[@]}" --out "$DIR/variant-constant.exr"
     "$RELUME" compare "$DIR/variant-constant.exr" "$DIR/cornell/reference.exr"
+    "$RELUME" render scenes/cornell.gltf "${size[@]}" --bake "$DIR/variant-obscurance" --ambient 0 --beta 0.13 --out "$DIR/beta.exr"
+    "$RELUME" compare "$DIR/beta.exr" "$DIR/cornell/reference.exr"
 }
 
 figure_lightmap_seams() {
