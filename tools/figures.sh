@@ -180,6 +180,7 @@ figure_light_clouds() {
     "$RELUME" render scenes/maze.gltf --bake "$DIR/maze" --frames 10 --out "$DIR/maze.exr"
     "$RELUME" bake scenes/glossy-enclosure.gltf --method light-cloud --samples 32 --no-light-clustering --threads 1 --out "$DIR/glossy"
     release_test -p relume-tests --test light_cloud_window --test light_cloud_end_to_end -- --include-ignored --nocapture
+    "$RELUME" run scenes/cornell-cloud.gltf --width 256 --height 256 --spp 256 --out "$DIR/run"
 }
 
 figure_viewer() {
