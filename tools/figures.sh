@@ -193,6 +193,9 @@ figure_viewer() {
         DISPLAY=:91 "$RELUME" view scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --script "$DIR/overhead.txt"
         "$RELUME" render scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --frames 40 --out "$DIR/render-$run.exr"
     done
+    # Three scripted moves of the spot: the viewer prints each change's latency to a finished frame.
+    printf 'method obscurance\nframes 3\nlight 0 position -0.12 0.47 -0.4\nframes 2\nlight 0 position 0.12 0.47 -0.4\nframes 2\nlight 0 position 0.12 0.47 -0.16\nframes 2\n' > "$DIR/latency.txt"
+    DISPLAY=:91 "$RELUME" view scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --script "$DIR/latency.txt"
     kill $xvfb
 }
 
