@@ -185,7 +185,8 @@ figure_light_clouds() {
 
 figure_viewer() {
     Xvfb :91 -screen 0 1280x1024x24 &
-    local xvfb=$!
+    # The figure runs in its own subshell: its exit, a failed step's included, stops the server.
+    trap "kill $! 2>/dev/null || true" EXIT
     sleep 2
     "$RELUME" bake scenes/cornell.gltf --method obscurance --out "$DIR/cornell-obscurance"
     printf 'overlay off\nmethod obscurance\nframes 3\nframes 40\noverlay on\nframes 3\nframes 40\n' > "$DIR/overhead.txt"
@@ -196,7 +197,6 @@ figure_viewer() {
     # Three scripted moves of the spot: the viewer prints each change's latency to a finished frame.
     printf 'method obscurance\nframes 3\nlight 0 position -0.12 0.47 -0.4\nframes 2\nlight 0 position 0.12 0.47 -0.4\nframes 2\nlight 0 position 0.12 0.47 -0.16\nframes 2\n' > "$DIR/latency.txt"
     DISPLAY=:91 "$RELUME" view scenes/cornell.gltf --bake "$DIR/cornell-obscurance" --width 512 --height 512 --script "$DIR/latency.txt"
-    kill $xvfb
 }
 
 figure_mrt_blocks() {

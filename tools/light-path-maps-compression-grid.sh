@@ -23,6 +23,7 @@ nrmse() { "$relume" compare "$@" | sed -n 's/^NRMSE //p'; }
 [ -f reference.exr ] || "$relume" reference "$scene" "${size[@]}" --spp 256 --pixel-centres --out reference.exr > /dev/null
 "$relume" bake "$scene" "${common[@]}" --uncompressed --out uncompressed > uncompressed.log 2>&1
 # Past 128 MiB the renderer refuses the uncompressed transfer: the grid goes on without it.
+rm -f uncompressed.exr
 if "$relume" render "$scene" --bake uncompressed "${size[@]}" --out uncompressed.exr > uncompressed-render.log 2>&1; then
   echo "uncompressed: $(grep -o '[0-9.]* MiB -> [0-9.]* MiB' uncompressed.log); image vs reference $(nrmse uncompressed.exr reference.exr)"
 else

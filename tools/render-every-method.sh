@@ -17,14 +17,18 @@ for scene in scenes/*.gltf; do
   render constant
   "$relume" bake "$scene" --method obscurance --rays 64 --out "$out/bake-$s-obscurance" >/dev/null
   render obscurance --bake "$out/bake-$s-obscurance"
-  # Light path maps need a punctual light: a scene lit by its environment alone is refused.
+  # Light path maps need a punctual light: a scene lit by its environment alone is refused
+  # ("this scene has none"); any other failure stops the check.
   if "$relume" bake "$scene" --method light-path-maps --rays 64 --entry-points 1024 --clusters 16 --basis 2 --out "$out/bake-$s-light-path-maps" >/dev/null 2>"$out/$s-light-path-maps.log"; then
     for c in plain times-obscurance times-obscurance-with-direct; do
       render "light-path-maps-$c" --bake "$out/bake-$s-light-path-maps" --composition $c
     done
     render light-path-maps-ambient --bake "$out/bake-$s-light-path-maps" --ambient 0.5 --beta 0.2
-  else
+  elif grep -q "this scene has none" "$out/$s-light-path-maps.log"; then
     echo "$s: light path maps not baked: $(tail -1 "$out/$s-light-path-maps.log")"
+  else
+    cat "$out/$s-light-path-maps.log" >&2
+    exit 1
   fi
   echo "$s rendered"
 done

@@ -73,7 +73,8 @@ pub(crate) struct BenchArgs {
     /// A report the overview links to (repeatable): a `relume run` report, say.
     #[arg(long, requires = "overview")]
     link: Vec<PathBuf>,
-    /// Start no new method configuration after this many seconds (the report says which were skipped).
+    /// Bake no new method configuration after this many seconds (the report says which were
+    /// skipped); the ones baked by then are still measured, one scene's light configurations at most.
     #[arg(long, value_parser = positive::<f64>)]
     time_limit: Option<f64>,
     /// Vulkan device: index or part of its name (default: a real GPU if any, else lavapipe).
@@ -217,7 +218,7 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
         }
         let mut bench = SceneBench::new(&sweep, entry, &ctx, &mut cache, args)?;
         noise.extend(bench.noise.map(|n| (bench.name.clone(), n)));
-        let mut prepared = Vec::new();
+        let mut bakes = Vec::new();
         let mut scene_rows = Vec::new();
         for (order, config) in configs.iter().enumerate() {
             if let Some(why) = methods::unsuited(config.method, &bench.scene) {
@@ -233,7 +234,15 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
                 continue;
             }
             // A configuration that cannot be baked or rendered fails its points; the sweep goes on.
-            match bench.prepare(order, config) {
+            match bench.bake_for(config) {
+                Ok(baked) => bakes.push((order, config, baked)),
+                Err(why) => scene_rows.push(bench.fail(order, config, &why)),
+            }
+        }
+        // Every bake of the scene first: a bake's peak memory holds no renderer.
+        let mut prepared = Vec::new();
+        for (order, config, (bake, dir)) in bakes {
+            match bench.prepare(order, config, bake, dir.as_deref()) {
                 Ok(p) => prepared.push(p),
                 Err(why) => scene_rows.push(bench.fail(order, config, &why)),
             }
@@ -343,19 +352,21 @@ impl<'s> SceneBench<'s> {
         })
     }
 
-    /// `config` baked if it needs a bake, its renderer made: ready to be measured with the
+    /// `config` baked if its method bakes: the cost and the bake's folder.
+    fn bake_for(&mut self, config: &Config) -> Result<(BakeCost, Option<PathBuf>)> {
+        println!("{}: {} [{}]", self.name, config.method.name(), config.label);
+        if !config.method.bakes() {
+            return Ok((BakeCost::default(), None));
+        }
+        let (dir, cost) = self.bake(config, &self.config_id(config))?;
+        Ok((cost, Some(dir)))
+    }
+
+    /// `config`'s renderer made from its bake (in `dir`): ready to be measured with the
     /// scene's other configurations.
-    fn prepare<'c>(&mut self, order: usize, config: &'c Config) -> Result<Prepared<'c>> {
+    fn prepare<'c>(&self, order: usize, config: &'c Config, bake: BakeCost, dir: Option<&Path>) -> Result<Prepared<'c>> {
         let method = config.method;
-        println!("{}: {} [{}]", self.name, method.name(), config.label);
-        let id = self.config_id(config);
-        let (bake, artifact) = match method.bakes() {
-            true => {
-                let (dir, cost) = self.bake(config, &id)?;
-                (cost, Some(Artifact::read(&dir)?))
-            }
-            false => (BakeCost::default(), None),
-        };
+        let artifact = dir.map(Artifact::read).transpose()?;
         let loaded = methods::load(method, artifact.as_ref(), &self.scene, &config.values)?;
         let base = RenderSettings { width: self.sweep.width, height: self.sweep.height, ..RenderSettings::default() };
         let settings = config.frame.settings(method, &self.scene, base);
