@@ -403,7 +403,7 @@ impl<'s> SceneBench<'s> {
             );
             let mut renderers: Vec<&mut Headless> = set.iter_mut().map(|p| &mut p.renderer).collect();
             let costs = timing::time_interleaved(&mut renderers, self.sweep.frames, self.sweep.warmup_seconds);
-            direct.images.clear();
+            direct.clear();
             live = Vec::new();
             for (mut p, cost) in set.into_iter().zip(costs) {
                 match cost.and_then(|frame| self.record(k, &mut p, frame, &mut direct, device)) {
@@ -550,30 +550,39 @@ struct Prepared<'c> {
 }
 
 /// Direct-only frames of a scene: one renderer per settings (configurations that differ only
-/// in what they add share one), and its image at the current light configuration.
+/// in what they add share one), each with its image at the light configuration being measured.
 #[derive(Default)]
-struct DirectFrames {
-    renderers: Vec<(RenderSettings, Headless)>,
-    /// Per renderer, its image at the light configuration being measured, once made.
-    images: Vec<(usize, Image)>,
+struct DirectFrames(Vec<DirectFrame>);
+
+struct DirectFrame {
+    settings: RenderSettings,
+    renderer: Headless,
+    /// Made at the first call for the light configuration being measured.
+    image: Option<Image>,
 }
 
 impl DirectFrames {
+    /// The direct-only image of `settings` at light configuration `k`, made once per configuration.
     fn image(&mut self, bench: &SceneBench, k: usize, settings: &RenderSettings) -> Result<&Image> {
-        let i = match self.renderers.iter().position(|(s, _)| s == settings) {
+        let i = match self.0.iter().position(|f| f.settings == *settings) {
             Some(i) => i,
             None => {
                 let renderer = gpu::renderer(bench.ctx, &methods::Plain(bench.scene.clone()), settings)?;
-                self.renderers.push((settings.clone(), renderer));
-                self.renderers.len() - 1
+                self.0.push(DirectFrame { settings: settings.clone(), renderer, image: None });
+                self.0.len() - 1
             }
         };
-        if !self.images.iter().any(|(j, _)| *j == i) {
-            let renderer = &mut self.renderers[i].1;
-            bench.configurations[k].apply(renderer)?;
-            self.images.push((i, frame_image(renderer)?));
+        let frame = &mut self.0[i];
+        if frame.image.is_none() {
+            bench.configurations[k].apply(&mut frame.renderer)?;
+            frame.image = Some(frame_image(&mut frame.renderer)?);
         }
-        Ok(&self.images.iter().find(|(j, _)| *j == i).expect("made above").1)
+        Ok(frame.image.as_ref().expect("made above"))
+    }
+
+    /// Forget the images: the light configuration changes.
+    fn clear(&mut self) {
+        self.0.iter_mut().for_each(|f| f.image = None);
     }
 }
 
