@@ -172,7 +172,7 @@ fn light_clouds_on_cornells_spot_beat_light_path_maps_of_the_same_size() {
 }
 
 /// The cross-method sweep in small: every method on cornell (its spot) and fiv-blobs (an
-/// environment), at the least effort each takes. methods.csv has a row per scene and method
+/// environment), at the least effort each takes, their references raised to a noise target. methods.csv has a row per scene and method
 /// that applies there and none for the others (listed in the report as not applying); the
 /// indirect columns are empty under the environment; a budget on memory alone names a method
 /// per scene; and `relume run --recommended` bakes and renders that choice against the
@@ -182,7 +182,7 @@ fn a_tiny_cross_method_sweep_covers_every_method_that_applies_and_its_choice_run
     let (out, cache) = (temp_dir("methods-out"), temp_dir("methods-cache"));
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let sweep = format!(
-        "name = 'methods'\nwidth = 24\nheight = 24\nreference_spp = 8\nframes = 2\nwarmup_seconds = 0.05\nreference_noise = true\n\
+        "name = 'methods'\nwidth = 24\nheight = 24\nreference_spp = 8\nframes = 2\nwarmup_seconds = 0.05\nreference_noise_target = 0.001\nreference_max_spp = 16\n\
          [[scenes]]\npath = '{}'\n[[scenes]]\npath = '{}'\n\
          [[methods]]\nmethod = 'direct'\n[[methods]]\nmethod = 'constant'\n\
          [[methods]]\nmethod = 'obscurance'\nparams = [{{ rays = 4, patches = 300 }}]\n\
@@ -235,10 +235,16 @@ fn a_tiny_cross_method_sweep_covers_every_method_that_applies_and_its_choice_run
     let noise = json["reference_noise"].as_array().expect("the references' noise per scene");
     assert_eq!(noise.len(), 2);
     for n in noise {
-        // 8 samples a pixel: noisy, never identical to the next seed's.
-        assert!(n["nrmse"].as_f64().is_some_and(|v| v > 0.0 && v < 2.0), "{n}");
+        // 16 samples a pixel: noisy, never identical to the next seed's, and over the target
+        // of 0.001, which raised the references from 8 samples to the cap of 16.
+        assert!(n["nrmse"].as_f64().is_some_and(|v| v > 0.001 && v < 2.0), "{n}");
+        assert_eq!(n["spp"].as_u64(), Some(16), "{n}");
     }
-    assert!(text.contains("The references' own noise"), "{text}");
+    assert!(
+        text.contains("The references' own noise")
+            && text.contains("reference 8 spp (cornell 16, fiv-blobs 16 for the noise target 0.001)"),
+        "{text}"
+    );
     let overview = std::fs::read_to_string(out.join("overview.md")).unwrap();
     assert!(overview.contains("(report/cornell_error_vs_frame_time.png)") && overview.contains("## Across methods"), "{overview}");
 

@@ -3,6 +3,7 @@
 //! section on them.
 
 use super::report::Summary;
+use super::Resolution;
 use std::fmt::Write as _;
 
 /// The `--budget` choice for one scene and method.
@@ -43,11 +44,16 @@ impl Budget {
     }
 
     /// Of two configurations within the budget, the better first: the cheaper under a bound on
-    /// the error, else the more accurate.
-    fn order(&self, a: &Summary, b: &Summary) -> std::cmp::Ordering {
-        match self.nrmse {
-            Some(_) => cost_order(a, b),
-            None => a.mean_nrmse.total_cmp(&b.mean_nrmse).then(cost_order(a, b)),
+    /// the error; else the cheaper of those whose error is within `resolution` (what the
+    /// reference's noise lets the bench tell apart) of the `lowest` within the budget, then
+    /// the rest by error.
+    fn order(&self, lowest: f64, resolution: f64, a: &Summary, b: &Summary) -> std::cmp::Ordering {
+        let tied = |s: &Summary| s.mean_nrmse <= lowest + resolution;
+        match (self.nrmse, tied(a), tied(b)) {
+            (Some(_), _, _) | (None, true, true) => cost_order(a, b),
+            (None, true, false) => std::cmp::Ordering::Less,
+            (None, false, true) => std::cmp::Ordering::Greater,
+            (None, false, false) => a.mean_nrmse.total_cmp(&b.mean_nrmse).then(cost_order(a, b)),
         }
     }
 
@@ -66,8 +72,13 @@ impl Budget {
     }
 }
 
+/// The lowest error of `candidates`.
+fn lowest<'s>(candidates: impl Iterator<Item = &'s Summary<'s>>) -> f64 {
+    candidates.map(|s| s.mean_nrmse).fold(f64::INFINITY, f64::min)
+}
+
 /// Per scene and method: the configurations in cost order, and the best within the budget.
-pub(super) fn recommend<'s>(summaries: &'s [Summary<'s>], budget: &Budget) -> Vec<Recommendation<'s>> {
+pub(super) fn recommend<'s>(summaries: &'s [Summary<'s>], budget: &Budget, resolution: &Resolution) -> Vec<Recommendation<'s>> {
     let mut recommendations: Vec<Recommendation> = Vec::new();
     for s in summaries.iter().filter(|s| s.ok()) {
         let row = s.first();
@@ -78,7 +89,9 @@ pub(super) fn recommend<'s>(summaries: &'s [Summary<'s>], budget: &Budget) -> Ve
     }
     for r in &mut recommendations {
         r.ladder.sort_by(|a, b| cost_order(a, b));
-        r.chosen = (0..r.ladder.len()).filter(|&i| budget.within(r.ladder[i])).min_by(|&a, &b| budget.order(r.ladder[a], r.ladder[b]));
+        let within: Vec<usize> = (0..r.ladder.len()).filter(|&i| budget.within(r.ladder[i])).collect();
+        let (lowest, resolution) = (lowest(within.iter().map(|&i| r.ladder[i])), resolution.of(r.scene));
+        r.chosen = within.into_iter().min_by(|&a, &b| budget.order(lowest, resolution, r.ladder[a], r.ladder[b]));
     }
     recommendations
 }
@@ -95,7 +108,7 @@ pub(crate) struct SceneChoice<'s> {
 
 /// Per scene, in the order the scenes ran: the method the budget picks (the best of the
 /// methods' choices) and the next best within the budget.
-pub(super) fn choose<'s>(recommendations: &[Recommendation<'s>], budget: &Budget) -> Vec<SceneChoice<'s>> {
+pub(super) fn choose<'s>(recommendations: &[Recommendation<'s>], budget: &Budget, resolution: &Resolution) -> Vec<SceneChoice<'s>> {
     let mut scenes: Vec<&str> = recommendations.iter().map(|r| r.scene).collect();
     scenes.dedup();
     scenes
@@ -103,7 +116,9 @@ pub(super) fn choose<'s>(recommendations: &[Recommendation<'s>], budget: &Budget
         .map(|scene| {
             let mut within: Vec<usize> =
                 (0..recommendations.len()).filter(|&i| recommendations[i].scene == scene && recommendations[i].chosen.is_some()).collect();
-            within.sort_by(|&a, &b| budget.order(recommendations[a].choice().unwrap(), recommendations[b].choice().unwrap()));
+            let choice = |i: usize| recommendations[i].choice().unwrap();
+            let (lowest, resolution) = (lowest(within.iter().map(|&i| choice(i))), resolution.of(scene));
+            within.sort_by(|&a, &b| budget.order(lowest, resolution, choice(a), choice(b)));
             SceneChoice { scene, chosen: within.first().copied(), runner_up: within.get(1).copied() }
         })
         .collect()
@@ -236,8 +251,8 @@ pub(super) mod tests {
         };
         let rows = [of("small", "a", 0.15, 1_000), of("small", "b", 0.12, 4_000), of("large", "c", 0.05, 50_000)];
         let summaries = summaries(&rows);
-        let recommendations = recommend(&summaries, &error(0.2));
-        let choices = choose(&recommendations, &error(0.2));
+        let recommendations = recommend(&summaries, &error(0.2), &Resolution::default());
+        let choices = choose(&recommendations, &error(0.2), &Resolution::default());
         assert_eq!(choices.len(), 1);
         let chosen = &recommendations[choices[0].chosen.unwrap()];
         assert_eq!((chosen.method, chosen.choice().unwrap().first().params.as_str()), ("small", "a"), "both meet 0.2: the cheaper");
@@ -246,13 +261,13 @@ pub(super) mod tests {
         assert_eq!(written["s"]["method"].as_str(), Some("small"));
         assert_eq!(written["s"]["large"]["mean_nrmse"].as_float(), Some(0.05));
 
-        let recommendations = recommend(&summaries, &error(0.1));
-        let choices = choose(&recommendations, &error(0.1));
+        let recommendations = recommend(&summaries, &error(0.1), &Resolution::default());
+        let choices = choose(&recommendations, &error(0.1), &Resolution::default());
         assert_eq!(recommendations[choices[0].chosen.unwrap()].method, "large", "only the dearer meets 0.1");
         assert!(choices[0].runner_up.is_none());
 
-        let recommendations = recommend(&summaries, &error(0.01));
-        let choices = choose(&recommendations, &error(0.01));
+        let recommendations = recommend(&summaries, &error(0.01), &Resolution::default());
+        let choices = choose(&recommendations, &error(0.01), &Resolution::default());
         assert!(choices[0].chosen.is_none());
         let mut text = String::new();
         budget_text(&mut text, &recommendations, &choices, &error(0.01));
@@ -278,13 +293,24 @@ pub(super) mod tests {
         ];
         let summaries = summaries(&rows);
         let budget = Budget { frame_ms: Some(2.0), artifact_mib: Some(16.0), ..Budget::default() };
-        let recommendations = recommend(&summaries, &budget);
-        let choices = choose(&recommendations, &budget);
+        let recommendations = recommend(&summaries, &budget, &Resolution::default());
+        let choices = choose(&recommendations, &budget, &Resolution::default());
         let chosen = recommendations[choices[0].chosen.unwrap()].choice().unwrap();
         assert_eq!(chosen.first().params, "e", "c is too slow, d too large: e is the most accurate within both");
         assert_eq!(recommendations[choices[0].runner_up.unwrap()].choice().unwrap().first().params, "b");
         assert_eq!(budget.text(), "the most accurate within GPU frame <= 2 ms, artifact <= 16 MiB");
         let tight = Budget { frame_ms: Some(0.1), ..Budget::default() };
-        assert!(choose(&recommend(&summaries, &tight), &tight)[0].chosen.is_none());
+        assert!(choose(&recommend(&summaries, &tight, &Resolution::default()), &tight, &Resolution::default())[0].chosen.is_none());
+
+        // Where the reference cannot tell 0.05, 0.10 and 0.15 apart (three times its noise is
+        // 0.12), the most accurate is the cheapest of them: e (4 MiB against c's 12 MiB).
+        let loose = Budget { frame_ms: Some(5.0), ..Budget::default() };
+        let blurred = Resolution(vec![("s".into(), 0.12)]);
+        let recommendations = recommend(&summaries, &loose, &blurred);
+        let choices = choose(&recommendations, &loose, &blurred);
+        assert_eq!(recommendations[choices[0].chosen.unwrap()].choice().unwrap().first().params, "e");
+        let recommendations = recommend(&summaries, &loose, &Resolution::default());
+        let choices = choose(&recommendations, &loose, &Resolution::default());
+        assert_eq!(recommendations[choices[0].chosen.unwrap()].choice().unwrap().first().params, "c", "told apart: the most accurate");
     }
 }

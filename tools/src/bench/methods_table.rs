@@ -100,7 +100,7 @@ pub(super) const METHODS_HEADER: [&str; 13] = [
 
 pub(super) fn methods_text(r: &mut String, cells: &[MethodCell], outcome: &Outcome) {
     let _ = writeln!(r, "## Across methods\n");
-    let _ = writeln!(r, "Per scene and method: the lowest mean NRMSE of its configurations and the costs of that configuration (its label), the lowest mean indirect NRMSE of any, and which of its configurations are on the scene's Pareto front of (GPU frame time, mean NRMSE). Empty cells mean nothing for the method or scene (-). Also in methods.csv.\n");
+    let _ = writeln!(r, "Per scene and method: the lowest mean NRMSE of its configurations and the costs of that configuration (its label), the lowest mean indirect NRMSE of any, and which of its configurations are on the scene's Pareto front of (GPU frame time, mean NRMSE; errors within three times the references' noise tied, below). Empty cells mean nothing for the method or scene (-). Also in methods.csv.\n");
     let _ = writeln!(r, "| {} |\n|{}", METHODS_HEADER.join(" | "), "---|".repeat(METHODS_HEADER.len()));
     for row in methods_rows(cells) {
         let _ = writeln!(r, "| {} |", row.join(" | "));
@@ -122,7 +122,7 @@ fn noise_text(r: &mut String, cells: &[MethodCell], noise: &[(String, super::Ref
     if noise.is_empty() {
         return;
     }
-    let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced again with the next seed: their NRMSE / sqrt 2), beside the errors ranked:\n");
+    let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced with two seeds: their NRMSE / sqrt 2), beside the errors ranked. Errors nearer each other than three times it are ties: the fronts and the budget do not rank them (the cheaper counts as on the front, and as the more accurate).\n");
     for (scene, n) in noise {
         let mut bests: Vec<(f64, &str)> = cells
             .iter()
@@ -138,7 +138,7 @@ fn noise_text(r: &mut String, cells: &[MethodCell], noise: &[(String, super::Ref
             (Some(first), true) => format!("; the best ({}) is apart from the rest by more than 3x the noise", first.1),
             (None, _) => String::new(),
         };
-        let _ = writeln!(r, "- {scene}: image NRMSE {:.4}, indirect {}{verdict}", n.scene_nrmse, cell(n.indirect_nrmse, 4));
+        let _ = writeln!(r, "- {scene} ({} spp): image NRMSE {:.4}, indirect {}{verdict}", n.spp, n.scene_nrmse, cell(n.indirect_nrmse, 4));
     }
 }
 

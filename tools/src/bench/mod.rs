@@ -9,6 +9,7 @@ pub(crate) mod config;
 mod configuration;
 mod figures;
 mod methods_table;
+mod noise;
 mod overview;
 mod pareto;
 mod perceptual;
@@ -26,6 +27,8 @@ use clap::Args;
 use config::Config;
 use configuration::{configurations, Configuration};
 use glam::Vec3;
+pub(crate) use noise::Resolution;
+use noise::{measured_noise, ReferenceNoise};
 use reference_cache::{Reference, ReferenceCache};
 use relume_bake::artifact::Artifact;
 use relume_bake::bvh::SceneBvh;
@@ -256,7 +259,7 @@ fn run_sweep(sweep: Sweep, configs: &[Config], args: &BenchArgs) -> Result<Outco
     for row in &mut rows {
         row.device = device.clone();
     }
-    results::mark_front(&mut rows);
+    results::mark_front(&mut rows, &Resolution::of_noise(&noise));
     let (references_traced, references_found) = (cache.traced, cache.found);
     Ok(Outcome {
         sweep,
@@ -303,7 +306,7 @@ impl<'s> SceneBench<'s> {
         let name = entry.name();
         let configurations = configurations(&scene, entry)?;
         let bvh = SceneBvh::new(&scene);
-        let settings = ReferenceSettings {
+        let mut settings = ReferenceSettings {
             samples_per_pixel: sweep.reference_spp,
             width: sweep.width,
             height: sweep.height,
@@ -311,9 +314,19 @@ impl<'s> SceneBench<'s> {
             work: WorkOptions { threads: args.threads, progress: true, ..WorkOptions::default() },
             ..ReferenceSettings::default()
         };
+        // The noise first: its target sets the samples of every reference.
+        let noise = match sweep.measures_noise() {
+            true => {
+                let first = configurations[0].apply_to(&scene);
+                let noise = measured_noise(&name, &first, cache, &settings, sweep)?;
+                settings.samples_per_pixel = noise.spp;
+                Some(noise)
+            }
+            false => None,
+        };
         let mut references = Vec::new();
         for (k, config) in configurations.iter().enumerate() {
-            println!("{name}: reference {}/{} ({} spp)", k + 1, configurations.len(), sweep.reference_spp);
+            println!("{name}: reference {}/{} ({} spp)", k + 1, configurations.len(), settings.samples_per_pixel);
             let moved = config.apply_to(&scene);
             let reference = match config.occluder {
                 Some(_) => cache.get(&moved, &SceneBvh::new(&moved), &settings)?,
@@ -326,16 +339,6 @@ impl<'s> SceneBench<'s> {
             outputs.commit()?;
             references.push(reference);
         }
-        let noise = match sweep.reference_noise {
-            true => {
-                println!("{name}: reference 1 again with the next seed (its noise)");
-                let seeded = ReferenceSettings { work: WorkOptions { seed: settings.work.seed + 1, ..settings.work }, ..settings.clone() };
-                let moved = configurations[0].apply_to(&scene);
-                let again = cache.get(&moved, &SceneBvh::new(&moved), &seeded)?;
-                Some(reference_noise(&references[0], &again)?)
-            }
-            false => None,
-        };
         let continuous = entry.light_path.as_ref().and_then(|p| p.seconds);
         Ok(SceneBench {
             sweep,
@@ -616,24 +619,6 @@ fn accuracy(image: &Image, reference: &Reference, direct: Option<&Image>) -> Res
         indirect_nrmse,
         indirect_flip,
     }))
-}
-
-/// A reference's own noise as an NRMSE against the truth, of the image and of its indirect
-/// layer: two references of other seeds differ by sqrt(2) times it (their noise independent).
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub(crate) struct ReferenceNoise {
-    pub scene_nrmse: f64,
-    pub indirect_nrmse: f64,
-}
-
-/// The noise of `a`, from `b` traced with another seed: NRMSE(a, b) / sqrt(2), measured
-/// against `a` (the scale NRMSE of a method is measured at).
-fn reference_noise(a: &Reference, b: &Reference) -> Result<ReferenceNoise> {
-    let noise = |of: &Image, again: &Image| -> Result<f64> {
-        let e = metrics::compare(again, of)?;
-        Ok(e.nrmse / std::f64::consts::SQRT_2)
-    };
-    Ok(ReferenceNoise { scene_nrmse: noise(&a.combined, &b.combined)?, indirect_nrmse: noise(&a.indirect, &b.indirect)? })
 }
 
 fn frame_image(renderer: &mut Headless) -> Result<Image> {

@@ -6,7 +6,7 @@ use super::charts::{self, Chart, Series};
 use super::methods_table::{cell, method_cells, methods_rows, methods_text, MethodCell, METHODS_HEADER};
 use super::overview::Overview;
 use super::results::{self, percentile, Row};
-use super::{pareto, Outcome};
+use super::{pareto, Outcome, Resolution};
 use anyhow::Result;
 use relume_bake::outputs::Outputs;
 use std::fmt::Write as _;
@@ -93,12 +93,14 @@ pub(super) fn summaries(rows: &[Row]) -> Vec<Summary<'_>> {
 }
 
 /// Per summary: on the Pareto front of (GPU frame time, mean NRMSE) among its scene's
-/// configurations scored at every light configuration.
-pub(super) fn fronts(summaries: &[Summary]) -> Vec<bool> {
+/// configurations scored at every light configuration, errors within the scene's resolution
+/// not told apart.
+pub(super) fn fronts(summaries: &[Summary], resolution: &Resolution) -> Vec<bool> {
     summaries
         .chunk_by(|a, b| a.first().scene == b.first().scene)
         .flat_map(|of_scene| {
-            pareto::front(&of_scene.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect::<Vec<_>>())
+            let points: Vec<(f64, f64)> = of_scene.iter().map(|s| (s.gpu_ms, if s.ok() { s.mean_nrmse } else { f64::NAN })).collect();
+            pareto::front(&points, resolution.of(&of_scene[0].first().scene))
         })
         .collect()
 }
@@ -162,12 +164,13 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, o
         "references": { "traced": outcome.references_traced, "from_cache": outcome.references_found },
         "skipped": outcome.skipped,
         "not_applicable": outcome.not_applicable,
-        "reference_noise": outcome.noise.iter().map(|(scene, n)| serde_json::json!({ "scene": scene, "nrmse": n.scene_nrmse, "indirect_nrmse": n.indirect_nrmse })).collect::<Vec<_>>(),
+        "reference_noise": outcome.noise.iter().map(|(scene, n)| serde_json::json!({ "scene": scene, "nrmse": n.scene_nrmse, "indirect_nrmse": n.indirect_nrmse, "spp": n.spp })).collect::<Vec<_>>(),
         "rows": outcome.rows,
     });
     save("results.json", &serde_json::to_string_pretty(&json)?)?;
     let summaries = summaries(&outcome.rows);
-    let fronts = fronts(&summaries);
+    let resolution = Resolution::of_noise(&outcome.noise);
+    let fronts = fronts(&summaries, &resolution);
     let cells = method_cells(&summaries, &fronts);
     save("summary.csv", &summary_csv(&summaries, &fronts))?;
     // The CSV leaves empty what the report marks "-".
@@ -176,8 +179,8 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, o
         .chain(methods_rows(&cells).into_iter().map(|r| results::csv_line(&blank(r))))
         .collect();
     save("methods.csv", &methods_csv)?;
-    let recommendations = budget.map(|b| recommend(&summaries, &b));
-    let choices = recommendations.as_deref().zip(budget).map(|(r, b)| choose(r, &b));
+    let recommendations = budget.map(|b| recommend(&summaries, &b, &resolution));
+    let choices = recommendations.as_deref().zip(budget).map(|(r, b)| choose(r, &b, &resolution));
     if let (Some(recommendations), Some(choices), Some(budget)) = (&recommendations, &choices, &budget) {
         save("recommended.toml", &recommended_toml(recommendations, choices, budget))?;
     }
@@ -186,7 +189,7 @@ pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, o
     let mut charts_md = String::new();
     for scene in &scenes {
         let of_scene: Vec<&Summary> = summaries.iter().filter(|s| s.first().scene == *scene && s.ok()).collect();
-        let mut written = write_scene_charts(&mut outputs, out, scene, &of_scene)?;
+        let mut written = write_scene_charts(&mut outputs, out, scene, &of_scene, resolution.of(scene))?;
         written.extend(super::figures::write(&mut outputs, out, &outcome.sweep.charts, scene, &of_scene)?);
         for (stem, md) in written {
             let _ = writeln!(charts_md, "![{md}]({stem}.png) ([SVG]({stem}.svg))\n");
@@ -218,7 +221,7 @@ fn remove_stale(path: &Path) -> Result<()> {
 
 /// One chart's points per method: (x, mean NRMSE) of each of its configurations, labelled by
 /// their numbers, each method in the style of its place in the registry.
-fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>, Vec<(f64, f64)>) {
+fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64, resolution: f64) -> (Vec<Series>, Vec<(f64, f64)>) {
     let mut series: Vec<Series> = Vec::new();
     for s in of_scene {
         let method = &s.first().method;
@@ -235,7 +238,7 @@ fn by_method(of_scene: &[&Summary], x: impl Fn(&Summary) -> f64) -> (Vec<Series>
         series[at].point_labels.push(s.number.to_string());
     }
     let points: Vec<(f64, f64)> = of_scene.iter().map(|s| (x(s), s.mean_nrmse)).collect();
-    let front = pareto::front_in_cost_order(&points).into_iter().map(|i| points[i]).collect();
+    let front = pareto::front_in_cost_order(&points, resolution).into_iter().map(|i| points[i]).collect();
     (series, front)
 }
 
@@ -248,7 +251,13 @@ fn method_style(method: &str) -> Option<usize> {
 type ChartCost<'f> = (&'static str, &'static str, &'f dyn Fn(&Summary) -> f64);
 
 /// The scene's charts; returns (file stem, caption) of each.
-fn write_scene_charts(outputs: &mut Outputs, out: &Path, scene: &str, of_scene: &[&Summary]) -> Result<Vec<(String, String)>> {
+fn write_scene_charts(
+    outputs: &mut Outputs,
+    out: &Path,
+    scene: &str,
+    of_scene: &[&Summary],
+    resolution: f64,
+) -> Result<Vec<(String, String)>> {
     if of_scene.is_empty() {
         return Ok(Vec::new());
     }
@@ -259,7 +268,7 @@ fn write_scene_charts(outputs: &mut Outputs, out: &Path, scene: &str, of_scene: 
         ("memory", "bake artifact, MiB", &|s| s.artifact_mib()),
     ];
     for (name, x_label, x) in costs {
-        let (series, front) = by_method(of_scene, x);
+        let (series, front) = by_method(of_scene, x, resolution);
         let stem = format!("{scene}_error_vs_{name}");
         let title = format!("{scene}: error against {}", x_label.split(',').next().unwrap_or(name));
         charts::write(
@@ -310,6 +319,21 @@ pub(super) fn machine() -> String {
     format!("{cpu}, {cores} core(s)")
 }
 
+/// The references' samples per pixel: the sweep's, or per scene where a noise target raised them.
+fn reference_samples(outcome: &Outcome) -> String {
+    let raised: Vec<String> =
+        outcome.noise.iter().filter(|(_, n)| n.spp != outcome.sweep.reference_spp).map(|(scene, n)| format!("{scene} {}", n.spp)).collect();
+    match raised.is_empty() {
+        true => format!("{} spp", outcome.sweep.reference_spp),
+        false => format!(
+            "{} spp ({} for the noise target {})",
+            outcome.sweep.reference_spp,
+            raised.join(", "),
+            outcome.sweep.reference_noise_target.unwrap_or(f64::NAN)
+        ),
+    }
+}
+
 fn report_text(
     outcome: &Outcome,
     summaries: &[Summary],
@@ -324,8 +348,8 @@ fn report_text(
     let _ = writeln!(r, "Device: {}. Machine: {}. relume {}.", outcome.device, machine(), env!("CARGO_PKG_VERSION"));
     let _ = writeln!(
         r,
-        "Images {}x{}; reference {} spp at pixel centres ({} traced, {} from the cache); {} timed frames per point, in rounds over the scene's configurations, after {} s of warm-up frames (3 at least); {:.1} s in all.\n",
-        sweep.width, sweep.height, sweep.reference_spp, outcome.references_traced, outcome.references_found, sweep.frames, sweep.warmup_seconds, outcome.seconds
+        "Images {}x{}; reference {} at pixel centres ({} traced, {} from the cache); {} timed frames per point, in rounds over the scene's configurations, after {} s of warm-up frames (3 at least); {:.1} s in all.\n",
+        sweep.width, sweep.height, reference_samples(outcome), outcome.references_traced, outcome.references_found, sweep.frames, sweep.warmup_seconds, outcome.seconds
     );
     if !outcome.skipped.is_empty() {
         let _ = writeln!(r, "**Skipped by --time-limit:** {}.\n", outcome.skipped.join("; "));
@@ -340,7 +364,7 @@ fn report_text(
     }
     methods_text(&mut r, cells, outcome);
     let _ = writeln!(r, "## Summary per method configuration\n");
-    let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect` (none under an environment, where the direct-only frame lacks the environment's direct light: -); flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene. The label is the configuration's number in the charts.\n");
+    let _ = writeln!(r, "Means over the light configurations; NRMSE and FLIP against the reference's `combined`, indirect NRMSE of the image minus the direct-only frame against `indirect` (none under an environment, where the direct-only frame lacks the environment's direct light: -); flicker as docs/BENCH.md defines it (largest over the path); GPU and CPU times are medians. Front: on the Pareto front of (GPU frame time, mean NRMSE) within its scene, errors nearer than three times the references' noise tied (where measured). The label is the configuration's number in the charts.\n");
     let _ = writeln!(r, "| scene | method (label) | params | NRMSE | FLIP | indirect NRMSE | max flicker | GPU ms | CPU ms | bake s | bake peak MiB | artifact MiB | front |");
     let _ = writeln!(r, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (s, &on) in summaries.iter().zip(fronts) {
@@ -433,8 +457,8 @@ pub(super) mod tests {
         let rows = [point("a", 0, Some(0.1)), point("a", 1, None), point("b", 0, Some(0.3)), point("b", 1, Some(0.3))];
         let summaries = summaries(&rows);
         assert_eq!((summaries[0].failed, summaries[0].ok(), summaries[0].mean_nrmse), (1, false, 0.1));
-        assert_eq!(fronts(&summaries), [false, true]);
-        let recommendations = recommend(&summaries, &error(0.5));
+        assert_eq!(fronts(&summaries, &Resolution::default()), [false, true]);
+        let recommendations = recommend(&summaries, &error(0.5), &Resolution::default());
         assert_eq!(recommendations[0].ladder.len(), 1, "a configuration with a failed point is never recommended");
         assert_eq!(recommendations[0].ladder[0].first().params, "b");
 
@@ -444,6 +468,6 @@ pub(super) mod tests {
             csv.lines().find(|l| l.contains("failed: 3 NaN")).expect("the failed point has its row").split(',').collect();
         let cell = |name: &str| failed[header.iter().position(|h| *h == name).unwrap()];
         assert_eq!((cell("nrmse"), cell("flip"), cell("non_finite_pixels")), ("", "", "3"), "error cells empty, the NaN count kept");
-        assert!(summary_csv(&summaries, &fronts(&summaries)).contains("\ns,m,a,2,1,0.100000,"));
+        assert!(summary_csv(&summaries, &fronts(&summaries, &Resolution::default())).contains("\ns,m,a,2,1,0.100000,"));
     }
 }

@@ -1,7 +1,7 @@
 //! One row per point of a sweep, and its two written forms: results.csv (columns in
 //! docs/BENCH.md) and results.json.
 
-use super::pareto;
+use super::{pareto, Resolution};
 use anyhow::{Context as _, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -143,14 +143,14 @@ pub(crate) fn percentile(values: &[f64], q: f64) -> f64 {
 
 /// Sets `on_front` on every row: the Pareto front of (GPU frame time, NRMSE) among the
 /// successful rows of the same scene and light configuration.
-pub(crate) fn mark_front(rows: &mut [Row]) {
+pub(crate) fn mark_front(rows: &mut [Row], resolution: &Resolution) {
     let groups: Vec<(String, usize)> = rows.iter().map(|r| (r.scene.clone(), r.light)).collect();
     for group in &groups {
         let members: Vec<usize> =
             (0..rows.len()).filter(|&i| (&rows[i].scene, rows[i].light) == (&group.0, group.1) && rows[i].accuracy.is_some()).collect();
         let points: Vec<(f64, f64)> =
             members.iter().map(|&i| (rows[i].frame.gpu_ms, rows[i].accuracy.map_or(f64::NAN, |a| a.nrmse))).collect();
-        for (&i, on) in members.iter().zip(pareto::front(&points)) {
+        for (&i, on) in members.iter().zip(pareto::front(&points, resolution.of(&group.0))) {
             rows[i].on_front = on;
         }
     }

@@ -22,6 +22,12 @@ pub(crate) struct Sweep {
     /// references' own noise (docs/BENCH.md, the sweep keys).
     #[serde(default)]
     pub reference_noise: bool,
+    /// The references' noise (an image NRMSE) to reach: a scene's references get the samples,
+    /// from reference_spp by doublings up to reference_max_spp, that should bring its measured
+    /// noise under this. Measures the noise (as reference_noise).
+    pub reference_noise_target: Option<f64>,
+    /// The most samples per pixel reference_noise_target may give a reference.
+    pub reference_max_spp: Option<u32>,
     /// Timed frames per point.
     #[serde(default = "default_frames")]
     pub frames: u32,
@@ -175,12 +181,30 @@ impl Sweep {
         Ok(sweep)
     }
 
+    /// Whether the references' own noise is measured (reference_noise, or a target for it).
+    pub fn measures_noise(&self) -> bool {
+        self.reference_noise || self.reference_noise_target.is_some()
+    }
+
     fn validate(&self) -> Result<()> {
         if !(1..=4096).contains(&self.width) || !(1..=4096).contains(&self.height) {
             bail!("width {} height {}: use 1..=4096 pixels per side", self.width, self.height);
         }
         if !(1..=65536).contains(&self.reference_spp) {
             bail!("reference_spp {}: use 1..=65536 samples per pixel", self.reference_spp);
+        }
+        if let Some(target) = self.reference_noise_target {
+            if !(target > 0.0 && target <= 1.0) {
+                bail!("reference_noise_target {target}: give an image NRMSE in (0, 1], e.g. 0.03");
+            }
+        }
+        if let Some(max) = self.reference_max_spp {
+            if self.reference_noise_target.is_none() {
+                bail!("reference_max_spp {max}: it caps the samples reference_noise_target asks for; give reference_noise_target too");
+            }
+            if !(self.reference_spp..=65536).contains(&max) {
+                bail!("reference_max_spp {max}: use reference_spp ({}) up to 65536 samples per pixel", self.reference_spp);
+            }
         }
         if !(1..=10_000).contains(&self.frames) {
             bail!("frames {}: time 1..=10000 frames per point", self.frames);
@@ -318,6 +342,9 @@ mod tests {
         for (text, expected) in [
             ("name = 'x'\nscenes = []\nmethods = []", "at least one"),
             ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
+            ("name = 'x'\nreference_noise_target = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "reference_noise_target 0"),
+            ("name = 'x'\nreference_max_spp = 512\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "give reference_noise_target too"),
+            ("name = 'x'\nreference_noise_target = 0.1\nreference_max_spp = 16\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "use reference_spp (256)"),
             ("name = 'x'\nwarmup_seconds = -1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "warmup_seconds"),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\n[[scenes]]\npath = 'b/a.gltf'\ncamera = 'eye=0,1,2;target=0,0,0'\n[[methods]]\nmethod = 'direct'", "both named \"a\""),
             ("name = 'x'\n[[scenes]]\npath = 'a.gltf'\nname = 'a b'\n[[methods]]\nmethod = 'direct'", "names files"),
