@@ -172,8 +172,9 @@ fn light_clouds_on_cornells_spot_beat_light_path_maps_of_the_same_size() {
 }
 
 /// The cross-method sweep in small: every method on cornell (its spot) and fiv-blobs (an
-/// environment), at the least effort each takes, their references raised to a noise target. methods.csv has a row per scene and method
-/// that applies there and none for the others (listed in the report as not applying); the
+/// environment), at the least effort each takes, their references raised to a noise target.
+/// methods.csv has a row per scene and method that applies there and none for the others
+/// (listed in the report as not applying); the
 /// indirect columns are empty under the environment; a budget on memory alone names a method
 /// per scene; and `relume run --recommended` bakes and renders that choice against the
 /// reference.
@@ -240,6 +241,7 @@ fn a_tiny_cross_method_sweep_covers_every_method_that_applies_and_its_choice_run
         assert!(n["nrmse"].as_f64().is_some_and(|v| v > 0.001 && v < 2.0), "{n}");
         assert_eq!(n["spp"].as_u64(), Some(16), "{n}");
     }
+    assert!(text.contains("(over the target 0.001, at reference_max_spp)"), "{text}");
     assert!(
         text.contains("The references' own noise")
             && text.contains("reference 8 spp (cornell 16, fiv-blobs 16 for the noise target 0.001)"),

@@ -117,7 +117,10 @@ pub(super) fn choose<'s>(recommendations: &[Recommendation<'s>], budget: &Budget
             let mut within: Vec<usize> =
                 (0..recommendations.len()).filter(|&i| recommendations[i].scene == scene && recommendations[i].chosen.is_some()).collect();
             let choice = |i: usize| recommendations[i].choice().unwrap();
-            let (lowest, resolution) = (lowest(within.iter().map(|&i| choice(i))), resolution.of(scene));
+            // The scene's lowest within the budget, not that of the methods' choices: those
+            // already gave up a tie's worth of error each, and ties must not chain.
+            let of_scene = recommendations.iter().filter(|r| r.scene == scene).flat_map(|r| r.ladder.iter().copied());
+            let (lowest, resolution) = (lowest(of_scene.filter(|s| budget.within(s))), resolution.of(scene));
             within.sort_by(|&a, &b| budget.order(lowest, resolution, choice(a), choice(b)));
             SceneChoice { scene, chosen: within.first().copied(), runner_up: within.get(1).copied() }
         })
@@ -312,5 +315,23 @@ pub(super) mod tests {
         let recommendations = recommend(&summaries, &loose, &Resolution::default());
         let choices = choose(&recommendations, &loose, &Resolution::default());
         assert_eq!(recommendations[choices[0].chosen.unwrap()].choice().unwrap().first().params, "c", "told apart: the most accurate");
+    }
+
+    /// Ties do not chain: a method whose choice gave up a tie's worth of error does not make a
+    /// method tied with that choice, but not with the scene's lowest, a tie.
+    #[test]
+    fn ties_are_within_the_resolution_of_the_scenes_lowest() {
+        let of = |method: &str, params: &str, nrmse: f64, bytes: u64| Row {
+            method: method.into(),
+            bake: BakeCost { artifact_bytes: bytes, ..BakeCost::default() },
+            ..point(params, 0, Some(nrmse))
+        };
+        let rows = [of("a", "exact", 0.05, 8_000), of("a", "small", 0.10, 1_000), of("b", "tiny", 0.15, 500)];
+        let summaries = summaries(&rows);
+        let (budget, resolution) = (Budget { frame_ms: Some(5.0), ..Budget::default() }, Resolution(vec![("s".into(), 0.06)]));
+        let recommendations = recommend(&summaries, &budget, &resolution);
+        let choices = choose(&recommendations, &budget, &resolution);
+        let chosen = &recommendations[choices[0].chosen.unwrap()];
+        assert_eq!((chosen.method, chosen.choice().unwrap().first().params.as_str()), ("a", "small"), "0.15 is 0.10 from 0.05");
     }
 }

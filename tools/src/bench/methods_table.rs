@@ -2,8 +2,9 @@
 //! configuration and that one's costs, the references' noise beside the errors, and the frame
 //! times the run does not tell apart.
 
+use super::noise::RESOLVED_NOISES;
 use super::report::Summary;
-use super::Outcome;
+use super::{Outcome, Resolution};
 use std::fmt::Write as _;
 
 /// A number with `decimals`, or "-" where it means nothing (NaN).
@@ -105,7 +106,7 @@ pub(super) fn methods_text(r: &mut String, cells: &[MethodCell], outcome: &Outco
     for row in methods_rows(cells) {
         let _ = writeln!(r, "| {} |", row.join(" | "));
     }
-    noise_text(r, cells, &outcome.noise);
+    noise_text(r, cells, outcome);
     timing_text(r, cells);
     if !outcome.not_applicable.is_empty() {
         let _ = writeln!(r, "\nNot run where they do not apply:\n");
@@ -116,29 +117,44 @@ pub(super) fn methods_text(r: &mut String, cells: &[MethodCell], outcome: &Outco
     let _ = writeln!(r);
 }
 
-/// Per scene that measured it, the references' own noise, and the methods whose best NRMSE is
-/// nearer the scene's best than three times that noise: not told apart by this reference.
-fn noise_text(r: &mut String, cells: &[MethodCell], noise: &[(String, super::ReferenceNoise)]) {
-    if noise.is_empty() {
+/// Per scene that measured it, the references' own noise, whether it met the sweep's target,
+/// and the methods whose best NRMSE is within the scene's resolution of the best: not told
+/// apart by this reference.
+fn noise_text(r: &mut String, cells: &[MethodCell], outcome: &Outcome) {
+    if outcome.noise.is_empty() {
         return;
     }
-    let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced with two seeds: their NRMSE / sqrt 2), beside the errors ranked. Errors nearer each other than three times it are ties: the fronts and the budget do not rank them (the cheaper counts as on the front, and as the more accurate).\n");
-    for (scene, n) in noise {
+    let _ = writeln!(r, "\nThe references' own noise (the first light configuration traced with two seeds: their NRMSE / sqrt 2), beside the errors ranked. Errors no further apart than {RESOLVED_NOISES} times it are ties: the fronts and the budget do not rank them (the cheaper counts as on the front, and as the more accurate).\n");
+    let resolution = Resolution::of_noise(&outcome.noise);
+    for (scene, n) in &outcome.noise {
         let mut bests: Vec<(f64, &str)> = cells
             .iter()
             .filter(|c| c.best().first().scene == *scene)
             .map(|c| (c.best().mean_nrmse, c.best().first().method.as_str()))
             .collect();
         bests.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let close: Vec<&str> =
-            bests.iter().skip(1).filter(|b| bests.first().is_some_and(|first| b.0 - first.0 < 3.0 * n.scene_nrmse)).map(|b| b.1).collect();
+        let tied = |b: &&(f64, &str)| bests.first().is_some_and(|first| b.0 <= first.0 + resolution.of(scene));
+        let close: Vec<&str> = bests.iter().skip(1).filter(tied).map(|b| b.1).collect();
         let verdict = match (bests.first(), close.is_empty()) {
             _ if bests.len() < 2 || !n.scene_nrmse.is_finite() => String::new(),
-            (Some(first), false) => format!("; within 3x the noise of the best ({}): {}", first.1, close.join(", ")),
-            (Some(first), true) => format!("; the best ({}) is apart from the rest by more than 3x the noise", first.1),
+            (Some(first), false) => format!("; within {RESOLVED_NOISES}x the noise of the best ({}): {}", first.1, close.join(", ")),
+            (Some(first), true) => format!("; the best ({}) is apart from the rest by more than {RESOLVED_NOISES}x the noise", first.1),
             (None, _) => String::new(),
         };
-        let _ = writeln!(r, "- {scene} ({} spp): image NRMSE {:.4}, indirect {}{verdict}", n.spp, n.scene_nrmse, cell(n.indirect_nrmse, 4));
+        let over = match outcome.sweep.reference_noise_target {
+            Some(target) if n.scene_nrmse > target => {
+                let capped = if Some(n.spp) == outcome.sweep.reference_max_spp { ", at reference_max_spp" } else { "" };
+                format!(" (over the target {target}{capped})")
+            }
+            _ => String::new(),
+        };
+        let _ = writeln!(
+            r,
+            "- {scene} ({} spp): image NRMSE {:.4}{over}, indirect {}{verdict}",
+            n.spp,
+            n.scene_nrmse,
+            cell(n.indirect_nrmse, 4)
+        );
     }
 }
 

@@ -287,7 +287,7 @@ struct SceneBench<'s> {
     /// Seconds between consecutive configurations when the light moves continuously.
     continuous: Option<f32>,
     references: Vec<Reference>,
-    /// The references' own noise (with the sweep's reference_noise).
+    /// The references' own noise (with the sweep's reference_noise or reference_noise_target).
     noise: Option<ReferenceNoise>,
     /// Bakes made so far, by method and flags: configurations that differ only at run time
     /// (composition, shadow maps) share one.

@@ -61,6 +61,10 @@ pub(super) fn measured_noise(
 /// The samples per pixel, from `spp` by doublings up to `max`, at which `noise` measured at
 /// `spp` falls to `target`: noise falls as 1/sqrt(samples).
 fn spp_for_noise(spp: u32, noise: f64, target: f64, max: u32) -> u32 {
+    // A black reference's noise is infinite (NRMSE against nothing): no samples meet a target.
+    if !noise.is_finite() {
+        return spp;
+    }
     let mut samples = spp;
     while samples < max && noise * (spp as f64 / samples as f64).sqrt() > target {
         samples = samples.saturating_mul(2).min(max);
@@ -68,15 +72,25 @@ fn spp_for_noise(spp: u32, noise: f64, target: f64, max: u32) -> u32 {
     samples
 }
 
-/// Per scene, the smallest difference of error the bench ranks: three times its references'
-/// own noise (none where it was not measured). Errors nearer than this are ties to the
-/// fronts and the budget.
+/// How many times the references' noise two errors must differ by to be ranked: the issue's
+/// bar, a reference's noise under a third of the smallest difference ranked.
+pub(crate) const RESOLVED_NOISES: f64 = 3.0;
+
+/// Per scene, the smallest difference of error the bench ranks: RESOLVED_NOISES times its
+/// references' own noise (none where it was not measured). Errors no further apart are ties
+/// to the fronts, the budget and the report.
 #[derive(Default)]
 pub(crate) struct Resolution(pub Vec<(String, f64)>);
 
 impl Resolution {
     pub(super) fn of_noise(noise: &[(String, ReferenceNoise)]) -> Resolution {
-        Resolution(noise.iter().filter(|(_, n)| n.scene_nrmse.is_finite()).map(|(scene, n)| (scene.clone(), 3.0 * n.scene_nrmse)).collect())
+        Resolution(
+            noise
+                .iter()
+                .filter(|(_, n)| n.scene_nrmse.is_finite())
+                .map(|(scene, n)| (scene.clone(), RESOLVED_NOISES * n.scene_nrmse))
+                .collect(),
+        )
     }
 
     pub fn of(&self, scene: &str) -> f64 {
@@ -96,7 +110,7 @@ mod tests {
         assert_eq!(spp_for_noise(256, 0.024, 0.03, 2048), 256, "already under");
         assert_eq!(spp_for_noise(256, 0.048, 0.03, 256), 256, "no room");
         assert_eq!(spp_for_noise(100, 0.2, 0.001, 300), 300, "the cap need not be a doubling");
-        assert_eq!(spp_for_noise(256, f64::NAN, 0.03, 2048), 256, "a black reference's noise asks for nothing");
+        assert_eq!(spp_for_noise(256, f64::INFINITY, 0.03, 2048), 256, "a black reference's noise asks for nothing");
     }
 
     #[test]

@@ -12,14 +12,15 @@ pub(crate) fn front(points: &[(f64, f64)], tolerance: f64) -> Vec<bool> {
     let mut order: Vec<usize> = (0..points.len()).filter(|&i| !points[i].0.is_nan() && !points[i].1.is_nan()).collect();
     order.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0));
     let mut on = vec![false; points.len()];
-    let mut best = f64::INFINITY;
+    // None before the cheapest group: it is on the front whatever its errors (infinite ones too).
+    let mut best: Option<f64> = None;
     for same_cost in order.chunk_by(|&a, &b| points[a].0 == points[b].0) {
-        let resolved: Vec<usize> = same_cost.iter().copied().filter(|&i| points[i].1 < best - tolerance).collect();
+        let resolved: Vec<usize> = same_cost.iter().copied().filter(|&i| best.is_none_or(|b| points[i].1 < b - tolerance)).collect();
         let Some(lowest) = resolved.iter().map(|&i| points[i].1).min_by(f64::total_cmp) else { continue };
         for &i in resolved.iter().filter(|&&i| points[i].1 <= lowest + tolerance) {
             on[i] = true;
         }
-        best = best.min(lowest);
+        best = Some(best.map_or(lowest, |b| b.min(lowest)));
     }
     on
 }
@@ -46,6 +47,8 @@ mod tests {
     #[test]
     fn one_point_and_none() {
         assert_eq!(front(&[(1.0, 1.0)], 0.0), [true]);
+        // A black reference makes every error infinite: the cheapest stay on the front.
+        assert_eq!(front(&[(2.0, f64::INFINITY), (1.0, f64::INFINITY), (1.0, f64::INFINITY)], 0.1), [false, true, true]);
         assert!(front(&[], 0.1).is_empty());
     }
 

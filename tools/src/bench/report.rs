@@ -329,7 +329,7 @@ fn reference_samples(outcome: &Outcome) -> String {
             "{} spp ({} for the noise target {})",
             outcome.sweep.reference_spp,
             raised.join(", "),
-            outcome.sweep.reference_noise_target.unwrap_or(f64::NAN)
+            outcome.sweep.reference_noise_target.expect("samples are raised only towards a target")
         ),
     }
 }

@@ -124,7 +124,8 @@ pub(crate) struct Row {
     /// Popping against the previous light configuration (None for the first, or a failed point).
     pub flicker: Option<f64>,
     pub non_finite_pixels: usize,
-    /// On the Pareto front of (GPU frame time, NRMSE) among the points of its scene and light.
+    /// On the Pareto front of (GPU frame time, NRMSE) among the points of its scene and light,
+    /// errors within the scene's resolution tied (`mark_front`).
     pub on_front: bool,
     pub device: String,
     /// The stem of the point's pictures under images/.
@@ -142,7 +143,8 @@ pub(crate) fn percentile(values: &[f64], q: f64) -> f64 {
 }
 
 /// Sets `on_front` on every row: the Pareto front of (GPU frame time, NRMSE) among the
-/// successful rows of the same scene and light configuration.
+/// successful rows of the same scene and light configuration, errors within the scene's
+/// resolution tied.
 pub(crate) fn mark_front(rows: &mut [Row], resolution: &Resolution) {
     let groups: Vec<(String, usize)> = rows.iter().map(|r| (r.scene.clone(), r.light)).collect();
     for group in &groups {

@@ -23,8 +23,8 @@ pub(crate) struct Sweep {
     #[serde(default)]
     pub reference_noise: bool,
     /// The references' noise (an image NRMSE) to reach: a scene's references get the samples,
-    /// from reference_spp by doublings up to reference_max_spp, that should bring its measured
-    /// noise under this. Measures the noise (as reference_noise).
+    /// from reference_spp by doublings up to reference_max_spp (required with it), that should
+    /// bring its measured noise under this. Measures the noise (as reference_noise).
     pub reference_noise_target: Option<f64>,
     /// The most samples per pixel reference_noise_target may give a reference.
     pub reference_max_spp: Option<u32>,
@@ -197,6 +197,9 @@ impl Sweep {
             if !(target > 0.0 && target <= 1.0) {
                 bail!("reference_noise_target {target}: give an image NRMSE in (0, 1], e.g. 0.03");
             }
+            if self.reference_max_spp.is_none() {
+                bail!("reference_noise_target {target}: give reference_max_spp too, the most samples per pixel it may ask for (e.g. 2048)");
+            }
         }
         if let Some(max) = self.reference_max_spp {
             if self.reference_noise_target.is_none() {
@@ -342,7 +345,8 @@ mod tests {
         for (text, expected) in [
             ("name = 'x'\nscenes = []\nmethods = []", "at least one"),
             ("name = 'x'\nwidth = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "width"),
-            ("name = 'x'\nreference_noise_target = 0\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "reference_noise_target 0"),
+            ("name = 'x'\nreference_noise_target = 0.1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "give reference_max_spp too"),
+            ("name = 'x'\nreference_noise_target = 0\nreference_max_spp = 512\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "reference_noise_target 0"),
             ("name = 'x'\nreference_max_spp = 512\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "give reference_noise_target too"),
             ("name = 'x'\nreference_noise_target = 0.1\nreference_max_spp = 16\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "use reference_spp (256)"),
             ("name = 'x'\nwarmup_seconds = -1\n[[scenes]]\npath = 'a.gltf'\n[[methods]]\nmethod = 'direct'", "warmup_seconds"),
