@@ -242,16 +242,16 @@ pub(super) mod tests {
         Budget { nrmse: Some(nrmse), ..Budget::default() }
     }
 
+    /// A point of `method` with parameter set `params`, its error and its artifact's bytes.
+    fn of(method: &str, params: &str, nrmse: f64, bytes: u64) -> Row {
+        Row { method: method.into(), bake: BakeCost { artifact_bytes: bytes, ..BakeCost::default() }, ..point(params, 0, Some(nrmse)) }
+    }
+
     /// Across methods, the budget picks the cheaper of two methods when both meet it, and the
     /// more accurate when only one does; recommended.toml names it; with none within it, the
     /// report names the most accurate.
     #[test]
     fn the_budget_picks_the_cheaper_method_within_it_and_else_the_one_that_meets_it() {
-        let of = |method: &str, params: &str, nrmse: f64, bytes: u64| Row {
-            method: method.into(),
-            bake: BakeCost { artifact_bytes: bytes, ..BakeCost::default() },
-            ..point(params, 0, Some(nrmse))
-        };
         let rows = [of("small", "a", 0.15, 1_000), of("small", "b", 0.12, 4_000), of("large", "c", 0.05, 50_000)];
         let summaries = summaries(&rows);
         let recommendations = recommend(&summaries, &error(0.2), &Resolution::default());
@@ -321,11 +321,6 @@ pub(super) mod tests {
     /// method tied with that choice, but not with the scene's lowest, a tie.
     #[test]
     fn ties_are_within_the_resolution_of_the_scenes_lowest() {
-        let of = |method: &str, params: &str, nrmse: f64, bytes: u64| Row {
-            method: method.into(),
-            bake: BakeCost { artifact_bytes: bytes, ..BakeCost::default() },
-            ..point(params, 0, Some(nrmse))
-        };
         let rows = [of("a", "exact", 0.05, 8_000), of("a", "small", 0.10, 1_000), of("b", "tiny", 0.15, 500)];
         let summaries = summaries(&rows);
         let (budget, resolution) = (Budget { frame_ms: Some(5.0), ..Budget::default() }, Resolution(vec![("s".into(), 0.06)]));
