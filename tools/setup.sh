@@ -3,13 +3,14 @@
 # Vulkan), the Vulkan loader and validation layers, and shaderc with the glslang and
 # SPIRV-Tools static libraries it links against (and g++ for libstdc++, which they need), and
 # the DejaVu font the bench's charts set their text in, the X virtual framebuffer the viewer's
-# tests open their window on (and, when asked, Blender's probes).
+# tests open their window on, Embree 3 (the ray caster the tests and `relume rays` hold relume's
+# BVH against; relume itself never needs it) (and, when asked, Blender's probes).
 # Safe to run again: it installs nothing
 # that is already there.
 set -euo pipefail
 
 packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers g++
-          libshaderc-dev glslang-dev spirv-tools fonts-dejavu-core xvfb)
+          libshaderc-dev glslang-dev spirv-tools fonts-dejavu-core xvfb libembree-dev)
 # `setup.sh probes` adds Blender's CC0 studio-light probes (real captured environments, 1024 x
 # 512 lat-long EXRs in /usr/share/blender/datafiles/studiolights/world/), which the main job
 # and the fiv-probes sweep light fiv-blobs by; the tests need none of them.

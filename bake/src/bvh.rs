@@ -106,8 +106,11 @@ impl SceneBvh {
         let (bvh, leaf_triangles, leaf_primitive) = if triangles.is_empty() {
             (None, Vec::new(), Vec::new())
         } else {
-            // medium_build does not split triangles, so the leaf order is a permutation.
-            let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default());
+            // The slowest preset: its full reinsertion and wide search from the first merge keep
+            // finely triangulated scenes traversable (medium_build's BVH cast 5x fewer rays on
+            // classroom split 32 x 32, 2.6x fewer on glossy-enclosure: docs/BENCHMARKS.md,
+            // "Ray casting"). Its pre-split may list a triangle in several leaves.
+            let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::very_slow_build(), &mut Duration::default());
             let leaf_triangles = bvh
                 .primitive_indices
                 .iter()

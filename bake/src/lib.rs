@@ -33,6 +33,10 @@ mod bsdf;
 pub mod bvh;
 #[cfg(feature = "baking")]
 pub mod cpca;
+#[cfg(feature = "embree")]
+pub mod embree;
+#[cfg(feature = "baking")]
+pub mod ray_bench;
 #[cfg(feature = "baking")]
 pub mod reference;
 #[cfg(feature = "baking")]

@@ -66,12 +66,30 @@ impl Tessellation {
             return Err(format!("the largest edge must be a finite length > 0, not {max_edge}"));
         }
         let splits: Vec<u64> = scene.meshes.iter().map(|m| splits(m, max_edge)).collect();
+        Self::split(scene, max_edge, splits, format!("edges of at most {max_edge} m"), "give a larger --max-edge")
+    }
+
+    /// Every triangle of `scene` split `k` x `k` (k a power of two: midpoint subdivision
+    /// log2 k times): the same surfaces in k^2 times the triangles, for measuring what
+    /// should not depend on the triangulation (`relume rays --subdivide`, the atlas's charts).
+    pub fn uniform(scene: &Scene, k: u32) -> Result<Tessellation, String> {
+        if k == 0 {
+            return Err("the subdivision must split each triangle at least 1 x 1".into());
+        }
+        Self::split(
+            scene,
+            0.0,
+            vec![k as u64; scene.meshes.len()],
+            format!("splitting every triangle {k} x {k}"),
+            "give a smaller subdivision",
+        )
+    }
+
+    fn split(scene: &Scene, max_edge: f32, splits: Vec<u64>, what: String, fix: &str) -> Result<Tessellation, String> {
         // At most (k + 1)(k + 2) / 2 vertices a triangle: refused before anything is made.
         let most: u64 = scene.meshes.iter().zip(&splits).map(|(m, &k)| (m.indices.len() / 3) as u64 * (k + 1) * (k + 2) / 2).sum();
         if most > MAX_VERTICES as u64 {
-            return Err(format!(
-                "edges of at most {max_edge} m would make up to {most} vertices, more than {MAX_VERTICES}; give a larger --max-edge"
-            ));
+            return Err(format!("{what} would make up to {most} vertices, more than {MAX_VERTICES}; {fix}"));
         }
         let meshes = scene.meshes.iter().zip(splits).map(|(m, k)| tessellate(m, k as u32)).collect();
         Ok(Tessellation { max_edge, meshes })

@@ -18,6 +18,7 @@ mod bench;
 mod gpu;
 mod lights;
 mod methods;
+mod rays;
 mod reference;
 mod render;
 mod report;
@@ -46,6 +47,9 @@ enum Command {
     /// Run a sweep (scenes x methods x parameters x lights, from a TOML file): costs and
     /// errors of every point, CSV/JSON, charts with the Pareto front, report.md.
     Bench(bench::BenchArgs),
+    /// Time ray casting on a scene: BVH build, closest-hit and shadow rays per second on a
+    /// path tracer's rays (and Embree's on the same rays where relume was built with it).
+    Rays(rays::RaysArgs),
     /// Write the lights a scene is lit by (its punctual lights, those of --lights, or the
     /// default rig of a scene without light) as a lights file to edit and give back with
     /// --lights.
@@ -113,6 +117,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => reference::compare_command(&args),
         Command::Run(args) => report::run_main_job(&args),
         Command::Bench(args) => bench::bench_command(&args),
+        Command::Rays(args) => rays::rays_command(&args),
         Command::Lights(args) => lights::lights_command(&args),
         Command::View(args) => view::view_command(&args),
         Command::Methods { name } => {
