@@ -40,7 +40,7 @@ use crate::environment::{face_point, face_rectangle_solid_angle, luminance};
 use crate::image::Image;
 use crate::sampling::{uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
-use crate::work::{progress_bar, with_threads, WorkOptions};
+use crate::work::{with_threads, Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -117,7 +117,7 @@ pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSetti
     let mut sums = vec![[0.0f64; 6]; pixel_count];
     let mut nonfinite = vec![0u64; height as usize];
 
-    let progress = progress_bar(settings.samples_per_pixel as u64 * height as u64, "reference", settings.work.progress);
+    let mut progress = Progress::new(settings.samples_per_pixel as u64 * height as u64, "reference", settings.work.progress);
 
     let start = Instant::now();
     let mut taken = 0u32;
@@ -145,7 +145,7 @@ pub fn render_reference(scene: &Scene, bvh: &SceneBvh, settings: &ReferenceSetti
         }
     });
     let seconds = start.elapsed().as_secs_f64();
-    progress.finish_and_clear();
+    progress.finish();
 
     let mut direct = Image::new(width, height);
     let mut indirect = Image::new(width, height);

@@ -2,7 +2,10 @@
 //! memory it reached.
 
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::Write;
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 /// What every long CPU job (a bake, the path tracer) takes from the command line: its seed,
@@ -53,17 +56,142 @@ pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Sen
     }
 }
 
-/// A progress bar of `len` steps labelled `label` on stderr, or a hidden one.
-pub fn progress_bar(len: u64, label: &str, visible: bool) -> ProgressBar {
-    if !visible {
-        return ProgressBar::hidden();
+/// How often a log (stderr not a terminal) gets a progress line.
+pub const LOG_INTERVAL: Duration = Duration::from_secs(5);
+
+/// The progress of one long stage of `len` steps: a bar on stderr when it is a terminal; when
+/// it is not (a log, a batch job), a line every [`LOG_INTERVAL`] from a thread of its own, so
+/// lines come even while a step takes long: the stage, steps done of all, the rate and the
+/// time left; and a last line when it ends, if any line was written. Nothing when not
+/// `visible`.
+pub struct Progress {
+    bar: ProgressBar,
+    log: Option<LogLines>,
+}
+
+impl Progress {
+    pub fn new(len: u64, label: &str, visible: bool) -> Progress {
+        use std::io::IsTerminal;
+        match (visible, std::io::stderr().is_terminal()) {
+            (false, _) => Progress { bar: ProgressBar::hidden(), log: None },
+            (true, true) => Progress { bar: terminal_bar(len, label), log: None },
+            (true, false) => Progress::logged(len, label, LOG_INTERVAL, Box::new(std::io::stderr())),
+        }
     }
+
+    /// Lines every `interval` into `sink` (stderr, or a test's buffer).
+    fn logged(len: u64, label: &str, interval: Duration, sink: Box<dyn Write + Send>) -> Progress {
+        let shared = Arc::new(LogShared {
+            label: label.to_string(),
+            len,
+            start: Instant::now(),
+            done: AtomicU64::new(0),
+            finished: Mutex::new(false),
+            wake: Condvar::new(),
+        });
+        let ticker = Arc::clone(&shared);
+        let thread = std::thread::spawn(move || ticker.write_lines(interval, sink));
+        Progress { bar: ProgressBar::hidden(), log: Some(LogLines { shared, thread: Some(thread) }) }
+    }
+
+    pub fn inc(&self, steps: u64) {
+        self.bar.inc(steps);
+        if let Some(log) = &self.log {
+            log.shared.done.fetch_add(steps, Ordering::Relaxed);
+        }
+    }
+
+    /// Ends the stage: clears the bar, or writes the log's last line.
+    pub fn finish(&mut self) {
+        self.bar.finish_and_clear();
+        if let Some(mut log) = self.log.take() {
+            log.stop();
+        }
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.finish();
+    }
+}
+
+fn terminal_bar(len: u64, label: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
     let template = format!("{label} {{bar:40}} {{percent:>3}}% {{elapsed_precise}} (eta {{eta}})");
     if let Ok(style) = ProgressStyle::with_template(&template) {
         bar.set_style(style);
     }
     bar
+}
+
+struct LogLines {
+    shared: Arc<LogShared>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl LogLines {
+    fn stop(&mut self) {
+        *self.shared.finished.lock().unwrap_or_else(|e| e.into_inner()) = true;
+        self.shared.wake.notify_all();
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+struct LogShared {
+    label: String,
+    len: u64,
+    start: Instant,
+    done: AtomicU64,
+    finished: Mutex<bool>,
+    wake: Condvar,
+}
+
+impl LogShared {
+    fn write_lines(&self, interval: Duration, mut sink: Box<dyn Write + Send>) {
+        let mut wrote = false;
+        let mut finished = self.finished.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            let (guard, timeout) = self.wake.wait_timeout_while(finished, interval, |f| !*f).unwrap_or_else(|e| e.into_inner());
+            finished = guard;
+            if !timeout.timed_out() {
+                break;
+            }
+            let _ = writeln!(sink, "{}", self.line());
+            wrote = true;
+        }
+        if wrote {
+            let _ = writeln!(
+                sink,
+                "{}: done {} of {} in {:.1} s",
+                self.label,
+                self.done.load(Ordering::Relaxed),
+                self.len,
+                self.start.elapsed().as_secs_f64()
+            );
+        }
+    }
+
+    /// "stage: done of all (percent), rate, time left".
+    fn line(&self) -> String {
+        let done = self.done.load(Ordering::Relaxed);
+        let seconds = self.start.elapsed().as_secs_f64();
+        let rate = done as f64 / seconds.max(1e-9);
+        let left =
+            if rate > 0.0 { format!("{:.0} s left", self.len.saturating_sub(done) as f64 / rate) } else { "time left unknown".into() };
+        let percent = 100.0 * done as f64 / self.len.max(1) as f64;
+        format!("{}: {done} of {} ({percent:.1} %), {}, {left}", self.label, self.len, per_second(rate))
+    }
+}
+
+fn per_second(rate: f64) -> String {
+    match rate {
+        r if r >= 1e6 => format!("{:.2} M/s", r * 1e-6),
+        r if r >= 1e3 => format!("{:.1} k/s", r * 1e-3),
+        r => format!("{r:.2}/s"),
+    }
 }
 
 /// The process's peak resident memory in bytes since it started or since the last
@@ -96,5 +224,38 @@ mod tests {
         let mut count = 0;
         assert_eq!(spent.in_passes(10, 4, |_| count += 1), 4);
         assert_eq!(count, 1);
+    }
+
+    /// A log gets a line per interval while the stage runs, with the stage, the steps done of
+    /// all, the rate and the time left, and a last line when it ends; a stage shorter than
+    /// the interval writes nothing.
+    #[test]
+    fn a_log_gets_a_line_every_interval_and_a_last_one() {
+        #[derive(Clone, Default)]
+        struct Sink(Arc<Mutex<Vec<u8>>>);
+        impl Write for Sink {
+            fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+                self.0.lock().unwrap().write(bytes)
+            }
+            fn flush(&mut self) -> std::io::Result<()> {
+                Ok(())
+            }
+        }
+        let sink = Sink::default();
+        let mut progress = Progress::logged(100, "stage", Duration::from_millis(40), Box::new(sink.clone()));
+        progress.inc(25);
+        std::thread::sleep(Duration::from_millis(150));
+        progress.finish();
+        let text = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(lines.len() >= 3, "{text}");
+        assert!(lines[0].starts_with("stage: 25 of 100 (25.0 %), ") && lines[0].ends_with(" s left"), "{text}");
+        assert!(lines.last().unwrap().starts_with("stage: done 25 of 100 in "), "{text}");
+
+        let quiet = Sink::default();
+        let mut short = Progress::logged(10, "short", Duration::from_secs(60), Box::new(quiet.clone()));
+        short.inc(10);
+        short.finish();
+        assert!(quiet.0.lock().unwrap().is_empty());
     }
 }

@@ -162,3 +162,45 @@ fn the_atlas_is_deterministic_and_bad_settings_are_refused() {
         assert!(matches!(Atlas::build(&scene, &bad), Err(AtlasError::Settings(_))));
     }
 }
+
+/// `mesh` with every triangle split into four at its edges' midpoints, `levels` times, each
+/// triangle keeping vertices of its own (as a flat-shaded file has them); a midpoint depends
+/// only on its edge's two ends, so neighbours' new vertices coincide bit for bit.
+fn midpoint_subdivided(mesh: &Mesh, levels: u32) -> Mesh {
+    let mut triangles: Vec<[usize; 3]> = mesh.indices.chunks_exact(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+    let (mut positions, mut normals) = (mesh.positions.clone(), mesh.normals.clone());
+    for _ in 0..levels {
+        let mut next = Vec::with_capacity(4 * triangles.len());
+        for [a, b, c] in triangles {
+            let mut mid = |p: usize, q: usize| {
+                positions.push((positions[p] + positions[q]) * 0.5);
+                normals.push(normals[p]);
+                positions.len() - 1
+            };
+            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        triangles = next;
+    }
+    let indices = triangles.iter().flat_map(|t| t.map(|v| v as u32)).collect();
+    Mesh { positions, normals, uv0: None, uv1: None, indices, ..mesh.clone() }
+}
+
+/// Chart segmentation sees surfaces, not triangles: classroom and table-chair with every
+/// triangle split 16 ways (and 64 ways for table-chair) keep their charts and their covered
+/// texels (to the texels that tiny triangles' rounding touches at a chart's border).
+#[test]
+fn a_scene_and_its_midpoint_subdivided_copy_get_the_same_charts() {
+    for (name, levels) in [("classroom", 2), ("table-chair", 3)] {
+        let scene = relume_bake::gltf_load::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.gltf")))
+            .unwrap()
+            .scene;
+        let fine = Scene { meshes: scene.meshes.iter().map(|m| midpoint_subdivided(m, levels)).collect(), ..scene.clone() };
+        assert_eq!(fine.triangle_count(), scene.triangle_count() << (2 * levels));
+        let settings = AtlasSettings { texel_density: scene.settings.texel_density, ..AtlasSettings::default() };
+        let (coarse, subdivided) = (Atlas::build(&scene, &settings).unwrap(), Atlas::build(&fine, &settings).unwrap());
+        assert_eq!(subdivided.charts.len(), coarse.charts.len(), "{name}: charts");
+        let (a, b) = (coarse.covered_texels() as f64, subdivided.covered_texels() as f64);
+        assert!((b / a - 1.0).abs() < 0.01, "{name}: {a} covered texels, {b} subdivided");
+    }
+}

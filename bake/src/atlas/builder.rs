@@ -434,8 +434,11 @@ impl OverlapGrid {
     }
 
     fn overlaps(&self, face: [Vec2; 3]) -> bool {
-        let scale = bounds_2d(&face).1 - bounds_2d(&face).0;
-        let tolerance = 1e-5 * scale.max_element();
+        // Relative to the face and to where it lies: the rounding of projected coordinates
+        // grows with their magnitude, and must not make neighbours of a finely triangulated
+        // surface overlap (a face 1e-3 of its coordinates across split charts).
+        let (lo, hi) = bounds_2d(&face);
+        let tolerance = 1e-5 * (hi - lo).max_element() + 1e-6 * lo.abs().max(hi.abs()).max_element();
         let big_face = self.cell_range(&face).count() >= 64 * 64;
         if big_face {
             return self.faces.iter().any(|f| triangles_overlap(f, &face, tolerance));

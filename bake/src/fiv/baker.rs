@@ -8,7 +8,7 @@ use crate::bvh::SceneBvh;
 use crate::environment::{face_point, lat_long_direction, Environment};
 use crate::scene::{Camera, Mesh, Scene};
 use crate::settings::SceneSettings;
-use crate::work::{progress_bar, with_threads, WorkOptions};
+use crate::work::{with_threads, Progress, WorkOptions};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 
@@ -102,7 +102,7 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
     };
     let g = settings.grid;
     let surface_samples = table.surface_shells() * g.azimuths * g.polar;
-    let progress = progress_bar(g.samples() as u64 + surface_samples as u64, &format!("fiv table of {}", mesh.name), work.progress);
+    let mut progress = Progress::new(g.samples() as u64 + surface_samples as u64, &format!("fiv table of {}", mesh.name), work.progress);
     let (fiv, valid) = (0..g.samples() as u32)
         .into_par_iter()
         .map(|s| {
@@ -126,7 +126,7 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
             }
         })
         .unzip();
-    progress.finish_and_clear();
+    progress.finish();
     OccluderTable { fiv, valid, surface, surface_valid, ..table }
 }
 

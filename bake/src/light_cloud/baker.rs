@@ -23,7 +23,7 @@ use crate::reference::{punctual_irradiance, survives_roulette, LOBE_DIMENSIONS};
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, LightKind, Material, Scene};
 use crate::sh;
-use crate::work::{progress_bar, WorkOptions};
+use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -115,7 +115,7 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
     let emission = settings.emission;
     let row = lights.len() * 3 * coefficients * emission;
     let mut sums = vec![0f64; vertices * row];
-    let progress = progress_bar(vertices as u64 * settings.samples as u64, "light cloud", settings.work.progress);
+    let mut progress = Progress::new(vertices as u64 * settings.samples as u64, "light cloud", settings.work.progress);
     let gather = Gather { scene, bvh, lights: &lights, coefficients, emission };
     let taken = settings.work.in_passes(settings.samples, SAMPLES_PER_PASS, |samples| {
         sums.par_chunks_mut(row).enumerate().for_each(|(v, sums)| {
@@ -129,7 +129,7 @@ pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) ->
             progress.inc(samples.len() as u64);
         });
     });
-    progress.finish_and_clear();
+    progress.finish();
     let mut rows: Vec<f32> = sums.iter().map(|s| (s / taken as f64) as f32).collect();
     if coefficients > 1 {
         rows.par_chunks_mut(row).enumerate().for_each(|(v, row)| Hemisphere::new(supports.normals[v]).fit(row));

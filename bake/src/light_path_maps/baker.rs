@@ -17,7 +17,7 @@ use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, Scene};
 use crate::settings::first_failed_check;
-use crate::work::{progress_bar, WorkOptions};
+use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -369,7 +369,7 @@ pub fn bake_transfers(
     let n = covered.len();
     let mut values = vec![Vec3::ZERO; entries.len() * n];
     let (lights_made, rays) = (AtomicU64::new(0), AtomicU64::new(0));
-    let progress = progress_bar(entries.len() as u64 * settings.walks as u64, "light path maps", settings.work.progress);
+    let mut progress = Progress::new(entries.len() as u64 * settings.walks as u64, "light path maps", settings.work.progress);
     let start = Instant::now();
     let walks = settings.work.in_passes(settings.walks, 1, |walk| {
         values.par_chunks_mut(n).zip(entries.par_iter()).enumerate().for_each_init(Vec::new, |lights, (e, (row, entry))| {
@@ -379,7 +379,7 @@ pub fn bake_transfers(
             progress.inc(1);
         });
     });
-    progress.finish_and_clear();
+    progress.finish();
     let scale = 1.0 / walks as f32;
     values.iter_mut().for_each(|v| *v *= scale);
     Ok(Transfers {

@@ -14,7 +14,7 @@ use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
 use crate::settings::first_failed_check;
-use crate::work::{progress_bar, WorkOptions};
+use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -168,7 +168,7 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
     let estimator = Estimator { scene, bvh, settings, average_albedo: average_albedo(scene) };
     let covered: Vec<u32> = (0..atlas.texels.len() as u32).filter(|&t| atlas.texels[t as usize].coverage > 0.0).collect();
     let mut sums = vec![Vec3::ZERO; covered.len()];
-    let progress = progress_bar(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.work.progress);
+    let mut progress = Progress::new(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.work.progress);
     let start = Instant::now();
     let taken = settings.work.in_passes(settings.rays_per_texel, RAYS_PER_PASS, |rays| {
         sums.par_chunks_mut(256).zip(covered.par_chunks(256)).for_each(|(sums, texels)| {
@@ -178,7 +178,7 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
             progress.inc(texels.len() as u64 * rays.len() as u64);
         });
     });
-    progress.finish_and_clear();
+    progress.finish();
     let mut values = vec![Vec3::ZERO; atlas.texels.len()];
     for (&texel, sum) in covered.iter().zip(&sums) {
         values[texel as usize] = *sum / taken as f32;
