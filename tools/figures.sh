@@ -20,7 +20,7 @@ FIGURES=(
     reference-paths vulkan-passes direct-accuracy vsm-bleeding obscurance-bake
     obscurance-passes obscurance-vs-reference lightmap-seams lpm-bake lpm-passes
     lpm-vs-reference bench-four-methods bench-stability fiv light-clouds viewer mrt-blocks
-    mrt-levels every-method cross-method correctness-tests
+    mrt-levels every-method cross-method ray-casting atlas-utilization correctness-tests
 )
 
 bench() { "$RELUME" bench "$1" --out "$DIR/$2" --cache "$OUT/reference-cache" "${@:3}"; }
@@ -253,6 +253,30 @@ figure_cross_method() {
     done
     # The 32-zone points under spots fail by design (the renderer's refusal): the bench exits 1.
     bench tools/sweeps/light-cloud-zones.toml light-cloud-zones || true
+}
+
+figure_ray_casting() {
+    # Embree (libembree-dev, installed by tools/setup.sh) as the yardstick on the same rays.
+    cargo build --release --locked -p relume-tools --features embree
+    for scene in glossy-enclosure classroom maze; do
+        "$RELUME" rays scenes/$scene.gltf --width 256 --height 256 --threads 2
+    done
+    for k in 4 16 32; do
+        "$RELUME" rays scenes/classroom.gltf --width 256 --height 256 --threads 2 --subdivide $k
+    done
+    for scene in glossy-enclosure classroom maze fiv-blobs cornell; do
+        for run in 1 2 3; do
+            "$RELUME" reference scenes/$scene.gltf --width 128 --height 96 --spp 32 --threads 2 --out "$DIR/$scene.exr"
+        done
+    done
+}
+
+figure_atlas_utilization() {
+    release_test -p relume-bake --test atlas -- --nocapture
+    for scene in cornell table-chair classroom; do
+        "$RELUME" bake scenes/$scene.gltf --method obscurance --rays 16 --out "$DIR/$scene"
+    done
+    "$RELUME" bake scenes/table-chair.gltf --method obscurance --patches 2000 --rays 16 --out "$DIR/table-chair-2000"
 }
 
 figure_correctness_tests() {

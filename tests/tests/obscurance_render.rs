@@ -51,7 +51,7 @@ fn synthetic_w(centre: Vec3) -> Vec3 {
 /// The scene's atlas (small pages, so the floor and the box land on different pages), the
 /// scene with the atlas applied (uv1 set), and the synthetic obscurance: rgb W, alpha coverage.
 fn atlas_scene(scene: &Scene) -> (Atlas, Scene, Vec<Vec4>) {
-    let atlas_settings = AtlasSettings { texel_density: 12.0, gutter: 2, max_size: 64, ..AtlasSettings::default() };
+    let atlas_settings = AtlasSettings { texel_density: 12.0, gutter: 2, max_size: 56, ..AtlasSettings::default() };
     let atlas = Atlas::build(scene, &atlas_settings).expect("atlas");
     let mut applied = scene.clone();
     atlas.apply_to(&mut applied);
