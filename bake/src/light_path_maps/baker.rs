@@ -436,22 +436,23 @@ pub fn compress(
     compression: Compression,
 ) -> Result<Compressed, String> {
     let cols = 3 * transfers.texels.len();
-    let data: Vec<f32> = transfers.values.iter().flat_map(|v| v.to_array()).collect();
+    // The transfers as rows of floats in place: a copy would double the bake's peak memory.
+    let data: &[f32] = bytemuck::cast_slice(&transfers.values);
     let features = entry_features(entries);
     let (clusters, basis) = match compression {
         Compression::None => return Ok(uncompressed(transfers, entries, texel_count, light_area)),
         Compression::Fixed { clusters, basis } => (clusters, basis),
         Compression::Budget(budget) => {
             let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
-            let table = cpca::error_table(&data, cols, &features, FEATURE_DIMS, &counts, BUDGET_MAX_BASIS)?;
+            let table = cpca::error_table(data, cols, &features, FEATURE_DIMS, &counts, BUDGET_MAX_BASIS)?;
             let best = cpca::choose(&table, budget).ok_or_else(|| {
                 format!("no clustering of up to {} clusters and {BUDGET_MAX_BASIS} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis", BUDGET_CLUSTERS[7])
             })?;
             (best.clusters, best.basis)
         }
     };
-    let fit = cpca::fit(&data, cols, &features, FEATURE_DIMS, clusters, basis)?;
-    let relative_error = fit.relative_error(&data);
+    let fit = cpca::fit(data, cols, &features, FEATURE_DIMS, clusters, basis)?;
+    let relative_error = fit.relative_error(data);
     let transfer = clustered(&fit, transfers, entries, texel_count, light_area);
     Ok(Compressed { clusters: fit.clusters.len(), basis, relative_error, transfer })
 }
