@@ -3,7 +3,7 @@
 //! same rays in one run.
 //!
 //! The set is a path tracer's: a camera ray per pixel, then at each hit a shadow ray towards
-//! each punctual light and a cosine-distributed bounce, for a few bounces. Primary rays are
+//! each punctual light that lights it and a cosine-distributed bounce, for a few bounces. Primary rays are
 //! coherent, bounces and shadow rays are not, as in every bake and the reference.
 
 use crate::bvh::SceneBvh;
@@ -74,12 +74,13 @@ fn path_rays(scene: &Scene, bvh: &SceneBvh, pixel: u32, width: u32, height: u32,
             break;
         };
         let n = if hit.geometric_normal.dot(ray.dir) < 0.0 { hit.geometric_normal } else { -hit.geometric_normal };
+        // As the path tracer casts them: none to a light behind the surface, outside its cone
+        // or range, and each stopping short of the light by the offset.
         for light in scene.local_lights() {
-            let to_light = light.position - hit.position;
-            let length = to_light.length();
-            if length > 0.0 {
-                let dir = to_light / length;
-                set.shadow.push(TracedRay { origin: bvh.offset_origin(hit.position, hit.geometric_normal, dir), dir, t_max: length });
+            let incident = light.incident(hit.position);
+            if incident.irradiance.max_element() > 0.0 && n.dot(incident.to_light) > 0.0 {
+                let origin = bvh.offset_origin(hit.position, hit.geometric_normal, incident.to_light);
+                set.shadow.push(TracedRay { origin, dir: incident.to_light, t_max: (incident.distance - bvh.epsilon()).max(0.0) });
             }
         }
         let u = sampler.sobol4(1 + bounce);

@@ -69,9 +69,10 @@ impl Tessellation {
         Self::split(scene, max_edge, splits, format!("edges of at most {max_edge} m"), "give a larger --max-edge")
     }
 
-    /// Every triangle of `scene` split `k` x `k` (k a power of two: midpoint subdivision
-    /// log2 k times): the same surfaces in k^2 times the triangles, for measuring what
-    /// should not depend on the triangulation (`relume rays --subdivide`, the atlas's charts).
+    /// Every triangle of `scene` split `k` x `k` (the regular grid of k^2 triangles; for k = 2^L
+    /// the triangles of L midpoint subdivisions): the same surfaces in k^2 times the
+    /// triangles, for measuring what should not depend on the triangulation (`relume rays
+    /// --subdivide`).
     pub fn uniform(scene: &Scene, k: u32) -> Result<Tessellation, String> {
         if k == 0 {
             return Err("the subdivision must split each triangle at least 1 x 1".into());

@@ -17,8 +17,8 @@ pub(crate) struct RaysArgs {
     /// pixel.
     #[command(flatten)]
     scene: SceneArgs,
-    /// Split every triangle k x k first (2, 4, 8, ...: midpoint subdivision): the same
-    /// surfaces in k^2 times the triangles.
+    /// Split every triangle k x k first (the regular grid; for 2, 4, 8, ... the triangles of
+    /// midpoint subdivision): the same surfaces in k^2 times the triangles.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
     subdivide: u32,
     /// Diffuse bounces of each path after its camera ray.
