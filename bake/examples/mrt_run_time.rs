@@ -23,7 +23,7 @@ fn main() {
     let block = BlockSettings { gather_rays: 4096, ..BlockSettings::default() };
     let lightfield = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 1024, ..InterfaceSettings::default() };
     let clock = Instant::now();
-    let dictionary = Dictionary::build(&block, &lightfield, |_| {});
+    let dictionary = Dictionary::build(&block, &lightfield, |_| Ok(())).expect("the dictionary builds");
     println!("dictionary: {:.1} s", clock.elapsed().as_secs_f64());
     println!("| level | blocks | samples | level bake | CPU transfer, every bounce | first bounce only |");
     println!("|---|---|---|---|---|---|");

@@ -32,6 +32,8 @@ mod bsdf;
 #[cfg(feature = "baking")]
 pub mod bvh;
 #[cfg(feature = "baking")]
+pub mod contract;
+#[cfg(feature = "baking")]
 pub mod cpca;
 #[cfg(feature = "embree")]
 pub mod embree;

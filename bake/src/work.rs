@@ -1,6 +1,7 @@
 //! What every long bake stage shares: its worker threads, its progress bar and the peak
 //! memory it reached.
 
+use crate::contract::{mib, Estimate};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
 use std::ops::Range;
@@ -20,12 +21,46 @@ pub struct WorkOptions {
     pub time_limit: Option<Duration>,
     /// Draw a progress bar on stderr (hidden when stderr is not a terminal).
     pub progress: bool,
+    /// Refuse, before its long work, a bake whose peak memory is estimated above this many
+    /// bytes (`admit`); None: no limit.
+    pub memory_limit: Option<u64>,
+    /// When the job began (`begun`): its time limit counts from here over all its stages;
+    /// None: each stage's own start.
+    pub started: Option<Instant>,
 }
 
 impl WorkOptions {
     /// Refuses zero threads, and more than any machine relume runs on has cores to give.
     pub fn validate(&self) -> Result<(), String> {
         crate::settings::first_failed_check(&[(self.threads.is_none_or(|n| (1..=1024).contains(&n)), "threads must be 1..=1024")])
+    }
+
+    /// The same options with the time limit counting from now, over every stage that follows.
+    pub fn begun(self) -> WorkOptions {
+        WorkOptions { started: Some(self.started.unwrap_or_else(Instant::now)), ..self }
+    }
+
+    /// Whether the time limit has passed, counted from `started` (else from `stage_start`).
+    pub fn out_of_time(&self, stage_start: Instant) -> bool {
+        self.time_limit.is_some_and(|limit| self.started.unwrap_or(stage_start).elapsed() >= limit)
+    }
+
+    /// Refuses a bake whose `estimate` is over the memory limit, naming the lever's value that
+    /// would fit; prints the estimate first when progress is shown.
+    pub fn admit(&self, stage: &str, estimate: &Estimate) -> Result<(), String> {
+        if self.progress {
+            eprintln!("{stage}: peak memory estimate {}", estimate.describe());
+        }
+        let Some(limit) = self.memory_limit.filter(|&limit| estimate.bytes() > limit) else { return Ok(()) };
+        let fits = match estimate.fitting(limit) {
+            0 => format!("even {} 1 would not fit", estimate.lever),
+            n => format!("{} {n} or less would fit", estimate.lever),
+        };
+        Err(format!(
+            "{stage}: the peak memory is estimated at {}, over --memory-limit {:.0} MiB: {fits}, or raise --memory-limit",
+            estimate.describe(),
+            mib(limit)
+        ))
     }
 
     /// Runs `pass` on the worker threads over 0..total (rays, walks) in ranges of `step`,
@@ -36,7 +71,7 @@ impl WorkOptions {
         with_threads(self.threads, || {
             let mut taken = 0;
             while taken < total {
-                if self.time_limit.is_some_and(|limit| taken > 0 && start.elapsed() >= limit) {
+                if taken > 0 && self.out_of_time(start) {
                     break;
                 }
                 let range = taken..(taken + step.max(1)).min(total);
@@ -199,6 +234,14 @@ fn per_second(rate: f64) -> String {
 pub fn peak_memory_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// The machine's memory in bytes (Linux `MemTotal`); None where the kernel does not say.
+pub fn machine_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
 }

@@ -211,7 +211,7 @@ fn a_dictionary_round_trips_and_one_of_other_parameters_is_refused_by_name() {
         gather_rays: 64,
         seed: 0,
     };
-    let made = Dictionary::build(&small, &lightfield, |_| {});
+    let made = Dictionary::build(&small, &lightfield, |_| Ok(())).expect("the dictionary builds");
     let dir = std::env::temp_dir().join(format!("relume-mrt-dictionary-{}", std::process::id()));
     let write = |dictionary: &Dictionary| {
         let sections = vec![dictionary::section(dictionary, serde_json::json!({}))];
@@ -457,7 +457,7 @@ fn the_light_volume_matches_a_brute_force_gather_in_the_lit_block_and_beyond_its
     let scene = relume_bake::gltf_load::load(&path).unwrap().scene;
     let block_settings = BlockSettings { samples_per_face: 8, gather_rays: 2048, ..BlockSettings::default() };
     let lightfield = InterfaceSettings { positions: 8, directions: 12, supersamples: 2, gather_rays: 4096, ..InterfaceSettings::default() };
-    let dictionary = Dictionary::build(&block_settings, &lightfield, |_| {});
+    let dictionary = Dictionary::build(&block_settings, &lightfield, |_| Ok(())).expect("the dictionary builds");
     let (_, level) = relume_bake::mrt::baker::bake_level(&scene, &dictionary, 8).unwrap();
     let blocks = Proxy::of(&scene).unwrap().level();
     // The maze's 2 m cells in the oracle's unit cells.

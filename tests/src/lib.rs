@@ -249,7 +249,7 @@ fn quick_dictionary() -> Dictionary {
         let block = BlockSettings { samples_per_face: 8, gather_rays: 1024, ..BlockSettings::default() };
         let lightfield =
             InterfaceSettings { positions: 6, directions: 9, supersamples: 1, gather_rays: 512, ..InterfaceSettings::default() };
-        Dictionary::build(&block, &lightfield, |_| {})
+        Dictionary::build(&block, &lightfield, |_| Ok(())).expect("the dictionary builds")
     };
     QUICK.get_or_init(build).clone()
 }

@@ -92,16 +92,27 @@ pub(crate) struct WorkArgs {
     /// Worker threads, 1..=1024 (default: all cores).
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
-    /// Stop after this many seconds, at a whole pass of the work (at least one is made).
-    #[arg(long, value_parser = positive::<f64>)]
-    pub time_limit: Option<f64>,
+    /// Stop after this many seconds, at a whole pass of the work (at least one is made); a
+    /// stage that needs all its work (FIV's tables, MRT's dictionary) is refused instead.
+    #[arg(long, value_parser = seconds)]
+    pub time_limit: Option<Duration>,
+    /// Refuse, before its long work, a bake whose peak memory is estimated above this: bytes,
+    /// or a number with K, M, G or T (binary units). Default: the machine's memory.
+    #[arg(long, value_parser = bytes)]
+    pub memory_limit: Option<u64>,
 }
 
 impl WorkArgs {
     /// The options, refused by name when impossible; a progress bar on a terminal.
     pub fn options(&self) -> Result<WorkOptions> {
-        let time_limit = self.time_limit.map(Duration::from_secs_f64);
-        let options = WorkOptions { seed: self.seed, threads: self.threads, time_limit, progress: true };
+        let options = WorkOptions {
+            seed: self.seed,
+            threads: self.threads,
+            time_limit: self.time_limit,
+            progress: true,
+            memory_limit: self.memory_limit.or_else(relume_bake::work::machine_memory_bytes),
+            started: None,
+        };
         options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
         Ok(options)
     }
@@ -244,6 +255,32 @@ pub(crate) fn reference_settings(scene: &SceneArgs, trace: &PathTracerArgs, shad
 /// A finite number above 0.
 pub(crate) fn positive<T: std::str::FromStr + Into<f64> + Copy>(text: &str) -> Result<T, String> {
     number(text, |v| v > 0.0).ok_or_else(|| "give a finite number above 0".into())
+}
+
+/// Seconds above 0 that a clock can count (not 1e20).
+fn seconds(text: &str) -> Result<Duration, String> {
+    let seconds: f64 = positive(text)?;
+    Duration::try_from_secs_f64(seconds).map_err(|_| format!("{seconds} s is more than a clock counts; give fewer seconds"))
+}
+
+/// A size in bytes: a whole number, or a number with K, M, G or T (binary units, an optional
+/// "iB" or "B"), above 0.
+pub(crate) fn bytes(text: &str) -> Result<u64, String> {
+    let trimmed = text.trim().trim_end_matches("iB").trim_end_matches('B');
+    let (number, scale) = match trimmed.char_indices().last() {
+        Some((i, unit)) if unit.is_ascii_alphabetic() => {
+            let power =
+                "KMGT".find(unit.to_ascii_uppercase()).ok_or_else(|| format!("\"{text}\": give bytes, or a number with K, M, G or T"))?;
+            (&trimmed[..i], 1u64 << (10 * (power + 1)))
+        }
+        _ => (trimmed, 1),
+    };
+    let value: f64 = number.trim().parse().map_err(|_| format!("\"{text}\": give bytes, or a number with K, M, G or T"))?;
+    let total = value * scale as f64;
+    match total.is_finite() && total >= 1.0 && total < u64::MAX as f64 {
+        true => Ok(total as u64),
+        false => Err(format!("\"{text}\": give a size of at least one byte that a 64-bit count holds")),
+    }
 }
 
 /// A finite number >= 0.

@@ -4,10 +4,11 @@
 
 use crate::args::{load, replace_environment, WorkArgs};
 use crate::methods::params::{BakeParams, Stage};
-use crate::methods::{self, Method, Stages};
+use crate::methods::{self, Method};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::BakeOutput;
+use relume_bake::contract::Stages;
 use relume_bake::gltf_load::{LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
@@ -120,14 +121,25 @@ pub(crate) fn bake_scene(
     if let Some(missed) = methods::misses(method, scene) {
         eprintln!("warning: {}: {missed}", scene.source.display());
     }
+    let baker = method.baker(scene, values)?;
     let mut stages = Stages::default();
-    let bake = method.bake(scene, values, work, &mut stages)?;
+    let bake = baker.bake(scene, &work.begun(), &mut stages).map_err(|e| naming(scene, e))?;
     let mut stats = bake.stats;
     stats["stages"] = stages.json();
+    stats["peak_memory_bytes"] = json!(stages.peak_memory_bytes());
     stats["threads"] = json!(work.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())));
     let mut parameters = bake.parameters;
     parameters["given"] = values.json(&method.params(), Stage::Bake);
     let output = BakeOutput { method: method.name(), scene: Some(scene), parameters, sections: bake.sections, stats };
     output.write(out)?;
     Ok(format!("{}{}wrote {}\n", bake.summary, stages.summary(), out.display()))
+}
+
+/// A bake's error naming the scene, once (an atlas's error names it already).
+fn naming(scene: &Scene, error: String) -> anyhow::Error {
+    let path = scene.source.display().to_string();
+    match error.starts_with(&path) {
+        true => anyhow::anyhow!(error),
+        false => anyhow::anyhow!("{path}: {error}"),
+    }
 }

@@ -13,6 +13,8 @@
 mod builder;
 #[cfg(feature = "baking")]
 pub use builder::*;
+#[cfg(feature = "baking")]
+pub mod stage;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};

@@ -61,7 +61,8 @@ pub fn bake(scene: &Scene, settings: &FivBakeSettings, work: &WorkOptions) -> Re
     let types = occluder_types(scene, &FivSceneSettings::of(scene)?)?;
     with_threads(work.threads, || {
         let terms = environment_terms(environment, settings.difmap_width);
-        let tables = types.iter().map(|t| occluder_table(&scene.meshes[t.meshes[0]], environment, settings, work)).collect();
+        let tables =
+            types.iter().map(|t| occluder_table(&scene.meshes[t.meshes[0]], environment, settings, work)).collect::<Result<_, _>>()?;
         Ok((FivBake { environment: terms, tables }, types))
     })
 }
@@ -87,7 +88,12 @@ pub fn environment_terms(environment: &Environment, difmap_width: u32) -> Enviro
 }
 
 /// The table of the type whose shape `mesh` has.
-pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBakeSettings, work: &WorkOptions) -> OccluderTable {
+pub fn occluder_table(
+    mesh: &Mesh,
+    environment: &Environment,
+    settings: &FivBakeSettings,
+    work: &WorkOptions,
+) -> Result<OccluderTable, String> {
     let (centre, radius) = bounding_sphere(&mesh.positions);
     let bvh = SceneBvh::new(&alone(mesh, centre));
     let table = OccluderTable {
@@ -103,31 +109,49 @@ pub fn occluder_table(mesh: &Mesh, environment: &Environment, settings: &FivBake
     let g = settings.grid;
     let surface_samples = table.surface_shells() * g.azimuths * g.polar;
     let mut progress = Progress::new(g.samples() as u64 + surface_samples as u64, &format!("fiv table of {}", mesh.name), work.progress);
-    let (fiv, valid) = (0..g.samples() as u32)
-        .into_par_iter()
-        .map(|s| {
-            let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
-            progress.inc(1);
-            let v = table.distance(k) * g.direction(i, j);
-            match inside(&bvh, -v) {
-                true => ([Vec3::ZERO; 3], false),
-                false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample, Vec3::ZERO), true),
-            }
-        })
-        .unzip();
-    let (surface, surface_valid) = (0..surface_samples)
-        .into_par_iter()
-        .map(|s| {
-            let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
-            progress.inc(1);
-            match surface_point(&bvh, -table.distance(k) * g.direction(i, j)) {
-                Some((point, normal)) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample, normal), true),
-                None => ([Vec3::ZERO; 3], false),
-            }
-        })
-        .unzip();
+    let (fiv, valid) = every_sample(work, g.samples() as u32, &progress, |s| {
+        let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
+        let v = table.distance(k) * g.direction(i, j);
+        match inside(&bvh, -v) {
+            true => ([Vec3::ZERO; 3], false),
+            false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample, Vec3::ZERO), true),
+        }
+    })?;
+    let (surface, surface_valid) = every_sample(work, surface_samples, &progress, |s| {
+        let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
+        match surface_point(&bvh, -table.distance(k) * g.direction(i, j)) {
+            Some((point, normal)) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample, normal), true),
+            None => ([Vec3::ZERO; 3], false),
+        }
+    })?;
     progress.finish();
-    OccluderTable { fiv, valid, surface, surface_valid, ..table }
+    Ok(OccluderTable { fiv, valid, surface, surface_valid, ..table })
+}
+
+/// Table samples a pass takes before the time limit is looked at.
+const SAMPLES_PER_PASS: u32 = 1024;
+
+/// `sample(s)` for every s in 0..total, in passes that the time limit stops: a table needs
+/// every sample, so a cut one is refused.
+fn every_sample(
+    work: &WorkOptions,
+    total: u32,
+    progress: &Progress,
+    sample: impl Fn(u32) -> ([Vec3; 3], bool) + Sync,
+) -> Result<(Vec<[Vec3; 3]>, Vec<bool>), String> {
+    let mut values = Vec::with_capacity(total as usize);
+    let taken = work.in_passes(total, SAMPLES_PER_PASS, |range| {
+        values.par_extend(range.into_par_iter().map(|s| {
+            progress.inc(1);
+            sample(s)
+        }));
+    });
+    if taken < total {
+        return Err(format!(
+            "--time-limit ran out after {taken} of {total} samples of an occluder table, which needs every one: give a coarser --grid or a longer --time-limit"
+        ));
+    }
+    Ok(values.into_iter().unzip())
 }
 
 /// The surface point nearest `point` along its radial line (towards the centre or away

@@ -15,6 +15,10 @@ mod sections;
 
 #[cfg(feature = "baking")]
 pub use baker::*;
+#[cfg(feature = "baking")]
+mod bake;
+#[cfg(feature = "baking")]
+pub use bake::*;
 pub use occluder_sums::*;
 pub use sections::*;
 

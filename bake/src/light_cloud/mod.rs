@@ -24,6 +24,10 @@ mod weights;
 #[cfg(feature = "baking")]
 pub use baker::*;
 #[cfg(feature = "baking")]
+mod bake;
+#[cfg(feature = "baking")]
+pub use bake::*;
+#[cfg(feature = "baking")]
 pub use reduce::*;
 #[cfg(feature = "baking")]
 pub use variance::*;

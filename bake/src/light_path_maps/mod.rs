@@ -10,6 +10,10 @@ mod baker;
 mod transfer;
 #[cfg(feature = "baking")]
 pub use baker::*;
+#[cfg(feature = "baking")]
+mod bake;
+#[cfg(feature = "baking")]
+pub use bake::*;
 pub use transfer::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};

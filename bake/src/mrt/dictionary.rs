@@ -260,18 +260,22 @@ mod built {
 
     impl Dictionary {
         /// Builds the six shapes' operators, then their interfaces; `stage` is told each
-        /// stage's name as it starts.
-        pub fn build(settings: &BlockSettings, interface: &InterfaceSettings, mut stage: impl FnMut(&str)) -> Dictionary {
+        /// stage's name as it starts, and its error stops the build.
+        pub fn build(
+            settings: &BlockSettings,
+            interface: &InterfaceSettings,
+            mut stage: impl FnMut(&str) -> Result<(), String>,
+        ) -> Result<Dictionary, String> {
             let shapes = Shape::dictionary();
             let operators: Vec<BlockOperators> = (shapes.iter().enumerate())
                 .map(|(i, &s)| {
-                    stage(&format!("block shape {} of {}", i + 1, shapes.len()));
-                    block::build(s, settings)
+                    stage(&format!("block shape {} of {}", i + 1, shapes.len()))?;
+                    Ok(block::build(s, settings))
                 })
-                .collect();
-            stage("interfaces");
+                .collect::<Result<_, String>>()?;
+            stage("interfaces")?;
             let built = crate::work::with_threads(settings.threads, || interface::build(&operators, interface));
-            Dictionary::of(settings, interface, &operators, &built)
+            Ok(Dictionary::of(settings, interface, &operators, &built))
         }
 
         /// The stored form of built operators.

@@ -12,7 +12,11 @@
 //! (`baker`).
 
 #[cfg(feature = "baking")]
+mod bake;
+#[cfg(feature = "baking")]
 pub mod baker;
+#[cfg(feature = "baking")]
+pub use bake::*;
 #[cfg(feature = "baking")]
 pub mod block;
 #[cfg(feature = "baking")]

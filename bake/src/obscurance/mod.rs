@@ -7,6 +7,10 @@
 mod baker;
 #[cfg(feature = "baking")]
 pub use baker::*;
+#[cfg(feature = "baking")]
+mod bake;
+#[cfg(feature = "baking")]
+pub use bake::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::image::encode_exr_layer;

@@ -3,12 +3,11 @@
 //! re-indexed by it.
 
 use super::params::{Default, Param, Values};
-use super::Stages;
 use anyhow::{bail, Result};
-use relume_bake::artifact::{Artifact, Section};
-use relume_bake::atlas::{Atlas, AtlasSection, AtlasSettings};
+use relume_bake::artifact::Artifact;
+use relume_bake::atlas::stage::AtlasStage;
+use relume_bake::atlas::{AtlasSection, AtlasSettings};
 use relume_bake::scene::Scene;
-use serde_json::{json, Value};
 
 pub(crate) const TEXEL_DENSITY: Param = Param::number(
     "texel-density",
@@ -55,61 +54,10 @@ pub(crate) fn settings(scene: &Scene, values: &Values) -> Result<AtlasSettings> 
     Ok(settings)
 }
 
-/// The atlas stage of a bake: built for the settings (or bisected to about `--patches`
-/// covered texels).
-pub(crate) fn build(scene: &Scene, values: &Values, stages: &mut Stages) -> Result<(Atlas, AtlasSettings)> {
-    let settings = settings(scene, values)?;
-    let atlas = stages.timed("atlas", || match values.given_count(&PATCHES) {
-        Some(patches) => Atlas::build_for_patch_count(scene, &settings, patches as u32),
-        None => Atlas::build(scene, &settings),
-    })?;
-    Ok((atlas, settings))
-}
-
-/// The atlas's section, with its facts for the manifest.
-pub(crate) fn section(atlas: &Atlas, settings: &AtlasSettings) -> Section {
-    atlas.section(json!({
-        "width": atlas.width,
-        "height": atlas.height,
-        "pages": atlas.pages,
-        "charts": atlas.charts.len(),
-        "covered_texels": atlas.covered_texels(),
-        "utilization": atlas.utilization(),
-        "too_small_triangles": atlas.too_small,
-        "texel_density": short(settings.texel_density),
-    }))
-}
-
-/// The atlas's parameters as used, for the manifest.
-pub(crate) fn parameters(settings: &AtlasSettings, values: &Values) -> Value {
-    json!({
-        "texel_density": short(settings.texel_density),
-        "patches": values.given_count(&PATCHES),
-        "gutter": settings.gutter,
-        "atlas_max": settings.max_size,
-        "discontinuity_angle_degrees": short(settings.discontinuity_angle.to_degrees()),
-    })
-}
-
-/// The atlas in a line (and a warning for triangles too small to cover a texel).
-pub(crate) fn summary(atlas: &Atlas) -> String {
-    let mut text = format!(
-        "atlas: {} charts, {} x {} x {} page(s), {} patches, utilization {:.1}%\n",
-        atlas.charts.len(),
-        atlas.width,
-        atlas.height,
-        atlas.pages,
-        atlas.covered_texels(),
-        100.0 * atlas.utilization()
-    );
-    if !atlas.too_small.is_empty() {
-        text.push_str(&format!(
-            "warning: {} triangle(s) too small to cover a texel measurably: {:?}\n",
-            atlas.too_small.len(),
-            atlas.too_small
-        ));
-    }
-    text
+/// The atlas stage of a bake: built for the settings, or bisected to about `--patches`
+/// covered texels.
+pub(crate) fn stage(scene: &Scene, values: &Values) -> Result<AtlasStage> {
+    Ok(AtlasStage { settings: settings(scene, values)?, patches: values.given_count(&PATCHES).map(|p| p as u32) })
 }
 
 /// The artifact's atlas and `scene` re-indexed by it.
@@ -123,9 +71,4 @@ pub(crate) fn read_for(artifact: &Artifact, scene: &Scene, fine: &Scene) -> Resu
     let mut applied = fine.clone();
     atlas.apply_to(&mut applied);
     Ok((atlas, applied))
-}
-
-/// An f32 as JSON in its shortest round-trip form (0.15, not 0.15000000596046448).
-pub(crate) fn short(x: f32) -> Value {
-    x.to_string().parse::<f64>().map_or(Value::Null, |v| json!(v))
 }

@@ -5,18 +5,18 @@
 //! its occluders.
 
 use super::params::{Default, Param, Values};
-use super::{Bake, Loaded, Method, Models, Stages};
+use super::{Loaded, Method, Models};
 use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::Artifact;
+use relume_bake::contract::Baker;
 use relume_bake::fiv::{
-    self as bake_fiv, Beyond, FivBake, FivBakeSettings, FivSceneSettings, Grid, Occluder, OccluderType, Radial, SelfShadow, SumOptions,
+    self as bake_fiv, Beyond, FivBake, FivBakeSettings, FivBaker, FivSceneSettings, Grid, Occluder, OccluderType, Radial, SelfShadow,
+    SumOptions,
 };
 use relume_bake::scene::Scene;
-use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::fiv::FivData;
 use relume_renderer::MakeTechnique;
-use serde_json::json;
 
 /// The paper's Table 1 grids, azimuths x polar angles x distances.
 const GRIDS: [&str; 5] = ["32x17x15", "64x33x15", "64x33x30", "128x65x30", "256x129x30"];
@@ -163,41 +163,8 @@ impl Method for Fiv {
         None
     }
 
-    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
-        let settings = bake_settings(values)?;
-        let (fiv, types) = stages
-            .timed("fiv", || bake_fiv::bake(scene, &settings, &work))
-            .map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.display()))?;
-        let reps = representatives(scene, &types);
-        let samples = settings.grid.samples();
-        // 36 bytes a sample as 003 Table 1, and the surface points' masks of self-shadowing.
-        let table_bytes: usize = fiv.tables.iter().map(|t| (t.fiv.len() + t.surface.len()) * 36).sum();
-        let facts = json!({ "grid": settings.grid.name(), "types": types.len(), "occluders": bake_fiv::occluders(scene, &types).len() });
-        let summary = format!(
-            "{} occluder types ({} occluders), grid {} ({samples} samples per type), tables {:.2} MiB\n",
-            types.len(),
-            bake_fiv::occluders(scene, &types).len(),
-            settings.grid.name(),
-            table_bytes as f64 / (1 << 20) as f64
-        );
-        let mut bake = Bake {
-            sections: bake_fiv::sections(&fiv, &reps, facts.clone()),
-            parameters: json!({
-                "grid": settings.grid.name(),
-                "distance_min": settings.distance_min,
-                "distance_max": settings.distance_max,
-                "mask_supersample": settings.mask_supersample,
-                "difmap_width": settings.difmap_width,
-            }),
-            stats: json!({ "table_bytes": table_bytes, "samples_per_type": samples, "types": types.len() }),
-            summary,
-        };
-        let declared = FivSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
-        if declared.derived {
-            let how = format!("{} (the closed meshes under 80 % of the scene's footprint)", declared.occluders.join(", "));
-            bake.derived("occluders", json!(declared.occluders), &how, "extras.relume.fiv.occluders");
-        }
-        Ok(bake)
+    fn baker(&self, _: &Scene, values: &Values) -> Result<Box<dyn Baker>> {
+        Ok(Box::new(FivBaker { settings: bake_settings(values)? }))
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {

@@ -6,18 +6,17 @@
 //! nearest visible cloud lights (§6.1) and one pass sums their transfer per vertex.
 
 use super::params::{Default, Param, Values};
-use super::{Bake, Loaded, Method, Models, Stages};
+use super::{Loaded, Method, Models};
 use anyhow::Result;
 use glam::Vec3;
 use relume_bake::artifact::Artifact;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::light_cloud::{self as lc, LightCloud, LightCloudBakeSettings, LightCloudSceneSettings};
-use relume_bake::scene::{LightKind, Scene};
-use relume_bake::tessellation::{self, Tessellation};
-use relume_bake::work::WorkOptions;
+use relume_bake::contract::Baker;
+use relume_bake::light_cloud::{self as lc, LightCloud, LightCloudBaker, LightCloudSceneSettings};
+use relume_bake::scene::Scene;
+use relume_bake::tessellation;
 use relume_renderer::techniques::light_cloud::{LightCloudData, Visibility};
 use relume_renderer::MakeTechnique;
-use serde_json::json;
 use std::sync::Arc;
 
 const SAMPLES: Param = Param::count(
@@ -126,9 +125,6 @@ const PARAMS: [&Param; 16] = [
     &FADE,
 ];
 
-/// Components of 004 Fig. 5 recorded.
-const VARIANCE_COMPONENTS: usize = 16;
-
 /// The zones and light clustering the flags ask for.
 fn reduction(values: &Values) -> Result<lc::Reduction> {
     let clustering = !values.given(&NO_LIGHT_CLUSTERING);
@@ -155,40 +151,6 @@ fn compression(values: &Values) -> Result<Option<(usize, lc::Vectors)>> {
 }
 
 pub(crate) struct LightCloudMethod;
-
-/// Edges per scene diagonal of the tessellation a flat-shaded scene gets (cornell-cloud's
-/// welded grids: 20).
-const EDGES_PER_DIAGONAL: f32 = 20.0;
-
-/// The largest edge given, or the one the scene needs: its diagonal / 20 when it is
-/// flat-shaded, else none (0).
-fn max_edge(scene: &Scene, values: &Values) -> f32 {
-    let diagonal = relume_bake::settings::diagonal(scene.settings.bounds);
-    let derived = if tessellation::flat_shaded(scene) { diagonal / EDGES_PER_DIAGONAL } else { 0.0 };
-    values.given_number(&MAX_EDGE).map_or(derived, |e| e as f32)
-}
-
-/// The emission bands given, or those the scene's lights need: 0 (isotropic cloud lights) for
-/// point lights, `SPOT_BANDS` when any is a spot.
-fn emission_bands(scene: &Scene, values: &Values) -> usize {
-    let spots = scene.lights.iter().any(|l| matches!(l.kind, LightKind::Spot { .. }));
-    values.given_count(&EMISSION_BANDS).map_or(if spots { SPOT_BANDS } else { 0 }, |b| b as usize)
-}
-
-/// The emission bands a scene with spot lights gets when none are given (docs/BENCHMARKS.md
-/// measures 0 to 3 against the path tracer).
-const SPOT_BANDS: usize = 2;
-
-/// The directions given, or those the scene's lights need: `SUN_DIRECTIONS` when any is
-/// directional, else none.
-fn directions(scene: &Scene, values: &Values) -> usize {
-    let sun = scene.lights.iter().any(|l| l.kind == LightKind::Directional);
-    values.given_count(&DIRECTIONS).map_or(if sun { SUN_DIRECTIONS } else { 0 }, |d| d as usize)
-}
-
-/// The directions a scene with a directional light gets when none are given (about 18
-/// degrees apart; docs/BENCHMARKS.md measures 16 to 256 against the path tracer).
-const SUN_DIRECTIONS: usize = 128;
 
 /// The scene's settings, naming the scene.
 fn checked(scene: &Scene) -> Result<LightCloudSceneSettings> {
@@ -264,158 +226,16 @@ impl Method for LightCloudMethod {
         None
     }
 
-    fn bake(&self, source: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
-        let declared = checked(source)?;
-        let compression = compression(values)?;
-        let reduction = reduction(values)?;
-        let bands = emission_bands(source, values);
-        let at = |e: String| anyhow::anyhow!("{}: {e}", source.source.display());
-        let edge = max_edge(source, values);
-        let tessellation =
-            (edge > 0.0).then(|| stages.timed("tessellation", || Tessellation::new(source, edge))).transpose().map_err(at)?;
-        let fine = tessellation.as_ref().map(|t| t.apply(source));
-        let scene = fine.as_ref().unwrap_or(source);
-        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-        let derive = !declared.declared && has_local_lights(scene);
-        let reachable = derive.then(|| stages.timed("region", || lc::region::reachable(scene, &bvh))).transpose().map_err(at)?;
-        // Points where the scene declares a grid or has a light that stands somewhere.
-        let grid = match &reachable {
-            Some(r) => Some(r.grid.clone()),
-            None => declared.declared.then_some(declared.grid),
-        };
-        let directions = directions(source, values);
-        let settings =
-            LightCloudBakeSettings { grid, directions, samples: values.count(&SAMPLES) as u32, emission: (bands + 1) * (bands + 1), work };
-        let gathered = stages.timed("gather", || lc::bake(scene, &bvh, &settings)).map_err(at)?;
-        let raw_bytes = gathered.terms.len() * 4;
-        let reduced = stages.timed("light clustering", || lc::reduce(scene, &bvh, &gathered, reduction)).map_err(at)?;
-        let (cloud, error, variance) = match compression {
-            None => (reduced.cloud, 0.0, None),
-            Some((clusters, vectors)) => {
-                let cloud = stages.timed("cpca", || lc::compress(&reduced.cloud, clusters, vectors)).map_err(at)?;
-                let error = lc::relative_error(&reduced.cloud, &cloud);
-                let variance = values.given(&EXPLAINED_VARIANCE).then(|| {
-                    stages.timed("explained variance", || lc::explained_variance(scene, &bvh, &reduced.cloud, &cloud, VARIANCE_COMPONENTS))
-                });
-                (cloud, error, variance)
-            }
-        };
-        let per_zone: Vec<usize> = (0..cloud.zone_count()).map(|z| cloud.zone_light_range(z).len()).collect();
-        let bytes = (cloud.terms.len() + cloud.coords.len() + cloud.assignment.len() + cloud.vectors.len()) * 4;
-        let (fewest_vectors, vectors_mean) = (
-            cloud.vectors.iter().min().copied().unwrap_or(0),
-            cloud.vectors.iter().sum::<u32>() as f64 / cloud.cluster_count().max(1) as f64,
-        );
-        let cloud_lights = gathered.lights.len() - directions;
-        let grid_points = settings.grid.as_ref().map_or(0, |g| g.points().len());
-        let mean_per_zone = per_zone.iter().sum::<usize>() as f64 / per_zone.len() as f64;
-        let (fewest, most) = (per_zone.iter().min().copied().unwrap_or(0), per_zone.iter().max().copied().unwrap_or(0));
-        let facts = json!({
-            "cloud_lights": cloud_lights,
-            "grid_points": grid_points,
-            "directions": directions,
-            "vertices": cloud.vertex_count(),
-            "zones": cloud.zone_count(),
-            "lights_per_zone": per_zone,
-            "clusters": cloud.cluster_count(),
-            "vectors": { "min": fewest_vectors, "max": cloud.basis(), "mean": vectors_mean },
-            "light_clustering_error": reduced.relative_error,
-            "relative_error": error,
-        });
-        let mut summary = format!(
-            "{cloud_lights} cloud lights ({grid_points} grid points less those inside closed geometry) and {directions} directions, {} vertices, {} paths a vertex\n\
-             {} zones of {fewest}..{most} lights (mean {mean_per_zone:.1}) after light clustering, relative error {:.4}\n\
-             {} clusters of D = {fewest_vectors}..{} (mean {vectors_mean:.1}), relative error {error:.4}; {:.2} MiB -> {:.2} MiB\n",
-            cloud.vertex_count(),
-            cloud.samples,
-            cloud.zone_count(),
-            reduced.relative_error,
-            cloud.cluster_count(),
-            cloud.basis(),
-            raw_bytes as f64 / (1 << 20) as f64,
-            bytes as f64 / (1 << 20) as f64
-        );
-        if let Some(v) = &variance {
-            let first = |shares: &[f64]| shares.iter().take(4).map(|s| format!("{s:.3}")).collect::<Vec<_>>().join(" ");
-            summary.push_str(&format!(
-                "the first components' shares of the variance (004 Fig. 5): indirect {}, direct {}\n",
-                first(&v.indirect),
-                first(&v.direct)
-            ));
-        }
-        let (lone, vertices) = tessellation::lone_vertices(scene);
-        if 2 * lone > vertices {
-            summary.push_str(&format!(
-                "warning: {lone} of {vertices} vertices belong to one triangle only (flat-shaded meshes): per-vertex transfer has almost nothing to interpolate; weld and tessellate the meshes (--max-edge, or as scenes/cornell-cloud is)\n"
-            ));
-        }
-        let mut sections = vec![lc::section(&cloud, facts)];
-        sections.extend(tessellation.as_ref().map(tessellation::section));
-        let mut bake = Bake {
-            sections,
-            parameters: json!({
-                "samples": settings.samples,
-                "emission_bands": bands,
-                "max_edge": edge,
-                "zones": reduction.zones,
-                "light_clustering": reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
-                "clusters": compression.map(|c| c.0),
-                "vectors": compression.map(|(_, v)| v.count()),
-                "variable_vectors": matches!(compression, Some((_, lc::Vectors::Shared(_)))),
-                "directions": directions,
-                "grid": settings.grid.as_ref().map(|g| json!({ "box": [g.min.to_array(), g.max.to_array()], "counts": g.counts })),
-            }),
-            stats: json!({
-                "explained_variance": variance.map(|v| json!({ "indirect": v.indirect, "direct": v.direct })),
-                "cloud_lights": cloud_lights,
-                "directions": directions,
-                "zones": cloud.zone_count(),
-                "lights_per_zone_mean": mean_per_zone,
-                "lights_per_zone_min": fewest,
-                "lights_per_zone_max": most,
-                "light_clustering_error": reduced.relative_error,
-                "vertices": cloud.vertex_count(),
-                "samples": cloud.samples,
-                "clusters": cloud.cluster_count(),
-                "vectors_min": fewest_vectors,
-                "vectors_max": cloud.basis(),
-                "vectors_mean": vectors_mean,
-                "relative_error": error,
-                "uncompressed_bytes": raw_bytes,
-                "transfer_bytes": bytes,
-            }),
-            summary,
-        };
-        if let Some(r) = &reachable {
-            let g = &r.grid;
-            let how = format!(
-                "box {:.3?} .. {:.3?}, {:?} cells (the space the lights reach: {} of {} voxels over the scene's bounds)",
-                g.min.to_array(),
-                g.max.to_array(),
-                g.counts,
-                r.reached,
-                r.voxels
-            );
-            let value = json!({ "box": [g.min.to_array(), g.max.to_array()], "counts": g.counts });
-            bake.derived("grid", value, &how, "extras.relume.light_cloud.grid");
-        }
-        if !values.given(&DIRECTIONS) && directions > 0 {
-            let how = format!("{directions} (the scene has a directional light: it stands on the nearest of {directions} unit directional lights over the sphere)");
-            bake.derived("directions", json!(directions), &how, "--directions");
-        }
-        if !values.given(&EMISSION_BANDS) && bands > 0 {
-            let how = format!("{bands} (the scene has spot lights: each cloud light holds {} emission functions)", settings.emission);
-            bake.derived("emission_bands", json!(bands), &how, "--emission-bands");
-        }
-        if let Some(t) = tessellation.as_ref().filter(|_| !values.given(&MAX_EDGE)) {
-            let how = format!(
-                "{edge:.4} m (the scene's meshes are flat-shaded: welded and split to {} vertices from {})",
-                t.vertex_count(),
-                lc::vertex_count(source)
-            );
-            bake.derived("max_edge", json!(edge), &how, "--max-edge");
-        }
-        Ok(bake)
+    fn baker(&self, _: &Scene, values: &Values) -> Result<Box<dyn Baker>> {
+        Ok(Box::new(LightCloudBaker {
+            samples: values.count(&SAMPLES) as u32,
+            emission_bands: values.given_count(&EMISSION_BANDS).map(|b| b as usize),
+            directions: values.given_count(&DIRECTIONS).map(|d| d as usize),
+            max_edge: values.given_number(&MAX_EDGE).map(|e| e as f32),
+            compression: compression(values)?,
+            reduction: reduction(values)?,
+            explained_variance: values.given(&EXPLAINED_VARIANCE),
+        }))
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, values: &Values) -> Result<Box<dyn Loaded>> {

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The least effort of each method's bake.
-fn least_effort(method: &str, dictionaries: &Path) -> Vec<(&'static str, String)> {
+pub(super) fn least_effort(method: &str, dictionaries: &Path) -> Vec<(&'static str, String)> {
     let pairs: &[(&str, &str)] = match method {
         "obscurance" => &[("rays", "1"), ("patches", "400")],
         "light-path-maps" => &[("rays", "1"), ("patches", "400"), ("entry-points", "64"), ("uncompressed", "true")],
@@ -48,7 +48,7 @@ fn least_effort(method: &str, dictionaries: &Path) -> Vec<(&'static str, String)
 
 /// A scene as shipped; a declared light cloud made 2 x 2 x 2 (the maze's 1,024 cloud lights
 /// would be minutes of work that says nothing more here).
-fn shipped(name: &str) -> Scene {
+pub(super) fn shipped(name: &str) -> Scene {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.gltf"));
     let args = crate::args::SceneArgs {
         scene: path,

@@ -9,6 +9,8 @@ mod fiv;
 mod light_cloud;
 mod light_path_maps;
 #[cfg(test)]
+mod limits;
+#[cfg(test)]
 mod matrix;
 mod mrt;
 mod obscurance;
@@ -17,12 +19,10 @@ pub(crate) mod params;
 use anyhow::{Context as _, Result};
 use glam::Vec3;
 use params::{Param, Stage, Values};
-use relume_bake::artifact::{Artifact, Section};
+use relume_bake::artifact::Artifact;
+use relume_bake::contract::Baker;
 use relume_bake::scene::Scene;
-use relume_bake::work::{peak_memory_bytes, reset_peak_memory, WorkOptions};
 use relume_renderer::MakeTechnique;
-use serde_json::{json, Value};
-use std::time::Instant;
 
 /// Every method, in the order reports list them.
 pub(crate) const METHODS: [&dyn Method; 7] = [
@@ -84,8 +84,9 @@ pub(crate) trait Method: Sync {
         false
     }
 
-    /// Bakes `scene` with `values` into sections, timing its stages in `stages`.
-    fn bake(&self, _scene: &Scene, _values: &Values, _work: WorkOptions, _stages: &mut Stages) -> Result<Bake> {
+    /// Its bake for `scene`, its settings mapped from `values` (the bake contract: the work
+    /// itself is the bake crate's).
+    fn baker(&self, _scene: &Scene, _values: &Values) -> Result<Box<dyn Baker>> {
         anyhow::bail!("{} has no bake", self.name())
     }
 
@@ -188,69 +189,6 @@ impl Loaded for Plain {
 
     fn techniques(&self) -> Vec<Box<dyn MakeTechnique + '_>> {
         Vec::new()
-    }
-}
-
-/// What a method's bake made: its sections, what it was made with, and what it found.
-pub(crate) struct Bake {
-    pub sections: Vec<Section>,
-    /// Every parameter the bake used (given and defaulted), for the manifest.
-    pub parameters: Value,
-    /// Method-specific statistics for stats.json.
-    pub stats: Value,
-    /// Lines for the terminal and the main job's report.
-    pub summary: String,
-}
-
-impl Bake {
-    /// Records a setting derived from the scene because the scene does not declare it: under
-    /// `derived` in the manifest's parameters and in stats.json, and in one warning line naming
-    /// what was chosen, `how`, and the scene key or flag that overrides it, `key`.
-    pub fn derived(&mut self, name: &str, value: Value, how: &str, key: &str) {
-        self.parameters["derived"][name] = value.clone();
-        self.stats["derived"][name] = value;
-        self.summary.push_str(&format!("warning: derived {name}: {how}; {key} sets it instead\n"));
-    }
-}
-
-/// One bake stage's cost, as stats.json records it.
-pub(crate) struct TimedStage {
-    pub name: &'static str,
-    pub seconds: f64,
-    pub peak_memory_bytes: Option<u64>,
-}
-
-/// The timed stages of one bake.
-#[derive(Default)]
-pub(crate) struct Stages(pub Vec<TimedStage>);
-
-impl Stages {
-    /// Runs `work` as the stage `name`: its wall time and the peak memory it reached.
-    pub fn timed<R>(&mut self, name: &'static str, work: impl FnOnce() -> R) -> R {
-        reset_peak_memory();
-        let start = Instant::now();
-        let result = work();
-        self.0.push(TimedStage { name, seconds: start.elapsed().as_secs_f64(), peak_memory_bytes: peak_memory_bytes() });
-        result
-    }
-
-    pub fn json(&self) -> Value {
-        json!(self
-            .0
-            .iter()
-            .map(|s| json!({ "name": s.name, "seconds": s.seconds, "peak_memory_bytes": s.peak_memory_bytes }))
-            .collect::<Vec<_>>())
-    }
-
-    /// One line per stage: seconds and peak memory.
-    pub fn summary(&self) -> String {
-        self.0
-            .iter()
-            .map(|s| {
-                let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64));
-                format!("  {:<13} {:>8.3} s, peak memory {memory}\n", s.name, s.seconds)
-            })
-            .collect()
     }
 }
 

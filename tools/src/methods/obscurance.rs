@@ -5,18 +5,16 @@
 //! small-scale term is the spectral obscurance.
 
 use super::params::{Default, Param, Values};
-use super::{atlas, Bake, Loaded, Method, Models, Stages};
+use super::{atlas, Loaded, Method, Models};
 use anyhow::Result;
 use glam::{Vec3, Vec4};
 use relume_bake::artifact::{Artifact, PageLayout};
-use relume_bake::atlas::Atlas;
-use relume_bake::bvh::SceneBvh;
-use relume_bake::obscurance::{self as bake_obscurance, ObscuranceMap, ObscuranceSceneSettings, ObscuranceSettings, Variant};
+use relume_bake::contract::Baker;
+use relume_bake::obscurance::{self as bake_obscurance, ObscuranceBaker, ObscuranceSceneSettings, ObscuranceSettings, Variant};
 use relume_bake::scene::Scene;
 use relume_bake::work::WorkOptions;
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::{AtlasImage, MakeTechnique};
-use serde_json::{json, Value};
 
 pub(crate) const VARIANT: Param = Param::choice(
     "variant",
@@ -40,68 +38,21 @@ pub(crate) const RAYS: Param = Param::count("rays", "rays per texel, spread over
 
 pub(crate) const PARAMS: [&Param; 4] = [&VARIANT, &TAU, &L_MAX, &RAYS];
 
-/// The obscurance bake's settings from `values` over the scene's, `variant` unless given.
-pub(crate) fn settings(scene: &Scene, values: &Values, variant: Variant, work: WorkOptions) -> Result<ObscuranceSettings> {
+/// The obscurance bake's settings from `values` over the scene's, `variant` unless given, on
+/// the atlas `values` ask for: the obscurance method's bake, and the small scale of the light
+/// path maps'.
+pub(crate) fn baker(scene: &Scene, values: &Values, variant: Variant) -> Result<ObscuranceBaker> {
     let scene_settings = ObscuranceSceneSettings::of(scene).map_err(anyhow::Error::msg)?;
     let variant = values.given_choice(&VARIANT).and_then(Variant::parse).unwrap_or(variant);
-    let settings = ObscuranceSettings {
+    let obscurance = ObscuranceSettings {
         variant,
         tau: values.given_number(&TAU).map_or(scene_settings.tau, |t| t as f32),
         l_max: values.given_number(&L_MAX).map_or(scene_settings.l_max, |l| l as f32),
         rays_per_texel: values.count(&RAYS) as u32,
-        work,
+        work: WorkOptions::default(),
     };
-    settings.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --rays, --threads)"))?;
-    Ok(settings)
-}
-
-/// The atlas, the BVH and the obscurance on the atlas, each a timed stage: the obscurance
-/// method's whole bake, and the small scale of the light path maps'. Returns the bake with the
-/// atlas and BVH for the stages that follow.
-pub(crate) fn bake_on_atlas(
-    scene: &Scene,
-    values: &Values,
-    settings: &ObscuranceSettings,
-    stages: &mut Stages,
-) -> Result<(Bake, Atlas, SceneBvh)> {
-    let (atlas, atlas_settings) = atlas::build(scene, values, stages)?;
-    let bvh = stages.timed("bvh", || SceneBvh::new(scene));
-    let map = stages.timed("obscurance", || bake_obscurance::bake_obscurance(scene, &bvh, &atlas, settings)).map_err(anyhow::Error::msg)?;
-    let facts = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
-    let section = bake_obscurance::section(&map.values, atlas.layout(), facts).map_err(anyhow::Error::msg)?;
-    let mut parameters = parameters(settings);
-    parameters["atlas"] = atlas::parameters(&atlas_settings, values);
-    let bake = Bake {
-        sections: vec![atlas::section(&atlas, &atlas_settings), section],
-        parameters,
-        stats: stats(&map, settings),
-        summary: atlas::summary(&atlas) + &summary(&map),
-    };
-    Ok((bake, atlas, bvh))
-}
-
-fn parameters(settings: &ObscuranceSettings) -> Value {
-    json!({
-        "variant": settings.variant.name(),
-        "tau": atlas::short(settings.tau),
-        "l_max": atlas::short(settings.l_max),
-        "rays_per_texel": settings.rays_per_texel,
-        "seed": settings.work.seed,
-    })
-}
-
-fn stats(map: &ObscuranceMap, settings: &ObscuranceSettings) -> Value {
-    json!({
-        "rays_per_texel": map.rays_per_texel,
-        "rays_per_texel_asked": settings.rays_per_texel,
-        "rays_traced": map.rays_traced,
-        "rays_per_second": map.rays_traced as f64 / map.seconds.max(1e-9),
-    })
-}
-
-fn summary(map: &ObscuranceMap) -> String {
-    let rate = map.rays_traced as f64 / map.seconds.max(1e-9) / 1e6;
-    format!("{} rays per texel, {} rays in {:.3} s ({rate:.2} M rays/s)\n", map.rays_per_texel, map.rays_traced, map.seconds)
+    obscurance.validate().map_err(|e| anyhow::anyhow!("{e} (--tau, --l-max, --rays)"))?;
+    Ok(ObscuranceBaker { atlas: atlas::stage(scene, values)?, obscurance })
 }
 
 /// The scene re-indexed by an artifact's atlas and the obscurance on it (rgb W, alpha the
@@ -171,9 +122,8 @@ impl Method for Obscurance {
         true
     }
 
-    fn bake(&self, scene: &Scene, values: &Values, work: WorkOptions, stages: &mut Stages) -> Result<Bake> {
-        let obscurance = settings(scene, values, Variant::Obscurance, work)?;
-        Ok(bake_on_atlas(scene, values, &obscurance, stages)?.0)
+    fn baker(&self, scene: &Scene, values: &Values) -> Result<Box<dyn Baker>> {
+        Ok(Box::new(baker(scene, values, Variant::Obscurance)?))
     }
 
     fn load(&self, artifact: Option<&Artifact>, scene: &Scene, _: &Values) -> Result<Box<dyn Loaded>> {

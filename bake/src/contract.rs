@@ -1,0 +1,147 @@
+//! The one contract every method's bake keeps (docs/ARCHITECTURE.md, "Adding a method"): a
+//! method's bake settings, complete and checked, are a [`Baker`]; it prepares what its work
+//! needs (atlas, BVH, tessellation), estimates its peak memory and has `WorkOptions` admit it
+//! before the long work, runs its work items in passes through `WorkOptions` (threads, time
+//! limit, progress, a seed per item), reduces (clustering, CPCA, solves) and returns its
+//! sections with their statistics. The command line only maps its flags to a `Baker`.
+
+use crate::artifact::Section;
+use crate::scene::Scene;
+use crate::work::{peak_memory_bytes, reset_peak_memory, WorkOptions};
+use serde_json::{json, Value};
+use std::time::Instant;
+
+/// A method's whole bake, its settings decided.
+pub trait Baker {
+    /// Bakes `scene` through `work`, timing each stage in `stages`; an error says what failed
+    /// and the fix (the caller names the scene).
+    fn bake(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String>;
+}
+
+/// What a method's bake made: its sections, what it was made with, and what it found.
+#[derive(Default)]
+pub struct Baked {
+    pub sections: Vec<Section>,
+    /// Every parameter the bake used (given and defaulted), for the manifest.
+    pub parameters: Value,
+    /// Method-specific statistics for stats.json.
+    pub stats: Value,
+    /// Lines for the terminal and the main job's report.
+    pub summary: String,
+}
+
+impl Baked {
+    /// Records a setting derived from the scene because the scene does not declare it: under
+    /// `derived` in the manifest's parameters and in stats.json, and in one warning line naming
+    /// what was chosen, `how`, and the scene key or flag that overrides it, `key`.
+    pub fn derived(&mut self, name: &str, value: Value, how: &str, key: &str) {
+        self.parameters["derived"][name] = value.clone();
+        self.stats["derived"][name] = value;
+        self.summary.push_str(&format!("warning: derived {name}: {how}; {key} sets it instead\n"));
+    }
+}
+
+/// One bake stage's cost, as stats.json records it.
+#[derive(Debug)]
+pub struct TimedStage {
+    pub name: &'static str,
+    pub seconds: f64,
+    pub peak_memory_bytes: Option<u64>,
+}
+
+/// The timed stages of one bake.
+#[derive(Debug, Default)]
+pub struct Stages(pub Vec<TimedStage>);
+
+impl Stages {
+    /// Runs `work` as the stage `name`: its wall time and the peak memory it reached.
+    pub fn timed<R>(&mut self, name: &'static str, work: impl FnOnce() -> R) -> R {
+        reset_peak_memory();
+        let start = Instant::now();
+        let result = work();
+        self.0.push(TimedStage { name, seconds: start.elapsed().as_secs_f64(), peak_memory_bytes: peak_memory_bytes() });
+        result
+    }
+
+    /// The highest of the stages' peaks: the bake's peak memory.
+    pub fn peak_memory_bytes(&self) -> Option<u64> {
+        self.0.iter().filter_map(|s| s.peak_memory_bytes).max()
+    }
+
+    pub fn json(&self) -> Value {
+        json!(self
+            .0
+            .iter()
+            .map(|s| json!({ "name": s.name, "seconds": s.seconds, "peak_memory_bytes": s.peak_memory_bytes }))
+            .collect::<Vec<_>>())
+    }
+
+    /// One line per stage: seconds and peak memory.
+    pub fn summary(&self) -> String {
+        self.0
+            .iter()
+            .map(|s| {
+                let memory = s.peak_memory_bytes.map_or("?".into(), |b| format!("{:.1} MiB", mib(b)));
+                format!("  {:<13} {:>8.3} s, peak memory {memory}\n", s.name, s.seconds)
+            })
+            .collect()
+    }
+}
+
+/// A bake's peak memory, estimated before its long work: a part that does not grow with the
+/// work (the process, the scene, its BVH and atlas) and one that grows linearly with it, as
+/// `count` units of `bytes_per_unit` (the method's constant, docs/BENCHMARKS.md), where the
+/// units are proportional to the flag `lever` at `value`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub fixed: u64,
+    pub count: u64,
+    pub bytes_per_unit: u64,
+    /// What a unit is, e.g. "texels x entry points".
+    pub unit: String,
+    pub lever: &'static str,
+    pub value: u64,
+    /// The units grow as the lever's value to this power.
+    pub power: f64,
+}
+
+impl Estimate {
+    pub fn bytes(&self) -> u64 {
+        self.fixed.saturating_add(self.count.saturating_mul(self.bytes_per_unit))
+    }
+
+    /// The largest value of the lever whose estimate is within `limit` (0: none is).
+    pub fn fitting(&self, limit: u64) -> u64 {
+        let room = limit.saturating_sub(self.fixed) as f64;
+        let growing = (self.count as f64 * self.bytes_per_unit as f64).max(1.0);
+        (self.value as f64 * (room / growing).powf(1.0 / self.power)).floor().min(u64::MAX as f64) as u64
+    }
+
+    /// "N MiB (fixed F MiB + count unit x B bytes)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{:.0} MiB ({:.0} MiB fixed + {} {} x {} bytes)",
+            mib(self.bytes()),
+            mib(self.fixed),
+            self.count,
+            self.unit,
+            self.bytes_per_unit
+        )
+    }
+}
+
+/// Bytes the process holds before a bake's own work: the program, and the scene with its BVH
+/// (measured: docs/BENCHMARKS.md, "Peak memory").
+pub fn scene_bytes(scene: &Scene) -> u64 {
+    let triangles: usize = scene.meshes.iter().map(|m| m.indices.len() / 3).sum();
+    PROCESS_BYTES + triangles as u64 * BYTES_PER_TRIANGLE
+}
+
+/// The program and its libraries, resident before any scene.
+pub const PROCESS_BYTES: u64 = 16 << 20;
+/// A triangle of the scene and of its BVH, with what the BVH's build holds at its peak.
+pub const BYTES_PER_TRIANGLE: u64 = 512;
+
+pub(crate) fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}

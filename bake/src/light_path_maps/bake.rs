@@ -1,0 +1,171 @@
+//! The light path maps' whole bake behind the bake contract: the obscurance method's bake with
+//! the spectral variant (the small scale, 000 §3.3), then entry points from the scene's light
+//! region (§3.2.1), their transfers by virtual lights (§3.2.2) and the transfers' clustered PCA
+//! (§3.2.3).
+
+use super::{
+    bake_transfers, compress, entry_points, test_points, Compressed, Compression, EntryPoints, LightPathMapSettings,
+    LightPathMapsSceneSettings, LightRegion, Transfers,
+};
+use crate::atlas::stage::short;
+use crate::contract::{Baked, Baker, Estimate, Stages};
+use crate::obscurance::ObscuranceBaker;
+use crate::scene::{LightKind, Scene};
+use crate::work::WorkOptions;
+use serde_json::json;
+
+pub struct LightPathMapsBaker {
+    /// The small scale: its variant is the spectral obscurance unless given otherwise.
+    pub obscurance: ObscuranceBaker,
+    /// Its threshold and `work` are replaced by `threshold` and the bake's.
+    pub settings: LightPathMapSettings,
+    /// Connections shorter than this are dropped; None: the obscurance's L_max.
+    pub threshold: Option<f32>,
+    /// The region's box re-sampled at this many test points.
+    pub test_points: Option<u32>,
+    pub compression: Compression,
+}
+
+/// Bytes a covered texel takes per entry point at the bake's peak (measured: docs/BENCHMARKS.md,
+/// "Peak memory"): its transfer (three f32) with clustered PCA's work on it when the clusters
+/// and basis are given, more with the error budget's search, and most uncompressed (every
+/// transfer spread over the whole atlas, then written as EXR).
+pub fn bytes_per_transfer(compression: Compression) -> u64 {
+    match compression {
+        Compression::Fixed { .. } => 16,
+        Compression::Budget(_) => 20,
+        Compression::None => 36,
+    }
+}
+
+/// Test points a directional light's derived region has (the scenes' declared boxes: 64).
+const SUN_TEST_POINTS: u32 = 64;
+
+/// The region the transfers are made for, and whether the scene declares it.
+struct Region {
+    region: Option<LightRegion>,
+    derived: bool,
+    light_area: f32,
+}
+
+impl LightPathMapsBaker {
+    fn region(&self, scene: &Scene) -> Result<Region, String> {
+        let block = LightPathMapsSceneSettings::of(scene)?;
+        let derived = block.region.is_none();
+        let region = match (block.region.or_else(|| derived_region(scene)), self.test_points) {
+            (Some(LightRegion::Box { min, max, .. }), Some(m)) => Some(LightRegion::Box { min, max, test_points: m }),
+            (_, Some(_)) => return Err(
+                "--test-points needs a region that is a box (declared in extras.relume.light_path_maps.region, or a directional light's)"
+                    .into(),
+            ),
+            (region, None) => region,
+        };
+        Ok(Region { region, derived, light_area: block.light_area })
+    }
+
+    /// The transfers' peak: every covered texel's transfer per entry point, and the compression's
+    /// work on them.
+    pub fn estimate(&self, fixed: &Estimate, covered: usize, entries: usize) -> Estimate {
+        Estimate {
+            fixed: fixed.bytes(),
+            count: covered as u64 * entries as u64,
+            bytes_per_unit: bytes_per_transfer(self.compression),
+            unit: "covered texels x entry points".into(),
+            lever: "--entry-points",
+            value: entries as u64,
+            power: 1.0,
+        }
+    }
+}
+
+/// The region of a scene that declares none and has a directional light: its bounds, whose
+/// every surface the sun may reach. Else None: the point and spot lights where they stand.
+fn derived_region(scene: &Scene) -> Option<LightRegion> {
+    let (min, max) = scene.settings.bounds;
+    scene.lights.iter().any(|l| l.kind == LightKind::Directional).then_some(LightRegion::Box { min, max, test_points: SUN_TEST_POINTS })
+}
+
+impl Baker for LightPathMapsBaker {
+    fn bake(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String> {
+        let threshold = self.threshold.unwrap_or(self.obscurance.obscurance.l_max);
+        let settings = LightPathMapSettings { threshold, work: *work, ..self.settings.clone() };
+        settings.validate().map_err(|e| format!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
+        let region = self.region(scene)?;
+        let (mut baked, atlas, bvh) = self.obscurance.bake_on_atlas(scene, work, stages)?;
+        let entries = stages.timed("entry_points", || {
+            let tests = test_points(scene, region.region.as_ref(), work.seed)?;
+            entry_points(scene, &bvh, tests, settings.entry_points, work.seed)
+        })?;
+        let fixed = self.obscurance.estimate(scene, &atlas);
+        work.admit("light path maps", &self.estimate(&fixed, atlas.covered_texels(), entries.entries.len()))?;
+        let transfers = stages.timed("transfer", || bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings))?;
+        let compressed =
+            stages.timed("cpca", || compress(&transfers, &entries.entries, atlas.texels.len(), region.light_area, self.compression))?;
+        let transfer = &compressed.transfer;
+        let facts =
+            json!({ "entry_points": transfer.entry_points.len(), "clusters": transfer.cluster_count(), "basis": transfer.basis_count });
+        baked.sections.push(super::section(transfer, atlas.layout(), facts)?);
+        baked.parameters["light_path_maps"] = json!({
+            "entry_points": settings.entry_points,
+            "test_points": entries.test_points.len(),
+            "walks": settings.walks,
+            "threshold": short(settings.threshold),
+            "compression": format!("{:?}", self.compression),
+            "seed": work.seed,
+        });
+        baked.stats["light_path_maps"] = stats(&entries, &transfers, &compressed);
+        baked.summary += &summary(&entries, &transfers, &compressed);
+        derived(&mut baked, scene, &region);
+        Ok(baked)
+    }
+}
+
+fn stats(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed) -> serde_json::Value {
+    json!({
+        "entry_points": entries.entries.len(),
+        "rays_per_test_point": entries.rays_per_test_point,
+        "covered_texels": transfers.texels.len(),
+        "walks": transfers.walks,
+        "virtual_lights": transfers.virtual_lights,
+        "connections": transfers.connections,
+        "clusters": compressed.clusters,
+        "basis": compressed.basis,
+        "relative_error": compressed.relative_error,
+        "uncompressed_bytes": transfers.values.len() * 12,
+        "compressed_bytes": compressed.transfer.size_bytes(),
+    })
+}
+
+fn summary(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed) -> String {
+    let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
+    format!(
+        "light path maps: {} entry points from {} test points, {} texels, {} virtual lights, {} connections; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB\n",
+        entries.entries.len(),
+        entries.test_points.len(),
+        transfers.texels.len(),
+        transfers.virtual_lights,
+        transfers.connections,
+        compressed.clusters,
+        compressed.basis,
+        compressed.relative_error,
+        mib(transfers.values.len() * 12),
+        mib(compressed.transfer.size_bytes()),
+    )
+}
+
+/// Records the region the bake derived, when the scene declares none.
+fn derived(baked: &mut Baked, scene: &Scene, region: &Region) {
+    match &region.region {
+        _ if !region.derived => {}
+        Some(LightRegion::Box { min, max, test_points }) => {
+            let how = format!("the scene's bounds {min} .. {max}, {test_points} test points (a directional light may reach every surface)");
+            let value = json!({ "box": [min.to_array(), max.to_array()], "test_points": test_points });
+            baked.derived("region", value, &how, "extras.relume.light_path_maps.region");
+        }
+        _ => {
+            let points: Vec<[f32; 3]> = scene.local_lights().map(|l| l.position.to_array()).collect();
+            let how = format!("the {} light(s) where they stand, as test points (relit well near there only)", points.len());
+            baked.derived("region", json!({ "points": points }), &how, "extras.relume.light_path_maps.region");
+        }
+    }
+}
