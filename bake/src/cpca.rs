@@ -39,6 +39,16 @@ impl Rows<'_> {
         &self.values[e * self.cols..][..self.cols]
     }
 
+    /// G = X X^T of the rows `members`. Each entry is its own serial dot product (cost
+    /// n_c^2 P / 2 in all), so rows run in parallel and the bytes do not depend on the thread
+    /// count.
+    fn gram(&self, members: &[u32]) -> DMatrix<f64> {
+        let row = |i: usize| self.row(members[i] as usize);
+        let n = members.len();
+        let lower: Vec<Vec<f64>> = (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(row(i), row(j))).collect()).collect();
+        DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+    }
+
     fn mean(&self, members: &[u32]) -> Vec<f64> {
         let mut sum = vec![0.0; self.cols];
         for &e in members {
@@ -182,12 +192,10 @@ impl Centred {
         Rows { values: &self.values, cols: self.cols }
     }
 
-    /// G = X X^T. Each entry is its own serial dot product (cost n_c^2 P / 2 in all), so rows
-    /// run in parallel and the bytes do not depend on the thread count.
+    /// G = X X^T of its members.
     fn gram(&self) -> DMatrix<f64> {
-        let (rows, n) = (self.rows(), self.values.len() / self.cols);
-        let lower: Vec<Vec<f64>> = (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(rows.row(i), rows.row(j))).collect()).collect();
-        DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+        let n = self.values.len() / self.cols;
+        self.rows().gram(&(0..n as u32).collect::<Vec<_>>())
     }
 
     /// C = X^T X (P x P): the covariance route, for clusters of more members than values per
@@ -265,6 +273,17 @@ pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> 
 fn unit(v: &[f64]) -> Vec<f32> {
     let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
     v.iter().map(|x| (x / norm) as f32).collect()
+}
+
+/// The centred Gram matrix of the rows `members` from the uncentred one of every row, U:
+/// (x_i - m) . (x_j - m) = U_ij - r_i - r_j + s, r_i the mean of U_ik over the members k, s the
+/// mean of the r_i.
+fn centred(uncentred: &DMatrix<f64>, members: &[u32]) -> DMatrix<f64> {
+    let n = members.len();
+    let u = |i: usize, j: usize| uncentred[(members[i] as usize, members[j] as usize)];
+    let r: Vec<f64> = (0..n).map(|i| (0..n).map(|k| u(i, k)).sum::<f64>() / n as f64).collect();
+    let s = r.iter().sum::<f64>() / n as f64;
+    DMatrix::from_fn(n, n, |i, j| u(i, j) - r[i] - r[j] + s)
 }
 
 /// The descending eigenvalues of `cluster_pca` alone (no eigenvectors: cheaper).
@@ -411,11 +430,22 @@ pub fn error_table(
     let (rows, total) = (data.len() / cols, dot(data, data));
     let mut eigenvalues: BTreeMap<Vec<u32>, Vec<f64>> = BTreeMap::new();
     let mut table = vec![];
-    for &c in cluster_counts.iter().filter(|&&c| c <= tree.max_clusters()) {
+    let counts: Vec<usize> = cluster_counts.iter().copied().filter(|&c| c <= tree.max_clusters()).collect();
+    // Fewer rows than values a row: every cluster's centred Gram matrix comes from the rows'
+    // one uncentred Gram matrix, made once and reading the rows in place.
+    let all = Rows { values: data, cols };
+    let uncentred = (cols >= rows).then(|| all.gram((0..rows as u32).collect::<Vec<_>>().as_slice()));
+    // The search is a long stage of its own on a large scene (minutes): a log sees it move.
+    let mut progress = crate::work::Progress::new(counts.iter().sum::<usize>() as u64, "clustered PCA's error table", true);
+    for c in counts {
         let mut dropped = vec![0.0; max_basis + 1];
         for members in groups(&tree.assignment(c), c) {
-            let values = eigenvalues.entry(members).or_insert_with_key(|m| cluster_eigenvalues(data, cols, m));
+            let values = eigenvalues.entry(members).or_insert_with_key(|m| match &uncentred {
+                Some(u) => descending(&centred(u, m).symmetric_eigenvalues()).iter().map(|o| o.0).collect(),
+                None => cluster_eigenvalues(data, cols, m),
+            });
             dropped.iter_mut().enumerate().for_each(|(d, sum)| *sum += values.iter().skip(d).sum::<f64>());
+            progress.inc(1);
         }
         table.extend(dropped.iter().enumerate().map(|(d, &squared)| Candidate {
             clusters: c,
@@ -424,6 +454,7 @@ pub fn error_table(
             stored_values: c * (1 + d) * cols + rows * d,
         }));
     }
+    progress.finish();
     Ok(table)
 }
 
