@@ -20,7 +20,8 @@ FIGURES=(
     reference-paths vulkan-passes direct-accuracy vsm-bleeding obscurance-bake
     obscurance-passes obscurance-vs-reference lightmap-seams lpm-bake lpm-passes
     lpm-vs-reference bench-four-methods bench-stability fiv light-clouds viewer mrt-blocks
-    mrt-levels every-method cross-method ray-casting atlas-utilization correctness-tests
+    mrt-levels every-method cross-method ray-casting atlas-utilization bake-memory scale-sweep
+    correctness-tests
 )
 
 bench() { "$RELUME" bench "$1" --out "$DIR/$2" --cache "$OUT/reference-cache" "${@:3}"; }
@@ -277,6 +278,46 @@ figure_atlas_utilization() {
         "$RELUME" bake scenes/$scene.gltf --method obscurance --rays 16 --out "$DIR/$scene"
     done
     "$RELUME" bake scenes/table-chair.gltf --method obscurance --patches 2000 --rays 16 --out "$DIR/table-chair-2000"
+}
+
+figure_bake_memory() {
+    local s=scenes
+    "$RELUME" bake $s/cornell.gltf --method obscurance --rays 16 --threads 2 --out "$DIR/obs-cornell"
+    "$RELUME" bake $s/classroom.gltf --method obscurance --rays 4 --threads 2 --out "$DIR/obs-classroom"
+    "$RELUME" bake $s/table-chair.gltf --method obscurance --rays 4 --texel-density 200 --threads 2 --out "$DIR/obs-tc"
+    for e in 1024 2048; do
+        "$RELUME" bake $s/cornell.gltf --method light-path-maps --rays 4 --entry-points $e --clusters 8 --basis 2 --threads 2 --out "$DIR/lpm-$e"
+    done
+    "$RELUME" bake $s/cornell.gltf --method light-path-maps --rays 4 --entry-points 4096 --clusters 32 --basis 2 --threads 2 --out "$DIR/lpm-4096"
+    "$RELUME" bake $s/cornell.gltf --method light-path-maps --rays 4 --entry-points 2048 --threads 2 --out "$DIR/lpm-budget"
+    /usr/bin/time -v "$RELUME" bake $s/cornell.gltf --method light-path-maps --rays 4 --entry-points 1024 --uncompressed --threads 2 --out "$DIR/lpm-none"
+    "$RELUME" bake $s/fiv-blobs.gltf --method fiv --threads 2 --out "$DIR/fiv-blobs"
+    "$RELUME" bake $s/fiv-crowd-60.gltf --method fiv --grid 32x17x15 --threads 2 --out "$DIR/fiv-crowd"
+    "$RELUME" bake $s/cornell-cloud.gltf --method light-cloud --samples 4 --threads 2 --out "$DIR/lc-cloud"
+    "$RELUME" bake $s/table-chair.gltf --method light-cloud --samples 2 --threads 2 --out "$DIR/lc-tc"
+    "$RELUME" bake $s/maze.gltf --method light-cloud --samples 1 --threads 2 --out "$DIR/lc-maze"
+    for lf in 4 8 12; do
+        for spf in 8 16; do
+            "$RELUME" bake $s/mrt-cube.gltf --method mrt --gather-rays 64 --samples-per-face $spf --lightfield $lf --threads 1 \
+                --dictionary-cache "$DIR/dictionaries-$lf-$spf" --out "$DIR/mrt-$lf-$spf"
+        done
+    done
+    "$RELUME" bake $s/classroom.gltf --method light-path-maps --threads 2 --out "$DIR/classroom-lpm"
+    grep -H peak_memory_bytes "$DIR"/*/stats.json
+}
+
+# Each method's bake at 1, 2, 5 and 10 bays a side of the scale scene (`relume scenes
+# --scale K`), under --memory-limit 16G: its stats.json (stages' seconds, peak memory) or its
+# refusal. Light path maps at 384 entry points (4,096 would not fit the largest in 16 GiB).
+figure_scale_sweep() {
+    for k in 1 2 5 10; do
+        "$RELUME" scenes --scale $k --out "$DIR/scenes"
+        local scene="$DIR/scenes/scale-$k.gltf" limit=(--memory-limit 16G --threads 2)
+        "$RELUME" bake "$scene" --method obscurance "${limit[@]}" --out "$DIR/obscurance-$k" || true
+        "$RELUME" bake "$scene" --method light-path-maps --entry-points 384 "${limit[@]}" --out "$DIR/light-path-maps-$k" || true
+        "$RELUME" bake "$scene" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
+        "$RELUME" bake "$scene" --method mrt "${limit[@]}" --dictionary-cache "$DIR/dictionaries" --out "$DIR/mrt-$k" || true
+    done
 }
 
 figure_correctness_tests() {

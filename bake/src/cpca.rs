@@ -16,6 +16,7 @@
 //! [`choose`] picks the cheapest within an error budget. No randomness, and parallel results
 //! are independent serial sums: the same bytes whatever the thread count.
 
+use crate::work::Progress;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -26,6 +27,10 @@ const LLOYD_ITERATIONS: usize = 100;
 const RANK_TOLERANCE: f64 = 1e-12;
 /// Columns per parallel task when a basis vector is built.
 const COLUMN_CHUNK: usize = 1024;
+/// Rows of a tile of the Gram matrix, and columns read at a time: two tiles' stretches
+/// (2 x 32 x 2,048 f32, 512 KiB) stay in a core's cache while their dot products run.
+const TILE_ROWS: usize = 32;
+const TILE_COLUMNS: usize = 2048;
 
 /// Row-major points of `cols` values each.
 #[derive(Clone, Copy)]
@@ -39,14 +44,47 @@ impl Rows<'_> {
         &self.values[e * self.cols..][..self.cols]
     }
 
-    /// G = X X^T of the rows `members`. Each entry is its own serial dot product (cost
-    /// n_c^2 P / 2 in all), so rows run in parallel and the bytes do not depend on the thread
-    /// count.
-    fn gram(&self, members: &[u32]) -> DMatrix<f64> {
-        let row = |i: usize| self.row(members[i] as usize);
+    /// G = X X^T of the rows `members` (cost n_c^2 P / 2 in all), by tiles of rows: a tile
+    /// pair's rows are read a stretch of columns at a time, so each value fetched from memory
+    /// serves a tile's worth of dot products (rows of light path maps are megabytes; row by row
+    /// the sums wait on memory). Each tile pair is its own serial sums in a fixed order, so
+    /// tiles run in parallel and the bytes do not depend on the thread count. A step of
+    /// `progress` per entry of the lower triangle.
+    fn gram(&self, members: &[u32], progress: &Progress) -> DMatrix<f64> {
         let n = members.len();
-        let lower: Vec<Vec<f64>> = (0..n).into_par_iter().map(|i| (0..=i).map(|j| dot(row(i), row(j))).collect()).collect();
-        DMatrix::from_fn(n, n, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+        let tiles = n.div_ceil(TILE_ROWS);
+        let pairs: Vec<(usize, usize)> = (0..tiles).flat_map(|a| (0..=a).map(move |b| (a, b))).collect();
+        let sums: Vec<Vec<f64>> = pairs.par_iter().map(|&(a, b)| self.tile_pair(members, a, b, progress)).collect();
+        let mut gram = DMatrix::zeros(n, n);
+        for (&(a, b), tile) in pairs.iter().zip(&sums) {
+            for (k, &value) in tile.iter().enumerate() {
+                let (i, j) = (a * TILE_ROWS + k / TILE_ROWS, b * TILE_ROWS + k % TILE_ROWS);
+                if i < n && j <= i {
+                    gram[(i, j)] = value;
+                    gram[(j, i)] = value;
+                }
+            }
+        }
+        gram
+    }
+
+    /// The dot products of tile `a`'s rows with tile `b`'s (b <= a; of a diagonal tile, its
+    /// lower triangle), a stretch of columns at a time.
+    fn tile_pair(&self, members: &[u32], a: usize, b: usize, progress: &Progress) -> Vec<f64> {
+        let rows = |t: usize| (t * TILE_ROWS..((t + 1) * TILE_ROWS).min(members.len())).map(|i| self.row(members[i] as usize));
+        let mut sums = vec![0.0f64; TILE_ROWS * TILE_ROWS];
+        for start in (0..self.cols).step_by(TILE_COLUMNS) {
+            let stretch = start..(start + TILE_COLUMNS).min(self.cols);
+            for (i, x) in rows(a).enumerate() {
+                let last = if a == b { i + 1 } else { TILE_ROWS };
+                for (j, y) in rows(b).take(last).enumerate() {
+                    sums[i * TILE_ROWS + j] += dot(&x[stretch.clone()], &y[stretch.clone()]);
+                }
+            }
+        }
+        let (height, width) = (rows(a).count() as u64, rows(b).count() as u64);
+        progress.inc(if a == b { height * (height + 1) / 2 } else { height * width });
+        sums
     }
 
     fn mean(&self, members: &[u32]) -> Vec<f64> {
@@ -173,56 +211,65 @@ pub struct ClusterPca {
     pub weights: Vec<Vec<f32>>,
 }
 
-/// A cluster's members minus their mean (row-major n_c x P), and the mean.
-struct Centred {
+/// A cluster: its members' rows, read in place (a centred copy would double the peak memory
+/// of a bake whose rows are most of it), and their mean; every product is of the rows minus
+/// the mean, formed from the rows' own products.
+struct Centred<'a> {
+    rows: Rows<'a>,
+    members: &'a [u32],
     mean: Vec<f32>,
-    values: Vec<f32>,
-    cols: usize,
 }
 
-impl Centred {
-    fn new(data: Rows, members: &[u32]) -> Centred {
+impl<'a> Centred<'a> {
+    fn new(rows: Rows<'a>, members: &'a [u32]) -> Centred<'a> {
         assert!(!members.is_empty(), "a cluster needs members");
-        let mean: Vec<f32> = data.mean(members).iter().map(|&m| m as f32).collect();
-        let values = members.iter().flat_map(|&e| data.row(e as usize).iter().zip(&mean).map(|(v, m)| v - m)).collect();
-        Centred { mean, values, cols: data.cols }
+        let mean: Vec<f32> = rows.mean(members).iter().map(|&m| m as f32).collect();
+        Centred { rows, members, mean }
     }
 
-    fn rows(&self) -> Rows<'_> {
-        Rows { values: &self.values, cols: self.cols }
+    fn row(&self, e: usize) -> &[f32] {
+        self.rows.row(self.members[e] as usize)
     }
 
-    /// G = X X^T of its members.
+    /// G = (X - m)(X - m)^T, from the members' uncentred Gram matrix (`centred`).
     fn gram(&self) -> DMatrix<f64> {
-        let n = self.values.len() / self.cols;
-        self.rows().gram(&(0..n as u32).collect::<Vec<_>>())
+        let uncentred = self.rows.gram(self.members, &Progress::new(0, "", false));
+        centred(&uncentred, &(0..self.members.len() as u32).collect::<Vec<_>>())
     }
 
-    /// C = X^T X (P x P): the covariance route, for clusters of more members than values per
-    /// row (per-vertex transfer: thousands of vertices, hundreds of values). Each entry is its
-    /// own serial dot product over the members, so the bytes do not depend on the thread count.
+    /// C = (X - m)^T (X - m) (P x P): the covariance route, for clusters of more members than
+    /// values per row (per-vertex transfer: thousands of vertices, hundreds of values). Each
+    /// entry is its own serial dot product over the members, so the bytes do not depend on the
+    /// thread count.
     fn covariance(&self) -> DMatrix<f64> {
-        let (rows, n) = (self.rows(), self.values.len() / self.cols);
-        let columns: Vec<Vec<f32>> = (0..self.cols).map(|k| (0..n).map(|e| rows.row(e)[k]).collect()).collect();
-        let lower: Vec<Vec<f64>> =
-            (0..self.cols).into_par_iter().map(|i| (0..=i).map(|j| dot(&columns[i], &columns[j])).collect()).collect();
-        DMatrix::from_fn(self.cols, self.cols, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
+        let cols = self.rows.cols;
+        let columns: Vec<Vec<f32>> = (0..cols).map(|k| (0..self.members.len()).map(|e| self.row(e)[k] - self.mean[k]).collect()).collect();
+        let lower: Vec<Vec<f64>> = (0..cols).into_par_iter().map(|i| (0..=i).map(|j| dot(&columns[i], &columns[j])).collect()).collect();
+        DMatrix::from_fn(cols, cols, |i, j| if j <= i { lower[i][j] } else { lower[j][i] })
     }
 
-    /// X^T v normalised: an eigenvector v of G with eigenvalue lambda gives the covariance's
-    /// eigenvector X^T v / sqrt(lambda) (Sloan et al. 2003); normalising directly is the same
-    /// in exact arithmetic and keeps unit length under rounding.
+    /// (X - m)^T v normalised, as X^T v - (sum v) m: an eigenvector v of G with eigenvalue
+    /// lambda gives the covariance's eigenvector (X - m)^T v / sqrt(lambda) (Sloan et al. 2003);
+    /// normalising directly is the same in exact arithmetic and keeps unit length under
+    /// rounding.
     fn basis_vector(&self, v: &[f64]) -> Vec<f32> {
-        let rows = self.rows();
-        let mut b = vec![0.0f64; self.cols];
+        let total: f64 = v.iter().sum();
+        let mut b = vec![0.0f64; self.rows.cols];
         b.par_chunks_mut(COLUMN_CHUNK).enumerate().for_each(|(k, chunk)| {
             for (e, &ve) in v.iter().enumerate() {
-                let row = &rows.row(e)[k * COLUMN_CHUNK..];
+                let row = &self.row(e)[k * COLUMN_CHUNK..];
                 chunk.iter_mut().zip(row).for_each(|(acc, &x)| *acc += ve * x as f64);
             }
+            let mean = &self.mean[k * COLUMN_CHUNK..];
+            chunk.iter_mut().zip(mean).for_each(|(acc, &m)| *acc -= total * m as f64);
         });
         let norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();
         b.iter().map(|x| (x / norm) as f32).collect()
+    }
+
+    /// (x_e - m) . b, as x_e . b - m . b.
+    fn weight(&self, e: usize, b: &[f32], mean_dot: f64) -> f32 {
+        (dot(self.row(e), b) - mean_dot) as f32
     }
 }
 
@@ -259,8 +306,11 @@ pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> 
     let vector = |i: usize| if by_covariance { unit(eigenvector(i)) } else { centred.basis_vector(eigenvector(i)) };
     let mut basis_vectors: Vec<Vec<f32>> = order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| vector(i)).collect();
     basis_vectors.resize(basis, vec![0.0; cols]);
-    let rows = centred.rows();
-    let weights = (0..members.len()).into_par_iter().map(|e| basis_vectors.iter().map(|b| dot(rows.row(e), b) as f32).collect()).collect();
+    let mean_dots: Vec<f64> = basis_vectors.iter().map(|b| dot(&centred.mean, b)).collect();
+    let weights = (0..members.len())
+        .into_par_iter()
+        .map(|e| basis_vectors.iter().zip(&mean_dots).map(|(b, &m)| centred.weight(e, b, m)).collect())
+        .collect();
     ClusterPca {
         members: members.to_vec(),
         mean: centred.mean,
@@ -433,10 +483,13 @@ pub fn error_table(
     let counts: Vec<usize> = cluster_counts.iter().copied().filter(|&c| c <= tree.max_clusters()).collect();
     // Fewer rows than values a row: every cluster's centred Gram matrix comes from the rows'
     // one uncentred Gram matrix, made once and reading the rows in place.
+    let by_gram = cols >= rows;
+    // The search is a long stage of its own on a large scene (minutes): a log sees it move,
+    // a step per entry of the Gram matrix and per cluster.
+    let steps = if by_gram { rows * (rows + 1) / 2 } else { 0 } + counts.iter().sum::<usize>();
+    let mut progress = Progress::new(steps as u64, "clustered PCA's error table", true);
     let all = Rows { values: data, cols };
-    let uncentred = (cols >= rows).then(|| all.gram((0..rows as u32).collect::<Vec<_>>().as_slice()));
-    // The search is a long stage of its own on a large scene (minutes): a log sees it move.
-    let mut progress = crate::work::Progress::new(counts.iter().sum::<usize>() as u64, "clustered PCA's error table", true);
+    let uncentred = by_gram.then(|| all.gram(&(0..rows as u32).collect::<Vec<_>>(), &progress));
     for c in counts {
         let mut dropped = vec![0.0; max_basis + 1];
         for members in groups(&tree.assignment(c), c) {

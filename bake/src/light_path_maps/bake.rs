@@ -5,7 +5,7 @@
 
 use super::{
     bake_transfers, compress, entry_points, test_points, Compressed, Compression, EntryPoints, LightPathMapSettings,
-    LightPathMapsSceneSettings, LightRegion, Transfers,
+    LightPathMapsSceneSettings, LightRegion, Transfers, BUDGET_BASIS_MAX, BUDGET_CLUSTERS_MAX,
 };
 use crate::atlas::stage::short;
 use crate::contract::{Baked, Baker, Estimate, Stages};
@@ -27,14 +27,26 @@ pub struct LightPathMapsBaker {
 }
 
 /// Bytes a covered texel takes per entry point at the bake's peak (measured: docs/BENCHMARKS.md,
-/// "Peak memory"): its transfer (three f32) with clustered PCA's work on it when the clusters
-/// and basis are given, more with the error budget's search, and most uncompressed (every
-/// transfer spread over the whole atlas, then written as EXR).
+/// "Peak memory"): its transfer (three f32), which clustered PCA reads in place; uncompressed,
+/// also every transfer spread over the whole atlas and its EXR's copy.
 pub fn bytes_per_transfer(compression: Compression) -> u64 {
     match compression {
-        Compression::Fixed { .. } => 16,
-        Compression::Budget(_) => 20,
         Compression::None => 36,
+        _ => 12,
+    }
+}
+
+/// Bytes an atlas texel takes per stored texture (a cluster's mean or eigen-texture, three f32)
+/// while the clusters are made: the clusters' vectors and the textures spread over the atlas.
+pub const BYTES_PER_TEXTURE_TEXEL: u64 = 24;
+
+/// The most textures the compression can store for `entries` entry points: C (1 + D) for the
+/// sizes given, the search's largest for a budget, none beyond the transfers uncompressed.
+fn textures(compression: Compression, entries: usize) -> u64 {
+    match compression {
+        Compression::Fixed { clusters, basis } => (clusters.min(entries) * (1 + basis)) as u64,
+        Compression::Budget(_) | Compression::BestWithin(_) => (BUDGET_CLUSTERS_MAX.min(entries) * (1 + BUDGET_BASIS_MAX)) as u64,
+        Compression::None => 0,
     }
 }
 
@@ -63,11 +75,14 @@ impl LightPathMapsBaker {
         Ok(Region { region, derived, light_area: block.light_area })
     }
 
-    /// The transfers' peak: every covered texel's transfer per entry point, and the compression's
-    /// work on them.
-    pub fn estimate(&self, fixed: &Estimate, covered: usize, entries: usize) -> Estimate {
+    /// The transfers' peak: every covered texel's transfer per entry point; fixed beside them,
+    /// the textures the compression may store over the atlas's `texels` and the search's Gram
+    /// matrices.
+    pub fn estimate(&self, fixed: &Estimate, texels: usize, covered: usize, entries: usize) -> Estimate {
+        let stored = textures(self.compression, entries) * texels as u64 * BYTES_PER_TEXTURE_TEXEL;
+        let gram = 2 * 8 * (entries as u64).pow(2);
         Estimate {
-            fixed: fixed.bytes(),
+            fixed: fixed.bytes() + stored + gram,
             count: covered as u64 * entries as u64,
             bytes_per_unit: bytes_per_transfer(self.compression),
             unit: "covered texels x entry points".into(),
@@ -97,7 +112,7 @@ impl Baker for LightPathMapsBaker {
             entry_points(scene, &bvh, tests, settings.entry_points, work.seed)
         })?;
         let fixed = self.obscurance.estimate(scene, &atlas);
-        work.admit("light path maps", &self.estimate(&fixed, atlas.covered_texels(), entries.entries.len()))?;
+        work.admit("light path maps", &self.estimate(&fixed, atlas.texels.len(), atlas.covered_texels(), entries.entries.len()))?;
         let transfers = stages.timed("transfer", || bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings))?;
         let compressed =
             stages.timed("cpca", || compress(&transfers, &entries.entries, atlas.texels.len(), region.light_area, self.compression))?;
@@ -115,6 +130,14 @@ impl Baker for LightPathMapsBaker {
         });
         baked.stats["light_path_maps"] = stats(&entries, &transfers, &compressed);
         baked.summary += &summary(&entries, &transfers, &compressed);
+        if let Compression::BestWithin(budget) = self.compression {
+            if compressed.relative_error > budget {
+                baked.summary += &format!(
+                    "warning: light path maps: no clustering reconstructs the transfers within the default error budget {budget}: the most accurate searched (C = {}, D = {}) reaches {:.4}; more --entry-points or --walks lower the noise PCA cannot compress, --error-budget refuses instead, --clusters with --basis fix the sizes\n",
+                    compressed.clusters, compressed.basis, compressed.relative_error
+                );
+            }
+        }
         derived(&mut baked, scene, &region);
         Ok(baked)
     }

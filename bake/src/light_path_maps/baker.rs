@@ -408,13 +408,18 @@ pub enum Compression {
     None,
     /// C clusters of D eigen-textures.
     Fixed { clusters: usize, basis: usize },
-    /// The smallest (C, D) whose relative reconstruction error of the T_e is within the budget.
+    /// The smallest (C, D) whose relative reconstruction error of the T_e is within the budget;
+    /// refused when none is.
     Budget(f64),
+    /// As `Budget`, or the most accurate (C, D) when none is within it (the default budget: a
+    /// bake whose noise no clustering compresses that far still ends, and says so).
+    BestWithin(f64),
 }
 
 /// Cluster counts and eigen-texture counts the error budget chooses among.
 const BUDGET_CLUSTERS: [usize; 8] = [1, 2, 4, 8, 16, 32, 64, 128];
-const BUDGET_MAX_BASIS: usize = 8;
+pub const BUDGET_CLUSTERS_MAX: usize = BUDGET_CLUSTERS[7];
+pub const BUDGET_BASIS_MAX: usize = 8;
 
 /// The stored transfer and what compressing it cost in accuracy.
 #[derive(Clone, Debug)]
@@ -442,12 +447,16 @@ pub fn compress(
     let (clusters, basis) = match compression {
         Compression::None => return Ok(uncompressed(transfers, entries, texel_count, light_area)),
         Compression::Fixed { clusters, basis } => (clusters, basis),
-        Compression::Budget(budget) => {
+        Compression::Budget(budget) | Compression::BestWithin(budget) => {
             let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
-            let table = cpca::error_table(data, cols, &features, FEATURE_DIMS, &counts, BUDGET_MAX_BASIS)?;
-            let best = cpca::choose(&table, budget).ok_or_else(|| {
-                format!("no clustering of up to {} clusters and {BUDGET_MAX_BASIS} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis", BUDGET_CLUSTERS[7])
-            })?;
+            let table = cpca::error_table(data, cols, &features, FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
+            let most_accurate =
+                || table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
+            let best = match (cpca::choose(&table, budget), compression) {
+                (Some(best), _) => best,
+                (None, Compression::BestWithin(_)) => *most_accurate().ok_or("no clustering to choose from")?,
+                (None, _) => return Err(format!("no clustering of up to {} clusters and {BUDGET_BASIS_MAX} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis", BUDGET_CLUSTERS_MAX)),
+            };
             (best.clusters, best.basis)
         }
     };

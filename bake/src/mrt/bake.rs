@@ -40,22 +40,28 @@ pub enum DictionarySource {
     Cache(PathBuf),
 }
 
-/// Bytes per squared block sample (n^2, n = 6 x samples per face side) a block shape's build
-/// holds: F in f64 as gathered rows and as a matrix, and the rest of its work (measured:
-/// docs/BENCHMARKS.md, "Peak memory").
-pub const BYTES_PER_SAMPLE_PAIR: u64 = 24;
+/// What a dictionary's build holds besides the scene (measured: docs/BENCHMARKS.md, "Peak
+/// memory"): its own working set, the block shapes' operators (bytes per squared block sample
+/// n^2, n = 6 x samples per face side: F as gathered rows and as a matrix, and the rest of the
+/// reduction) and, the most at the default sizes, the interfaces' lightfield operators (bytes
+/// per lightfield cell and mode: positions^2 x directions^2 cells, k_rlf modes).
+pub const DICTIONARY_BYTES: u64 = 24 << 20;
+pub const BYTES_PER_SAMPLE_PAIR: u64 = 32;
+pub const BYTES_PER_CELL_MODE: u64 = 112;
 
 impl MrtBaker {
-    /// The dictionary's peak: one block shape's n x n operators at a time.
+    /// The dictionary's peak: one block shape's n x n operators, then the interfaces'
+    /// lightfield operators; the lever is the lightfield's position cells a side.
     pub fn estimate(&self, scene: &Scene) -> Estimate {
-        let n = 6 * self.block.samples_per_face * self.block.samples_per_face;
+        let n = (6 * self.block.samples_per_face * self.block.samples_per_face) as u64;
+        let (p, d) = (self.interface.positions as u64, self.interface.directions as u64);
         Estimate {
-            fixed: scene_bytes(scene),
-            count: (n * n) as u64,
-            bytes_per_unit: BYTES_PER_SAMPLE_PAIR,
-            unit: "block sample pairs".into(),
-            lever: "--samples-per-face",
-            value: self.block.samples_per_face as u64,
+            fixed: scene_bytes(scene) + DICTIONARY_BYTES + n * n * BYTES_PER_SAMPLE_PAIR,
+            count: p * p * d * d * self.interface.lightfield_modes as u64,
+            bytes_per_unit: BYTES_PER_CELL_MODE,
+            unit: "lightfield cells x modes".into(),
+            lever: "--lightfield",
+            value: p,
             power: 4.0,
         }
     }

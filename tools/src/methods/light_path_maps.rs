@@ -42,7 +42,7 @@ const BASIS: Param =
     Param::count("basis", "eigen-textures per cluster D (with --clusters)", 0, 1024, Default::From("chosen by --error-budget"));
 const ERROR_BUDGET: Param = Param::number(
     "error-budget",
-    "the smallest C in 1, 2, 4 .. 128 and D in 0..8 storing the fewest values within this relative error of the transfers",
+    "the smallest C in 1, 2, 4 .. 128 and D in 0..8 storing the fewest values within this relative error of the transfers; given, none within it is refused; by default (0.1) the most accurate is taken then, with a warning",
     (0.0, 1e6, false),
     Default::Value("0.1"),
 );
@@ -69,7 +69,10 @@ fn compression(values: &Values) -> Result<Compression> {
     Ok(match (given(&UNCOMPRESSED), values.given_count(&CLUSTERS), values.given_count(&BASIS)) {
         (true, _, _) => Compression::None,
         (false, Some(clusters), Some(basis)) => Compression::Fixed { clusters: clusters as usize, basis: basis as usize },
-        _ => Compression::Budget(values.number(&ERROR_BUDGET)),
+        _ => match values.given_number(&ERROR_BUDGET) {
+            Some(budget) => Compression::Budget(budget),
+            None => Compression::BestWithin(values.number(&ERROR_BUDGET)),
+        },
     })
 }
 

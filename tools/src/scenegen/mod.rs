@@ -69,6 +69,7 @@ mod geometry;
 mod glossy;
 mod gltf_writer;
 mod maze;
+mod scale;
 mod scenes;
 mod settings;
 mod sunroom;
@@ -140,6 +141,24 @@ fn environment(name: &str) -> Option<Image> {
     Some(image)
 }
 
+/// Writes the scale scene of `bays` x `bays` bays (`scale-K`, 1..=32; not a committed scene:
+/// see `scale`) into `out_dir` (created if missing); returns the files written.
+pub fn write_scale(out_dir: &Path, bays: u32) -> anyhow::Result<Vec<PathBuf>> {
+    let name = format!("scale-{bays}");
+    let (gltf, bin) = generate(&name).with_context(|| format!("--scale {bays}: give 1..={} bays a side", scale::MAX_BAYS))?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
+    let mut outputs = Outputs::new();
+    let written = [(format!("{name}.gltf"), gltf.into_bytes()), (format!("{name}.bin"), bin)]
+        .into_iter()
+        .map(|(file, bytes)| {
+            let path = out_dir.join(file);
+            outputs.bytes(&path, &bytes).map(|()| path)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    outputs.commit()?;
+    Ok(written)
+}
+
 /// Writes every generated scene into `out_dir` (created if missing) and the environments
 /// they use into `out_dir/envs`, and returns the files written: `.gltf` then `.bin` for
 /// each scene, then each environment's `.exr`.
@@ -192,6 +211,9 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "courtyard" => courtyard::courtyard(),
         "sunroom" => sunroom::sunroom(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
+        bays if bays.starts_with("scale-") => {
+            scale::scale(bays.trim_start_matches("scale-").parse().ok().filter(|k| (1..=scale::MAX_BAYS).contains(k))?)
+        }
         _ => return None,
     };
     Some(builder.finish(name))

@@ -376,3 +376,39 @@ fn cornell_wall_light_is_cornell_lit_from_5_cm_off_the_red_wall() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The scale scene grows with its bays alone: each bay adds its sixteen instanced desk and
+/// chair pairs (648 triangles each) and one light, alternately a spot and a point light; every
+/// triangle faces out of its box (the pairs) or into the hall (the shell), so the bakes see
+/// closed furniture in a closed hall.
+#[test]
+fn the_scale_scene_grows_by_bays_of_instanced_furniture_and_lights() {
+    let dir = temp_dir("scale");
+    let mut furniture = Vec::new();
+    for bays in [1u32, 2] {
+        write_scale(&dir, bays).unwrap();
+        let scene = load(&dir, &format!("scale-{bays}"));
+        let pairs: Vec<_> = scene.meshes.iter().filter(|m| m.name.starts_with("Pair")).collect();
+        assert_eq!(pairs.len() as u32, 16 * bays * bays);
+        assert!(pairs.iter().all(|m| m.indices.len() == 3 * 648), "a pair is 6 boxes of 6 faces of 3 x 3 cells");
+        furniture.push(pairs.iter().map(|m| m.indices.len() / 3).sum::<usize>());
+        let spots = scene.lights.iter().filter(|l| matches!(l.kind, LightKind::Spot { .. })).count() as u32;
+        assert_eq!((scene.lights.len() as u32, spots), (bays * bays, (bays * bays).div_ceil(2)));
+        // Signed volume: positive for closed boxes facing out, minus the hall's for its shell.
+        let volume = |name: &str| -> f32 {
+            let mesh = scene.meshes.iter().find(|m| m.name == name).unwrap();
+            mesh.indices
+                .chunks_exact(3)
+                .map(|t| mesh.positions[t[0] as usize].dot(mesh.positions[t[1] as usize].cross(mesh.positions[t[2] as usize])) / 6.0)
+                .sum()
+        };
+        let pair = volume(&pairs[0].name.clone());
+        assert!(pair > 0.02 && pair < 0.05, "a pair's boxes face out: volume {pair}");
+        let side = 8.0 * bays as f32;
+        let shell: f32 = ["Floor", "Ceiling", "BackWall", "FrontWall", "LeftWall", "RightWall"].into_iter().map(volume).sum();
+        assert!((shell + side * side * 3.0).abs() < 1e-3 * side * side * 3.0, "the shell faces in: volume {shell}");
+    }
+    assert_eq!(furniture, [16 * 648, 64 * 648]);
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(write_scale(&temp_dir("scale-refused"), 0).unwrap_err().to_string().contains("--scale 0: give 1..=32"));
+}
