@@ -4,8 +4,8 @@
 //! (§3.2.3).
 
 use super::{
-    bake_transfers, compress, entry_points, test_points, Compressed, Compression, EntryPoints, LightPathMapSettings,
-    LightPathMapsSceneSettings, LightRegion, Transfers, BUDGET_BASIS_MAX, BUDGET_CLUSTERS_MAX,
+    bake_transfers, compress, entry_points, fitted, sizes, test_points, Compressed, Compression, EntryPoints, LightPathMapSettings,
+    LightPathMapsSceneSettings, LightRegion, Transfers,
 };
 use crate::atlas::stage::short;
 use crate::contract::{Baked, Baker, Estimate, Stages};
@@ -40,16 +40,6 @@ pub fn bytes_per_transfer(compression: Compression) -> u64 {
 /// while the clusters are made: the clusters' vectors and the textures spread over the atlas.
 pub const BYTES_PER_TEXTURE_TEXEL: u64 = 24;
 
-/// The most textures the compression can store for `entries` entry points: C (1 + D) for the
-/// sizes given, the search's largest for a budget, none beyond the transfers uncompressed.
-fn textures(compression: Compression, entries: usize) -> u64 {
-    match compression {
-        Compression::Fixed { clusters, basis } => (clusters.min(entries) * (1 + basis)) as u64,
-        Compression::Budget(_) | Compression::BestWithin(_) => (BUDGET_CLUSTERS_MAX.min(entries) * (1 + BUDGET_BASIS_MAX)) as u64,
-        Compression::None => 0,
-    }
-}
-
 /// Test points a directional light's derived region has (the scenes' declared boxes: 64).
 const SUN_TEST_POINTS: u32 = 64;
 
@@ -76,10 +66,10 @@ impl LightPathMapsBaker {
     }
 
     /// The transfers' peak: every covered texel's transfer per entry point; fixed beside them,
-    /// the textures the compression may store over the atlas's `texels` and the search's Gram
-    /// matrices.
-    pub fn estimate(&self, fixed: &Estimate, texels: usize, covered: usize, entries: usize) -> Estimate {
-        let stored = textures(self.compression, entries) * texels as u64 * BYTES_PER_TEXTURE_TEXEL;
+    /// the search's Gram matrices and the `textures` (C (1 + D)) the compression stores over
+    /// the atlas's `texels`.
+    pub fn estimate(&self, fixed: &Estimate, texels: usize, covered: usize, entries: usize, textures: usize) -> Estimate {
+        let stored = (textures * texels) as u64 * BYTES_PER_TEXTURE_TEXEL;
         let gram = 2 * 8 * (entries as u64).pow(2);
         Estimate {
             fixed: fixed.bytes() + stored + gram,
@@ -111,11 +101,24 @@ impl Baker for LightPathMapsBaker {
             let tests = test_points(scene, region.region.as_ref(), work.seed)?;
             entry_points(scene, &bvh, tests, settings.entry_points, work.seed)
         })?;
+        // Admitted twice: before the walks with the textures known (the sizes given, or none
+        // yet), and once the search has chosen them, before the clusters are made.
         let fixed = self.obscurance.estimate(scene, &atlas);
-        work.admit("light path maps", &self.estimate(&fixed, atlas.texels.len(), atlas.covered_texels(), entries.entries.len()))?;
+        let (texels, covered, count) = (atlas.texels.len(), atlas.covered_texels(), entries.entries.len());
+        let given = match self.compression {
+            Compression::Fixed { clusters, basis } => clusters.min(count) * (1 + basis),
+            _ => 0,
+        };
+        work.admit("light path maps", &self.estimate(&fixed, texels, covered, count, given))?;
         let transfers = stages.timed("transfer", || bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings))?;
-        let compressed =
-            stages.timed("cpca", || compress(&transfers, &entries.entries, atlas.texels.len(), region.light_area, self.compression))?;
+        let compressed = stages.timed("cpca", || match sizes(&transfers, &entries.entries, self.compression)? {
+            None => compress(&transfers, &entries.entries, texels, region.light_area, self.compression),
+            Some((clusters, basis)) => {
+                let chosen = self.estimate(&fixed, texels, covered, count, clusters.min(count) * (1 + basis));
+                work.admit("light path maps' clusters", &chosen).map_err(|e| format!("{e} (or fewer --clusters and --basis)"))?;
+                fitted(&transfers, &entries.entries, texels, region.light_area, clusters, basis)
+            }
+        })?;
         let transfer = &compressed.transfer;
         let facts =
             json!({ "entry_points": transfer.entry_points.len(), "clusters": transfer.cluster_count(), "basis": transfer.basis_count });

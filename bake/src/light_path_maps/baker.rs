@@ -418,8 +418,8 @@ pub enum Compression {
 
 /// Cluster counts and eigen-texture counts the error budget chooses among.
 const BUDGET_CLUSTERS: [usize; 8] = [1, 2, 4, 8, 16, 32, 64, 128];
-pub const BUDGET_CLUSTERS_MAX: usize = BUDGET_CLUSTERS[7];
-pub const BUDGET_BASIS_MAX: usize = 8;
+const BUDGET_CLUSTERS_MAX: usize = BUDGET_CLUSTERS[7];
+const BUDGET_BASIS_MAX: usize = 8;
 
 /// The stored transfer and what compressing it cost in accuracy.
 #[derive(Clone, Debug)]
@@ -440,27 +440,49 @@ pub fn compress(
     light_area: f32,
     compression: Compression,
 ) -> Result<Compressed, String> {
-    let cols = 3 * transfers.texels.len();
-    // The transfers as rows of floats in place: a copy would double the bake's peak memory.
-    let data: &[f32] = bytemuck::cast_slice(&transfers.values);
-    let features = entry_features(entries);
-    let (clusters, basis) = match compression {
-        Compression::None => return Ok(uncompressed(transfers, entries, texel_count, light_area)),
-        Compression::Fixed { clusters, basis } => (clusters, basis),
-        Compression::Budget(budget) | Compression::BestWithin(budget) => {
-            let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
-            let table = cpca::error_table(data, cols, &features, FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
-            let most_accurate =
-                || table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
-            let best = match (cpca::choose(&table, budget), compression) {
-                (Some(best), _) => best,
-                (None, Compression::BestWithin(_)) => *most_accurate().ok_or("no clustering to choose from")?,
-                (None, _) => return Err(format!("no clustering of up to {} clusters and {BUDGET_BASIS_MAX} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis", BUDGET_CLUSTERS_MAX)),
-            };
-            (best.clusters, best.basis)
-        }
+    match sizes(transfers, entries, compression)? {
+        None => Ok(uncompressed(transfers, entries, texel_count, light_area)),
+        Some((clusters, basis)) => Ok(fitted(transfers, entries, texel_count, light_area, clusters, basis)?),
+    }
+}
+
+/// The transfers as rows of floats, in place: a copy would double the bake's peak memory.
+fn rows(transfers: &Transfers) -> (&[f32], usize) {
+    (bytemuck::cast_slice(&transfers.values), 3 * transfers.texels.len())
+}
+
+/// The clusters C and eigen-textures D the compression stores: given, or chosen by the error
+/// budget's search; None: uncompressed.
+pub fn sizes(transfers: &Transfers, entries: &[BakedEntry], compression: Compression) -> Result<Option<(usize, usize)>, String> {
+    let (budget, refuse) = match compression {
+        Compression::None => return Ok(None),
+        Compression::Fixed { clusters, basis } => return Ok(Some((clusters, basis))),
+        Compression::Budget(budget) => (budget, true),
+        Compression::BestWithin(budget) => (budget, false),
     };
-    let fit = cpca::fit(data, cols, &features, FEATURE_DIMS, clusters, basis)?;
+    let (data, cols) = rows(transfers);
+    let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
+    let table = cpca::error_table(data, cols, &entry_features(entries), FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
+    let most_accurate = table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
+    let best = match (cpca::choose(&table, budget), most_accurate) {
+        (Some(best), _) => best,
+        (None, Some(most)) if !refuse => *most,
+        _ => return Err(format!("no clustering of up to {BUDGET_CLUSTERS_MAX} clusters and {BUDGET_BASIS_MAX} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis")),
+    };
+    Ok(Some((best.clusters, best.basis)))
+}
+
+/// The clustered PCA of the transfers into `clusters` clusters of `basis` eigen-textures.
+pub fn fitted(
+    transfers: &Transfers,
+    entries: &[BakedEntry],
+    texel_count: usize,
+    light_area: f32,
+    clusters: usize,
+    basis: usize,
+) -> Result<Compressed, String> {
+    let (data, cols) = rows(transfers);
+    let fit = cpca::fit(data, cols, &entry_features(entries), FEATURE_DIMS, clusters, basis)?;
     let relative_error = fit.relative_error(data);
     let transfer = clustered(&fit, transfers, entries, texel_count, light_area);
     Ok(Compressed { clusters: fit.clusters.len(), basis, relative_error, transfer })

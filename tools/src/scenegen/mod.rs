@@ -50,6 +50,8 @@
 //!   scene declares no method's settings (each derives its own).
 //! - `sunroom`: a room lit by the sun alone, straight down through a skylight (a directional
 //!   light), a table half in the sun patch; every face a welded grid.
+//! - `scale-K` (not shipped; `relume scenes --scale K`): a hall of K x K bays, each with
+//!   sixteen instanced desk and chair pairs and a spot or point light, for the scale sweep.
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
