@@ -463,7 +463,8 @@ pub fn sizes(transfers: &Transfers, entries: &[BakedEntry], compression: Compres
     let (data, cols) = rows(transfers);
     let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
     let table = cpca::error_table(data, cols, &entry_features(entries), FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
-    let most_accurate = table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
+    let most_accurate =
+        table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
     let best = match (cpca::choose(&table, budget), most_accurate) {
         (Some(best), _) => best,
         (None, Some(most)) if !refuse => *most,
