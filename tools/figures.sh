@@ -315,6 +315,8 @@ figure_scale_sweep() {
         local scene="$DIR/scenes/scale-$k.gltf" limit=(--memory-limit 16G --threads 2)
         "$RELUME" bake "$scene" --method obscurance "${limit[@]}" --out "$DIR/obscurance-$k" || true
         "$RELUME" bake "$scene" --method light-path-maps --entry-points 384 "${limit[@]}" --out "$DIR/light-path-maps-$k" || true
+        "$RELUME" bake "$scene" --method light-path-maps --entry-points 384 --clusters 32 --basis 2 "${limit[@]}" \
+            --out "$DIR/light-path-maps-fixed-$k" || true
         "$RELUME" bake "$scene" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
         "$RELUME" bake "$scene" --method mrt "${limit[@]}" --dictionary-cache "$DIR/dictionaries" --out "$DIR/mrt-$k" || true
     done

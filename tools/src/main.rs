@@ -69,7 +69,7 @@ enum Command {
         #[arg(long, default_value = "scenes")]
         out: PathBuf,
         /// Write only the scale scene of K x K bays, `scale-K` (1..=32: 10,368 furniture
-        /// triangles and about 11,000 lightmap texels a bay), instead of the committed scenes.
+        /// triangles and about 15,000 covered lightmap texels a bay), instead of the committed scenes.
         #[arg(long, value_name = "K")]
         scale: Option<u32>,
     },

@@ -5,7 +5,7 @@
 //! elsewhere); the hall's shell and every box face are welded grids. Every pair is one node
 //! instancing one mesh (6 boxes, each face a 3 x 3 grid: 648 triangles), so the file stays small
 //! while the scene grows: 10,368 furniture triangles a bay, 1.04 M at K = 10. At the texel
-//! density of 8 texels a metre the atlas covers about 11,000 texels a bay (1.1 M at K = 10). It
+//! density of 8 texels a metre the atlas covers about 15,000 texels a bay (1.48 M at K = 10). It
 //! declares no method's block: the light cloud's region, MRT's blocks and the light path maps'
 //! test points (the lights where they stand) are derived, as a user's scene's would be.
 //!

@@ -53,7 +53,7 @@ pub(super) const OCCLUDER_SETTINGS: Settings =
 pub(super) const TABLE_CHAIR_SETTINGS: Settings =
     Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 24.0, tau: 0.2, l_max: 0.6, light_region: None, light_area: 0.0 };
 
-/// The scale scene: the classroom's, at 8 texels a metre (about 1.1 M texels at 10 x 10
+/// The scale scene: the classroom's, at 8 texels a metre (about 1.5 M covered texels at 10 x 10
 /// bays), its lights where they stand.
 pub(super) const SCALE_SETTINGS: Settings =
     Settings { ambient: [0.0; 3], beta: 0.3, texel_density: 8.0, tau: 0.3, l_max: 1.0, light_region: None, light_area: 0.0 };
