@@ -145,3 +145,27 @@ pub const BYTES_PER_TRIANGLE: u64 = 512;
 pub(crate) fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1u64 << 20) as f64
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lever's value a refusal names fits the limit, and one more does not, whether the
+    /// units grow with it or with its fourth power.
+    #[test]
+    fn the_fitting_value_fits_and_one_more_does_not() {
+        for (power, value) in [(1.0, 4096u64), (4.0, 8)] {
+            let estimate =
+                Estimate { fixed: 100 << 20, count: 1 << 30, bytes_per_unit: 12, unit: "units".into(), lever: "--lever", value, power };
+            let limit = estimate.bytes() / 3;
+            let fits = estimate.fitting(limit);
+            let at = |v: u64| {
+                let count = (estimate.count as f64 * (v as f64 / value as f64).powf(power)) as u64;
+                Estimate { count, value: v, ..estimate.clone() }.bytes()
+            };
+            assert!(fits > 0 && fits < value, "power {power}: {fits}");
+            assert!(at(fits) <= limit && at(fits + 1) > limit, "power {power}: {fits}");
+            assert_eq!(Estimate { fixed: limit + 1, ..estimate.clone() }.fitting(limit), 0);
+        }
+    }
+}

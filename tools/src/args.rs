@@ -93,7 +93,7 @@ pub(crate) struct WorkArgs {
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
     /// Stop after this many seconds, at a whole pass of the work (at least one is made); a
-    /// stage that needs all its work (FIV's tables, MRT's dictionary) is refused instead.
+    /// stage that needs all its work (an occluder table, a dictionary) is refused instead.
     #[arg(long, value_parser = seconds)]
     pub time_limit: Option<Duration>,
     /// Refuse, before its long work, a bake whose peak memory is estimated above this: bytes,
