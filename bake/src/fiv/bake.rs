@@ -1,7 +1,7 @@
 //! FIV's whole bake behind the bake contract: the environment's terms and a table per occluder
 //! type (003 §4), with the facts the manifest and stats.json keep.
 
-use super::{bake, occluders, sections, FivBakeSettings, FivSceneSettings};
+use super::{bake_types, occluders, sections, FivBakeSettings, FivSceneSettings};
 use crate::contract::{scene_bytes, Baked, Baker, Estimate, Stages};
 use crate::scene::Scene;
 use crate::work::WorkOptions;
@@ -38,7 +38,7 @@ impl Baker for FivBaker {
         let declared = FivSceneSettings::of(scene)?;
         let types = super::occluder_types(scene, &declared)?;
         work.admit("fiv", &self.estimate(scene, types.len()))?;
-        let (fiv, types) = stages.timed("fiv", || bake(scene, settings, work))?;
+        let fiv = stages.timed("fiv", || bake_types(scene, &types, settings, work))?;
         let representatives: Vec<&str> = types.iter().map(|t| scene.meshes[t.meshes[0]].name.as_str()).collect();
         let samples = settings.grid.samples();
         let occluder_count = occluders(scene, &types).len();

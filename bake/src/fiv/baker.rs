@@ -54,16 +54,25 @@ impl FivBakeSettings {
 /// Bakes `scene`'s environment and occluder tables; refused when the scene declares no
 /// environment or its occluders cannot be typed (named in [`occluder_types`]).
 pub fn bake(scene: &Scene, settings: &FivBakeSettings, work: &WorkOptions) -> Result<(FivBake, Vec<OccluderType>), String> {
-    settings.validate()?;
-    let Some(environment) = &scene.environment else {
-        return Err("the scene declares no environment (extras.relume.environment), and FIV is lit by one".into());
-    };
+    checked(scene, settings)?;
     let types = occluder_types(scene, &FivSceneSettings::of(scene)?)?;
+    Ok((bake_types(scene, &types, settings, work)?, types))
+}
+
+/// The scene's environment, once the settings are checked.
+fn checked<'s>(scene: &'s Scene, settings: &FivBakeSettings) -> Result<&'s Environment, String> {
+    settings.validate()?;
+    scene.environment.as_ref().ok_or_else(|| "the scene declares no environment (extras.relume.environment), and FIV is lit by one".into())
+}
+
+/// As [`bake`], for the scene's occluder `types` already found.
+pub fn bake_types(scene: &Scene, types: &[OccluderType], settings: &FivBakeSettings, work: &WorkOptions) -> Result<FivBake, String> {
+    let environment = checked(scene, settings)?;
     with_threads(work.threads, || {
         let terms = environment_terms(environment, settings.difmap_width);
         let tables =
             types.iter().map(|t| occluder_table(&scene.meshes[t.meshes[0]], environment, settings, work)).collect::<Result<_, _>>()?;
-        Ok((FivBake { environment: terms, tables }, types))
+        Ok(FivBake { environment: terms, tables })
     })
 }
 
