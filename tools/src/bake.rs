@@ -127,6 +127,7 @@ pub(crate) fn bake_scene(
     let mut stats = bake.stats;
     stats["stages"] = stages.json();
     stats["peak_memory_bytes"] = json!(stages.peak_memory_bytes());
+    stats["triangles"] = json!(scene.triangle_count());
     stats["threads"] = json!(work.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())));
     let mut parameters = bake.parameters;
     parameters["given"] = values.json(&method.params(), Stage::Bake);

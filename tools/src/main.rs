@@ -47,6 +47,9 @@ enum Command {
     /// Run a sweep (scenes x methods x parameters x lights, from a TOML file): costs and
     /// errors of every point, CSV/JSON, charts with the Pareto front, report.md.
     Bench(bench::BenchArgs),
+    /// Chart bakes' time and peak memory against their scenes' triangles, log-log, with each
+    /// series' fitted exponent (the scale sweep's chart).
+    Scaling(bench::scaling::ScalingArgs),
     /// Time ray casting on a scene: BVH build, closest-hit and shadow rays per second on a
     /// path tracer's rays (and Embree's on the same rays where relume was built with it).
     Rays(rays::RaysArgs),
@@ -121,6 +124,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => reference::compare_command(&args),
         Command::Run(args) => report::run_main_job(&args),
         Command::Bench(args) => bench::bench_command(&args),
+        Command::Scaling(args) => bench::scaling::scaling_command(&args),
         Command::Rays(args) => rays::rays_command(&args),
         Command::Lights(args) => lights::lights_command(&args),
         Command::View(args) => view::view_command(&args),

@@ -48,6 +48,13 @@ pub enum DictionarySource {
 pub const DICTIONARY_BYTES: u64 = 24 << 20;
 pub const BYTES_PER_SAMPLE_PAIR: u64 = 32;
 pub const BYTES_PER_CELL_MODE: u64 = 112;
+/// What the level holds per squared feedback coefficient (D = blocks x k_self; measured:
+/// docs/BENCHMARKS.md, "Scale sweep"): the solved feedback's 3 f32 (12 bytes) and, per colour
+/// channel solved at once, I - K and its inverse in f64 (16 bytes); T_b->r adds at most 16
+/// k_r / k_self (a receiver on each side face of a block, from every block).
+pub const FEEDBACK_BYTES: u64 = 12;
+pub const SOLVE_BYTES: u64 = 16;
+pub const TRANSFER_BYTES: u64 = 16;
 
 impl MrtBaker {
     /// The dictionary's peak: one block shape's n x n operators, then the interfaces'
@@ -63,6 +70,23 @@ impl MrtBaker {
             lever: "--lightfield",
             value: p,
             power: 4.0,
+        }
+    }
+
+    /// The level's peak, at its feedback solve, for `blocks` blocks of k_self modes each; the
+    /// lever is k_self (the coefficients grow as its square).
+    pub fn level_estimate(&self, scene: &Scene, blocks: usize, work: &WorkOptions) -> Estimate {
+        let modes = self.block.modes as u64;
+        let channels = work.threads.unwrap_or_else(rayon::current_num_threads).clamp(1, 3) as u64;
+        let transfers = (TRANSFER_BYTES * self.interface.response_modes as u64).div_ceil(modes);
+        Estimate {
+            fixed: scene_bytes(scene),
+            count: (blocks as u64 * modes).pow(2),
+            bytes_per_unit: FEEDBACK_BYTES + SOLVE_BYTES * channels + transfers,
+            unit: "squared feedback coefficients".into(),
+            lever: "--modes",
+            value: modes,
+            power: 2.0,
         }
     }
 
@@ -130,6 +154,7 @@ pub fn proxy(scene: &Scene) -> Result<(Proxy, Vec<usize>, Option<Derived>), Stri
 impl Baker for MrtBaker {
     fn bake(&self, source: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String> {
         let (proxy, dynamic, derived) = stages.timed("proxy", || proxy(source))?;
+        work.admit("mrt level", &self.level_estimate(source, proxy.corners.len(), work))?;
         let split = derived.as_ref().and_then(|d| d.split.as_ref());
         let fine = split.map(|s| s.apply(source));
         let scene = fine.as_ref().unwrap_or(source);

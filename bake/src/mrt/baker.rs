@@ -4,6 +4,7 @@
 
 use super::dictionary::{self, Dictionary};
 use super::evaluate::LevelTransfer;
+use super::inverse::inverse;
 use super::level_data::{k_max, LevelData, MAX_FEEDBACK};
 use super::map::{map, Mapped};
 use super::proxy::{dynamic_meshes, Proxy};
@@ -52,22 +53,22 @@ pub fn bake_on(
 /// inverse times b0, every bounce at once.
 fn solve_feedback(level: &LevelData, dictionary: &Dictionary) -> Result<Vec<f32>, String> {
     let d = level.blocks.len() * k_max(dictionary);
-    let channels: Vec<Result<Vec<f32>, String>> = (0..3usize)
-        .into_par_iter()
-        .map(|c| {
-            let k = bounce_matrix(level, dictionary, c);
-            let radius = spectral_radius(&k);
-            if radius >= 1.0 {
-                return Err(format!("the level's feedback diverges: one bounce returns {radius:.3} of some light (above 1; an albedo near 1, or too few modes)"));
-            }
-            let inverse = (DMatrix::identity(d, d) - k)
-                .try_inverse()
-                .filter(|m| m.iter().all(|v| v.is_finite()))
-                .ok_or("the level's feedback has no fixed point (I - K is singular: an albedo of 1 in a closed level?)")?;
-            Ok(inverse.iter().map(|&v| v as f32).collect())
-        })
-        .collect();
-    Ok(channels.into_iter().collect::<Result<Vec<_>, _>>()?.concat())
+    let mut feedback = vec![0f32; 3 * d * d];
+    feedback.par_chunks_mut(d * d.max(1)).enumerate().try_for_each(|(c, out)| {
+        let mut k = bounce_matrix(level, dictionary, c);
+        let radius = spectral_radius(&k);
+        if radius >= 1.0 {
+            return Err(format!(
+                "the level's feedback diverges: one bounce returns {radius:.3} of some light (above 1; an albedo near 1, or too few modes)"
+            ));
+        }
+        k.neg_mut();
+        (0..d).for_each(|i| k[(i, i)] += 1.0);
+        let inverse = inverse(k).ok_or("the level's feedback has no fixed point (I - K is singular: an albedo of 1 in a closed level?)")?;
+        out.iter_mut().zip(inverse.iter()).for_each(|(o, &v)| *o = v as f32);
+        Ok(())
+    })?;
+    Ok(feedback)
 }
 
 /// K for colour channel `c`, block by block: K[a, a] = T_a rho U_b (the block's own bounce)

@@ -26,6 +26,8 @@ pub mod dictionary;
 pub mod evaluate;
 #[cfg(feature = "baking")]
 pub mod interface;
+#[cfg(feature = "baking")]
+mod inverse;
 pub mod level;
 pub mod level_data;
 pub mod map;

@@ -61,6 +61,9 @@ pub(crate) struct Chart<'a> {
     pub lines: bool,
     /// The Pareto front's points, by rising x.
     pub front: Vec<(f64, f64)>,
+    /// Both axes logarithmic (costs against sizes over orders of magnitude: a power law is a
+    /// line whose slope is its exponent).
+    pub log_log: bool,
 }
 
 /// Reads the font once; plotters keeps it for the life of the process.
@@ -104,6 +107,39 @@ fn range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     start..hi + margin
 }
 
+/// A log-log chart as a linear one of the values' base-10 logarithms (ticks are labelled with
+/// the values); any other chart as it is.
+fn on_log_axes<'a>(chart: &Chart<'a>) -> Chart<'a> {
+    let log = |points: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        points.iter().map(|&(x, y)| if chart.log_log { (x.log10(), y.log10()) } else { (x, y) }).collect()
+    };
+    Chart {
+        title: chart.title.clone(),
+        series: chart
+            .series
+            .iter()
+            .map(|s| Series { label: s.label.clone(), points: log(&s.points), style: s.style, point_labels: s.point_labels.clone() })
+            .collect(),
+        front: log(&chart.front),
+        ..*chart
+    }
+}
+
+/// 10^`exponent`, in three significant figures with k, M or G.
+fn power_of_ten(exponent: f64) -> String {
+    let value = 10f64.powf(exponent);
+    let (scaled, suffix) =
+        [(1e9, "G"), (1e6, "M"), (1e3, "k")].into_iter().find(|(s, _)| value >= *s).map_or((value, ""), |(s, n)| (value / s, n));
+    let digits = if scaled >= 100.0 {
+        0
+    } else if scaled >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{scaled:.digits$}{suffix}")
+}
+
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Result<()>
 where
     DB::ErrorType: 'static,
@@ -113,6 +149,7 @@ where
         bail!("chart \"{}\": no points to draw", chart.title);
     }
     root.fill(&WHITE).map_err(fail)?;
+    let chart = &on_log_axes(chart);
     let all = || chart.series.iter().flat_map(|s| s.points.iter().copied());
     // Line charts keep their legend at the top, above room made for it; scatter charts put it
     // in the lower left, cheap and right, where a point would beat every other.
@@ -128,7 +165,15 @@ where
         .y_label_area_size(64)
         .build_cartesian_2d(range(all().map(|p| p.0)), y_range)
         .map_err(fail)?;
-    plot.configure_mesh().x_desc(chart.x_label).y_desc(chart.y_label).label_style((FONT, 14)).draw().map_err(fail)?;
+    let tick = |v: &f64| if chart.log_log { power_of_ten(*v) } else { format!("{v}") };
+    plot.configure_mesh()
+        .x_desc(chart.x_label)
+        .y_desc(chart.y_label)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .label_style((FONT, 14))
+        .draw()
+        .map_err(fail)?;
     for (i, series) in chart.series.iter().enumerate() {
         let style = series.style.unwrap_or(i);
         let colour = Palette99::pick(style).to_rgba();

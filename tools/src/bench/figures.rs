@@ -73,6 +73,7 @@ fn against_parameter<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart<'a>
         series,
         lines: true,
         front: Vec::new(),
+        log_log: false,
     })
 }
 
@@ -108,6 +109,7 @@ fn against_configuration<'a>(of_method: &[&Summary], x: &'a str) -> Option<Chart
         series,
         lines: true,
         front: Vec::new(),
+        log_log: false,
     })
 }
 
@@ -134,5 +136,6 @@ fn statistic_lines<'a>(of_method: &[&Summary], name: &'a str) -> Option<Chart<'a
         series,
         lines: true,
         front: Vec::new(),
+        log_log: false,
     })
 }

@@ -16,6 +16,7 @@ mod perceptual;
 mod reference_cache;
 mod report;
 mod results;
+pub(crate) mod scaling;
 mod sweep;
 mod timing;
 

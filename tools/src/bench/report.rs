@@ -274,7 +274,15 @@ fn write_scene_charts(
         charts::write(
             outputs,
             &out.join(&stem),
-            &Chart { title: title.clone(), x_label, y_label: "NRMSE vs reference (mean over lights)", series, lines: false, front },
+            &Chart {
+                title: title.clone(),
+                x_label,
+                y_label: "NRMSE vs reference (mean over lights)",
+                series,
+                lines: false,
+                front,
+                log_log: false,
+            },
         )?;
         written.push((stem, title));
     }
@@ -303,6 +311,7 @@ fn write_scene_charts(
                 series,
                 lines: true,
                 front: Vec::new(),
+                log_log: false,
             },
         )?;
         written.push((stem, title));
