@@ -308,18 +308,31 @@ figure_bake_memory() {
 
 # Each method's bake at 1, 2, 5 and 10 bays a side of the scale scene (`relume scenes
 # --scale K`), under --memory-limit 16G: its stats.json (stages' seconds, peak memory) or its
-# refusal. Light path maps at 384 entry points (4,096 would not fit the largest in 16 GiB).
+# refusal; then `relume scaling` charts them. Light path maps at 384 entry points (4,096 would
+# not fit the largest in 16 GiB); MRT's dictionary made once, before the sweep; light clouds
+# at K = 1 and 2 (K = 10 is refused at once; K = 2 takes 25 minutes, so it runs last); the path
+# tracer's paths per second on the smallest and largest.
 figure_scale_sweep() {
+    local limit=(--memory-limit 16G --threads 2)
     for k in 1 2 5 10; do
         "$RELUME" scenes --scale $k --out "$DIR/scenes"
-        local scene="$DIR/scenes/scale-$k.gltf" limit=(--memory-limit 16G --threads 2)
+    done
+    "$RELUME" bake "$DIR/scenes/scale-1.gltf" --method mrt "${limit[@]}" --dictionary-cache "$DIR/dictionaries" --out "$DIR/dictionary"
+    for k in 1 2 5 10; do
+        local scene="$DIR/scenes/scale-$k.gltf"
         "$RELUME" bake "$scene" --method obscurance "${limit[@]}" --out "$DIR/obscurance-$k" || true
         "$RELUME" bake "$scene" --method light-path-maps --entry-points 384 "${limit[@]}" --out "$DIR/light-path-maps-$k" || true
         "$RELUME" bake "$scene" --method light-path-maps --entry-points 384 --clusters 32 --basis 2 "${limit[@]}" \
             --out "$DIR/light-path-maps-fixed-$k" || true
-        "$RELUME" bake "$scene" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
         "$RELUME" bake "$scene" --method mrt "${limit[@]}" --dictionary-cache "$DIR/dictionaries" --out "$DIR/mrt-$k" || true
     done
+    for k in 1 10 2; do
+        "$RELUME" bake "$DIR/scenes/scale-$k.gltf" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
+    done
+    for k in 1 10; do
+        "$RELUME" reference "$DIR/scenes/scale-$k.gltf" --width 128 --height 96 --spp 32 --threads 2 --out "$DIR/reference-$k.exr"
+    done
+    "$RELUME" scaling $(ls -d "$DIR"/*-[0-9]*/ | while read -r d; do [ -f "$d/stats.json" ] && echo "${d%/}"; done) --out "$DIR/chart"
 }
 
 figure_correctness_tests() {

@@ -38,6 +38,8 @@ pub mod cpca;
 #[cfg(feature = "embree")]
 pub mod embree;
 #[cfg(feature = "baking")]
+mod light_grid;
+#[cfg(feature = "baking")]
 pub mod ray_bench;
 #[cfg(feature = "baking")]
 pub mod reference;

@@ -38,6 +38,7 @@ use crate::bsdf::Bsdf;
 use crate::bvh::{Hit, SceneBvh};
 use crate::environment::{face_point, face_rectangle_solid_angle, luminance};
 use crate::image::Image;
+use crate::light_grid::LightGrid;
 use crate::sampling::{uniform_triangle, PathSampler};
 use crate::scene::{Light, Material, Scene};
 use crate::work::{with_threads, Progress, WorkOptions};
@@ -56,9 +57,9 @@ const ENVIRONMENT_DIMENSIONS: u32 = 1 << 30;
 /// lobe reads it).
 pub(crate) const LOBE_DIMENSIONS: u32 = 1 << 29;
 /// Scenes with up to this many punctual lights trace a shadow ray to each at every path
-/// vertex; with more, `SAMPLED_LIGHTS` of them are drawn at each vertex by their unshadowed
-/// contribution, so that a path's cost does not grow with the lights (the scale scene has one
-/// a bay: docs/BENCHMARKS.md, "Scale sweep").
+/// vertex; with more, `SAMPLED_LIGHTS` of them are drawn at each vertex from the light grid
+/// (`light_grid.rs`), so that a path's cost does not grow with the lights (the scale scene has
+/// one a bay: docs/BENCHMARKS.md, "Scale sweep").
 pub const TRACED_LIGHTS: usize = 8;
 const SAMPLED_LIGHTS: u32 = 2;
 /// First sampler dimension of the light choices with many lights (`SAMPLED_LIGHTS` per
@@ -263,25 +264,22 @@ pub fn environment_irradiance(scene: &Scene, bvh: &SceneBvh, point: Vec3, normal
 /// blocked.
 #[inline]
 pub(crate) fn punctual_irradiance(bvh: &SceneBvh, light: &Light, point: Vec3, ns: Vec3, ng: Vec3, shadows: bool) -> Option<(Vec3, Vec3)> {
-    let (e, to_light, distance) = unshadowed_irradiance(light, point, ns, ng)?;
-    (!shadows || visible(bvh, point, ng, to_light, distance)).then_some((e, to_light))
-}
-
-/// The light's irradiance at `point` before visibility (E cos, with the direction to the light
-/// and its distance); None where it is nothing or from behind the surface.
-fn unshadowed_irradiance(light: &Light, point: Vec3, ns: Vec3, ng: Vec3) -> Option<(Vec3, Vec3, f32)> {
     let incident = light.incident(point);
-    let cos = ns.dot(incident.to_light);
-    if incident.irradiance.max_element() <= 0.0 || cos <= 0.0 || ng.dot(incident.to_light) <= 0.0 {
+    if incident.irradiance.max_element() <= 0.0 {
         return None;
     }
-    Some((incident.irradiance * cos, incident.to_light, incident.distance))
-}
-
-/// Whether a shadow ray from `point` reaches a light `distance` away towards `to_light`.
-fn visible(bvh: &SceneBvh, point: Vec3, ng: Vec3, to_light: Vec3, distance: f32) -> bool {
-    let origin = bvh.offset_origin(point, ng, to_light);
-    !bvh.occluded(origin, to_light, (distance - bvh.epsilon()).max(0.0))
+    let cos = ns.dot(incident.to_light);
+    if cos <= 0.0 || ng.dot(incident.to_light) <= 0.0 {
+        return None;
+    }
+    if shadows {
+        let origin = bvh.offset_origin(point, ng, incident.to_light);
+        let t_max = (incident.distance - bvh.epsilon()).max(0.0);
+        if bvh.occluded(origin, incident.to_light, t_max) {
+            return None;
+        }
+    }
+    Some((incident.irradiance * cos, incident.to_light))
 }
 
 /// Russian roulette on the continuation from path vertex `vertex`: from the fourth on, the
@@ -384,6 +382,8 @@ struct Integrator<'a> {
     max_bounces: u32,
     pixel_centres: bool,
     shadows: bool,
+    /// The lights' odds by place, in a scene of more than `TRACED_LIGHTS`.
+    light_grid: Option<LightGrid>,
 }
 
 impl<'a> Integrator<'a> {
@@ -398,6 +398,7 @@ impl<'a> Integrator<'a> {
             max_bounces: settings.max_bounces,
             pixel_centres: settings.pixel_centres,
             shadows: settings.shadows,
+            light_grid: (scene.lights.len() > TRACED_LIGHTS).then(|| LightGrid::new(scene)),
         }
     }
 
@@ -516,37 +517,23 @@ impl<'a> Integrator<'a> {
 
     /// Next-event estimates from the punctual lights at `p` (f E cos each, still to be
     /// multiplied by the throughput): every light's, in a scene of up to `TRACED_LIGHTS`;
-    /// otherwise `SAMPLED_LIGHTS` drawn with odds proportional to their unshadowed f E cos
-    /// (summed over the colours), each divided by its odds and their count: the same mean.
+    /// otherwise `SAMPLED_LIGHTS` drawn by the light grid, each divided by its odds and their
+    /// count: the same mean.
     #[allow(clippy::too_many_arguments)]
     fn punctual_lights(&self, sampler: &PathSampler, bounce: u32, bsdf: &Bsdf, p: Vec3, ns: Vec3, ng: Vec3, add: &mut impl FnMut(Vec3)) {
         let lights = &self.scene.lights;
-        if lights.len() <= TRACED_LIGHTS {
+        let Some(grid) = &self.light_grid else {
             for light in lights {
                 if let Some((e, wi)) = punctual_irradiance(self.bvh, light, p, ns, ng, self.shadows) {
                     add(bsdf.eval(wi) * e);
                 }
             }
             return;
-        }
-        let weight = |l: Vec3| (l.x + l.y + l.z) as f64;
-        let unshadowed: Vec<(Vec3, Vec3, f32)> = lights
-            .iter()
-            .filter_map(|light| unshadowed_irradiance(light, p, ns, ng))
-            .map(|(e, wi, distance)| (bsdf.eval(wi) * e, wi, distance))
-            .filter(|u| weight(u.0) > 0.0)
-            .collect();
-        let total: f64 = unshadowed.iter().map(|u| weight(u.0)).sum();
+        };
         for j in 0..SAMPLED_LIGHTS {
-            let mut target = sampler.uniform_f64(LIGHT_DIMENSIONS + SAMPLED_LIGHTS * bounce + j) * total;
-            // The last light where rounding leaves the target past the sum.
-            let chosen = unshadowed.iter().find(|u| {
-                target -= weight(u.0);
-                target < 0.0
-            });
-            let Some(&(l, wi, distance)) = chosen.or(unshadowed.last()) else { return };
-            if !self.shadows || visible(self.bvh, p, ng, wi, distance) {
-                add(l * (total / (weight(l) * SAMPLED_LIGHTS as f64)) as f32);
+            let (i, odds) = grid.pick(p, sampler.uniform_f64(LIGHT_DIMENSIONS + SAMPLED_LIGHTS * bounce + j));
+            if let Some((e, wi)) = punctual_irradiance(self.bvh, &lights[i], p, ns, ng, self.shadows) {
+                add(bsdf.eval(wi) * e / (odds * SAMPLED_LIGHTS as f64) as f32);
             }
         }
     }

@@ -206,7 +206,7 @@ fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
     let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 4, None);
     let errors: Vec<f64> = [0, 1, 2, 4, 8, 24]
         .iter()
-        .map(|&d| lc::relative_error(&cloud, &lc::compress(&cloud, 4, lc::Vectors::Each(d)).expect("compress")))
+        .map(|&d| lc::relative_error(&cloud, &lc::compress(&cloud, 4, lc::Vectors::Each(d), false).expect("compress")))
         .collect();
     println!("relative error with 0, 1, 2, 4, 8, 24 vectors: {errors:?}");
     assert!(errors.windows(2).all(|w| w[1] <= w[0] + 1e-9), "{errors:?}");
@@ -219,8 +219,8 @@ fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
     }
     let mut gains = Vec::new();
     for (data, d) in [(&cloud, 1), (&cloud, 2), (&cloud, 4), (&uneven, 1), (&uneven, 2), (&uneven, 4)] {
-        let each = lc::relative_error(data, &lc::compress(data, 4, lc::Vectors::Each(d)).unwrap());
-        let shared = lc::compress(data, 4, lc::Vectors::Shared(d)).unwrap();
+        let each = lc::relative_error(data, &lc::compress(data, 4, lc::Vectors::Each(d), false).unwrap());
+        let shared = lc::compress(data, 4, lc::Vectors::Shared(d), false).unwrap();
         let error = lc::relative_error(data, &shared);
         println!("D = {d}: {:?} vectors shared, relative error {error:.5} against {each:.5}", shared.vectors);
         assert_eq!(shared.vectors.iter().sum::<u32>() as usize, d * shared.cluster_count());
@@ -233,7 +233,7 @@ fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
     let mut weigher = Weigher::new(cloud.lights.len(), 4).unwrap();
     let weights = weigh(&mut weigher, &cloud.lights, &[point_light(Vec3::new(0.1, 0.2, -0.1), Vec3::new(1.0, 2.0, 3.0))]);
     for vectors in [lc::Vectors::Each(2), lc::Vectors::Shared(2)] {
-        let compressed = lc::compress(&cloud, 4, vectors).unwrap();
+        let compressed = lc::compress(&cloud, 4, vectors, false).unwrap();
         let columns = lc::Columns::new(&compressed);
         for (v, e) in compressed.reconstruct(&weights).iter().enumerate() {
             let direct = weights.iter().fold(Vec3::ZERO, |sum, w| sum + columns.column(v, w.column as usize) * w.weight).max(Vec3::ZERO);
@@ -242,7 +242,7 @@ fn compression_error_falls_with_vectors_and_vanishes_at_full_rank() {
                 "{vectors:?}, vertex {v}: {e} against {direct}"
             );
         }
-        assert!(lc::compress(&compressed, 4, vectors).is_err(), "a compressed cloud is refused");
+        assert!(lc::compress(&compressed, 4, vectors, false).is_err(), "a compressed cloud is refused");
     }
 }
 
@@ -261,10 +261,10 @@ fn the_section_round_trips_and_refuses_values_out_of_range() {
         BakeOutput { method: "light-cloud", scene: Some(&s), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
         lc::read(&Artifact::read(&dir).unwrap(), scene).map_err(|e| e.to_string())
     };
-    let compressed = lc::compress(&cloud, 3, lc::Vectors::Each(2)).unwrap();
+    let compressed = lc::compress(&cloud, 3, lc::Vectors::Each(2), false).unwrap();
     assert_eq!(read(&cloud, &s).unwrap(), cloud);
     assert_eq!(read(&compressed, &s).unwrap(), compressed);
-    let shared = lc::compress(&cloud, 3, lc::Vectors::Shared(1)).unwrap();
+    let shared = lc::compress(&cloud, 3, lc::Vectors::Shared(1), false).unwrap();
     assert_eq!(read(&shared, &s).unwrap(), shared);
     let mut short = shared.clone();
     short.coords.pop();
@@ -380,7 +380,7 @@ fn a_glossy_scene_stores_exitant_radiance_in_sixteen_harmonics() {
 fn explained_variance_shares_fall_and_sum_to_one_at_full_rank() {
     let s = sphere_scene();
     let cloud = bake(&s, CloudGrid { min: Vec3::splat(-0.6), max: Vec3::splat(0.6), counts: [2, 2, 2] }, 4, None);
-    let compressed = lc::compress(&cloud, 4, lc::Vectors::Each(2)).unwrap();
+    let compressed = lc::compress(&cloud, 4, lc::Vectors::Each(2), false).unwrap();
     let shares = lc::explained_variance(&s, &SceneBvh::new(&s), &cloud, &compressed, 12);
     println!("indirect {:?}\ndirect {:?}", shares.indirect, shares.direct);
     for (name, values) in [("indirect", &shares.indirect), ("direct", &shares.direct)] {

@@ -94,7 +94,7 @@ fn light_clustering_keeps_the_directions_and_the_section_round_trips() {
         let tail = &reduced.lights[reduced.zone_light_range(z)];
         assert_eq!(&tail[tail.len() - DIRECTIONS..], &lc::directions(DIRECTIONS)[..]);
     }
-    let compressed = lc::compress(&reduced, 4, lc::Vectors::Each(2)).unwrap();
+    let compressed = lc::compress(&reduced, 4, lc::Vectors::Each(2), false).unwrap();
     let dir = std::env::temp_dir().join(format!("relume-light-cloud-directions-{}", std::process::id()));
     let sections = vec![lc::section(&compressed, serde_json::json!({}))];
     BakeOutput { method: "light-cloud", scene: Some(&s), parameters: serde_json::json!({}), sections, stats: serde_json::json!({}) }

@@ -182,7 +182,7 @@ fn a_zoned_transfer_round_trips_and_is_the_same_at_any_thread_count() {
     let cloud = gathered(&s, ROOMS_GRID, 2);
     let in_pool = |threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| lc::compress(&reduce(&s, &cloud, 3, Some((0.5, 8.0))).cloud, 6, lc::Vectors::Each(2)).unwrap())
+        pool.install(|| lc::compress(&reduce(&s, &cloud, 3, Some((0.5, 8.0))).cloud, 6, lc::Vectors::Each(2), false).unwrap())
     };
     let zoned = in_pool(1);
     assert_eq!(zoned, in_pool(2));

@@ -213,48 +213,47 @@ fn shadow_rays_see_occluders() {
     assert!(umbra > 10 && lit > 100, "{umbra} pixels in the umbra, {lit} lit");
 }
 
-/// Many lights (more than `TRACED_LIGHTS`) are sampled at each vertex by their unshadowed
-/// contribution: with white lights and no shadows every sample is exact (the odds are the
-/// contributions' shares); with coloured lights and an occluder the mean is still the sum over
-/// every light (bars from the first measurement, 0.055 % over the image and 3.5 % at the worst
-/// pixel, at twice that).
+/// Many lights (more than `TRACED_LIGHTS`) are sampled at each vertex from the light grid:
+/// with coloured point and spot lights and an occluder, the mean is still the sum over every
+/// light (bars at about twice the first measurement: 0.17 % over the image, the worst pixel off by 0.24
+/// of the mean pixel; at 8,192 samples 0.06 % and 0.058, as an unbiased estimate's noise falls).
 #[test]
 fn many_lights_are_sampled_without_bias() {
     let count = TRACED_LIGHTS as u32 * 3;
-    let lights_of = |colour: &dyn Fn(u32) -> Vec3| -> Vec<Light> {
-        (0..count)
-            .map(|i| {
-                let a = i as f32 * 2.4;
-                point_light(Vec3::new(3.0 * a.cos(), 1.0 + (i % 5) as f32 * 0.7, 3.0 * a.sin()), colour(i))
-            })
-            .collect()
-    };
+    let lights: Vec<Light> = (0..count)
+        .map(|i| {
+            let a = i as f32 * 2.4;
+            let at = Vec3::new(3.0 * a.cos(), 1.0 + (i % 5) as f32 * 0.7, 3.0 * a.sin());
+            let colour = Vec3::new(1.0 + (i % 3) as f32, 2.0, 1.0 + (i % 4) as f32);
+            match i % 3 {
+                0 => spot_light(at, Vec3::new(-at.x, -at.y, -at.z * 0.5), colour * 4.0, 0.2, 0.5),
+                _ => point_light(at, colour),
+            }
+        })
+        .collect();
     let camera = look_at(Vec3::new(0.0, 8.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 1.2);
+    let mut s = plane_scene(0.5, lights, camera);
+    s.meshes.push(square(Vec3::new(0.5, 0.6, 0.0), Vec3::X * 0.8, Vec3::NEG_Z * 0.8, 1, 0));
     let (w, h) = (24, 24);
-    let centres = ReferenceSettings { samples_per_pixel: 1, width: w, height: h, pixel_centres: true, ..Default::default() };
-    // At the surface the pixel's centre sees (the ground or the occluder's top: both face up).
-    let expected = |s: &Scene, x: u32, y: u32| {
-        let bvh = SceneBvh::new(s);
-        let hit = bvh.closest_hit(s.camera.position(), s.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, w, h), f32::INFINITY);
-        direct_irradiance(s, &bvh, hit.expect("every pixel sees the ground").position, Vec3::Y) * (0.5 / PI)
-    };
-    let white = plane_scene(0.5, lights_of(&|i| Vec3::splat(1.0 + i as f32)), camera);
-    let images = render(&white, &ReferenceSettings { shadows: false, ..centres.clone() });
-    for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
-        let (got, want) = (images.direct.get(x, y), expected(&white, x, y));
-        assert!(relative_error(got, want) < 1e-4, "pixel ({x}, {y}): {got}, the sum over every light {want}");
-    }
-    let mut shadowed = plane_scene(0.5, lights_of(&|i| Vec3::new(1.0 + (i % 3) as f32, 2.0, 1.0 + (i % 4) as f32)), camera);
-    shadowed.meshes.push(square(Vec3::new(0.5, 0.6, 0.0), Vec3::X * 0.8, Vec3::NEG_Z * 0.8, 1, 0));
-    let images = render(&shadowed, &ReferenceSettings { samples_per_pixel: 512, ..centres });
-    let (mut got, mut want, mut worst) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
-    for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
-        let (g, e) = (images.direct.get(x, y), expected(&shadowed, x, y));
-        (got, want) = (got + g, want + e);
-        worst = worst.max(relative_error(g, e));
-    }
-    eprintln!("many lights, 512 samples: image {got} against {want}, worst pixel off by {worst}");
-    assert!(relative_error(got, want) < 0.002 && worst < 0.07, "image {got} against {want}; worst pixel off by {worst}");
+    let settings = ReferenceSettings { samples_per_pixel: 512, width: w, height: h, pixel_centres: true, ..Default::default() };
+    let images = render(&s, &settings);
+    let bvh = SceneBvh::new(&s);
+    // The sum over every light at the surface each pixel's centre sees (the ground or the
+    // occluder's top: both face up).
+    let pixels: Vec<(Vec3, Vec3)> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let hit = bvh.closest_hit(s.camera.position(), s.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, w, h), f32::INFINITY);
+            let e = direct_irradiance(&s, &bvh, hit.expect("every pixel sees the ground").position, Vec3::Y) * (0.5 / PI);
+            (images.direct.get(x, y), e)
+        })
+        .collect();
+    let (got, want) = pixels.iter().fold((Vec3::ZERO, Vec3::ZERO), |(g, e), p| (g + p.0, e + p.1));
+    let mean = want / pixels.len() as f32;
+    // Off by a share of the mean pixel: dim pixels' noise is not their relative error.
+    let worst = pixels.iter().map(|(g, e)| ((*g - *e).abs() / mean).max_element()).fold(0.0f32, f32::max);
+    eprintln!("many lights, 512 samples: image {got} against {want}, worst pixel off by {worst} of the mean pixel");
+    assert!(relative_error(got, want) < 0.004 && worst < 0.5, "image {got} against {want}; worst pixel off by {worst}");
 }
 
 // ---------------------------------------------------------------------------------------

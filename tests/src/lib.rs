@@ -205,7 +205,7 @@ pub fn light_cloud_by_defaults(
 ) -> relume_bake::light_cloud::LightCloud {
     use relume_bake::light_cloud as lc;
     let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
-    lc::compress(&lc::reduce(scene, bvh, gathered, reduction).expect("reduce").cloud, 32, lc::Vectors::Each(8)).expect("compress")
+    lc::compress(&lc::reduce(scene, bvh, gathered, reduction).expect("reduce").cloud, 32, lc::Vectors::Each(8), false).expect("compress")
 }
 
 /// A level of modular radiance transfer baked quickly: a small dictionary (8 x 8 samples a

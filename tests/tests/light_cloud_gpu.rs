@@ -94,14 +94,14 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     let (scene, cloud, visibility) = baked();
     gpu_equals_cpu(&scene, &cloud, Arc::clone(&visibility));
     // CPCA vertex reconstruction: 16 clusters of 4 vectors.
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, lc::Vectors::Each(4)).unwrap(), Arc::clone(&visibility));
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, lc::Vectors::Each(4), false).unwrap(), Arc::clone(&visibility));
     // 4 zones, each with its own clustered lights (004 §4): every cluster weighs its zone's.
     let reduction = lc::Reduction { zones: 4, weights: Some((0.5, 20.0)) };
     let reduced = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud;
     assert!(reduced.lights.len() < 4 * cloud.lights.len(), "light clustering merged lights");
-    gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, lc::Vectors::Each(4)).unwrap(), Arc::clone(&visibility));
+    gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, lc::Vectors::Each(4), false).unwrap(), Arc::clone(&visibility));
     // Sloan's variable allocation: D_c from cluster to cluster.
-    let shared = lc::compress(&reduced, 16, lc::Vectors::Shared(4)).unwrap();
+    let shared = lc::compress(&reduced, 16, lc::Vectors::Shared(4), false).unwrap();
     assert!(shared.vectors.iter().any(|&d| d != 4), "every cluster kept 4 vectors: {:?}", shared.vectors);
     gpu_equals_cpu(&scene, &shared, visibility);
 }
@@ -114,7 +114,7 @@ fn a_sun_on_the_clouds_directions_gives_what_the_cpu_does() {
     let bvh = SceneBvh::new(&scene);
     let settings = LightCloudBakeSettings { grid: None, directions: 16, samples: 2, emission: 1, work: WorkOptions::default() };
     let cloud = lc::bake(&scene, &bvh, &settings).expect("bake");
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(2)).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(2), false).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
 }
 
 #[test]
@@ -193,7 +193,7 @@ fn spherical_harmonic_transfer_equals_the_cpus_as_the_light_moves() {
     )
     .expect("bake");
     assert_eq!(cloud.coefficients, relume_bake::sh::COEFFICIENTS);
-    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(4)).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
+    gpu_equals_cpu(&scene, &lc::compress(&cloud, 8, lc::Vectors::Each(4), false).unwrap(), Arc::new(move |a, b| bvh.visible(a, b)));
 }
 
 /// The paper's rendering (004 §5, eq. 13) draws every cluster in its own additive pass, its

@@ -109,7 +109,7 @@ impl Baker for LightCloudBaker {
         let (cloud, error, variance) = match self.compression {
             None => (reduced.cloud, 0.0, None),
             Some((clusters, vectors)) => {
-                let cloud = stages.timed("cpca", || compress(&reduced.cloud, clusters, vectors))?;
+                let cloud = stages.timed("cpca", || compress(&reduced.cloud, clusters, vectors, work.progress))?;
                 let error = relative_error(&reduced.cloud, &cloud);
                 let variance = self.explained_variance.then(|| {
                     stages.timed("explained variance", || explained_variance(scene, &bvh, &reduced.cloud, &cloud, VARIANCE_COMPONENTS))

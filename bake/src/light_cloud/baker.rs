@@ -250,8 +250,9 @@ impl Vectors {
 /// the zone's share of `clusters` (by its vertices, at least one) by the divisive 2-means of
 /// its rows, D vectors each, then refined: vertices move to the cluster that reconstructs them
 /// best until none moves (at most 20 rounds). Clusters left empty are dropped. With
-/// `Vectors::Shared`, the refined clusters then share their vectors out.
-pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result<LightCloud, String> {
+/// `Vectors::Shared`, the refined clusters then share their vectors out. With `progress`, a
+/// line every few seconds (zones' vertices done).
+pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors, progress: bool) -> Result<LightCloud, String> {
     if cloud.basis() != 0 || cloud.cluster_count() != cloud.vertex_count() {
         return Err("only an uncompressed cloud can be compressed".into());
     }
@@ -262,6 +263,7 @@ pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result
     }
     let mut out = LightCloud { zone_clusters: vec![0], vectors: Vec::new(), terms: Vec::new(), coords: Vec::new(), ..cloud.clone() };
     let mut coords = vec![Vec::new(); cloud.vertex_count()];
+    let mut done = Progress::new(cloud.vertex_count() as u64, "light cloud's clustered PCA", progress);
     for (zone, members) in zones.iter().enumerate() {
         let cols = cloud.per_light() * cloud.zone_light_range(zone).len();
         let rows: Vec<f32> =
@@ -291,7 +293,9 @@ pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors) -> Result
             out.assignment[v as usize] = base + c;
         }
         out.zone_clusters.push(base + clusters.len() as u32);
+        done.inc(members.len() as u64);
     }
+    done.finish();
     out.coords = coords.concat();
     Ok(out)
 }

@@ -37,6 +37,7 @@ struct Line {
 
 pub fn scaling_command(args: &ScalingArgs) -> Result<()> {
     let lines = read_lines(&args.bakes)?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
     let mut outputs = Outputs::new();
     outputs.bytes(&args.out.join("scaling.md"), table(&lines).as_bytes())?;
     let axes: [(&str, &str, fn(&Point) -> f64); 2] =
