@@ -26,16 +26,17 @@ pub struct LightGrid {
 }
 
 impl LightGrid {
-    /// The grid over the surfaces' box, clipped to the point and spot lights' box grown by its
-    /// size on every side (so that a far ground plane does not make the cells coarse), and
-    /// holding the lights; points outside take the nearest cell.
+    /// The grid over the surfaces' box, clipped to the point and spot lights' box grown on every
+    /// side by its longest side (so that a far ground plane does not make the cells coarse, and
+    /// lights in one ceiling's plane still have the floor below them in the box), and holding
+    /// the lights; points outside take the nearest cell.
     pub fn new(scene: &Scene) -> LightGrid {
         let lights = scene.lights.len().max(1);
         let placed: Vec<Vec3> = scene.lights.iter().filter(|l| l.kind != LightKind::Directional).map(|l| l.position).collect();
         let (mut lo, mut hi) = scene.bounds();
         if !placed.is_empty() {
             let (light_lo, light_hi) = bounds_of(&placed);
-            let reach = light_hi - light_lo;
+            let reach = Vec3::splat((light_hi - light_lo).max_element());
             lo = lo.max(light_lo - reach).min(light_lo);
             hi = hi.min(light_hi + reach).max(light_hi);
         }
