@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 #[derive(Args)]
 pub struct ScalingArgs {
     /// Bake artifact folders (`relume bake --out`), each named SERIES-SIZE: the name less its
-    /// last '-' part names the series it is drawn in (obscurance-1 ... obscurance-10).
+    /// last '-' part names the series it is drawn in (bake-1 ... bake-10).
     #[arg(required = true, num_args = 2..)]
     bakes: Vec<PathBuf>,
     /// The folder for scaling.md (the table and exponents) and the charts (SVG and PNG).
@@ -78,7 +78,7 @@ fn read_lines(bakes: &[PathBuf]) -> Result<Vec<Line>> {
     for dir in bakes {
         let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or_default();
         let Some((series, _)) = name.rsplit_once('-') else {
-            bail!("{}: a bake folder's name must be SERIES-SIZE (obscurance-10), so that it joins a series", dir.display());
+            bail!("{}: a bake folder's name must be SERIES-SIZE (bake-10), so that it joins a series", dir.display());
         };
         let point = read_point(dir)?;
         match lines.iter_mut().find(|l| l.name == series) {
