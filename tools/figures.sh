@@ -265,6 +265,10 @@ figure_ray_casting() {
     for k in 4 16 32; do
         "$RELUME" rays scenes/classroom.gltf --width 256 --height 256 --threads 2 --subdivide $k
     done
+    for k in 1 2 5 10; do
+        "$RELUME" scenes --scale $k --out "$DIR/scenes"
+        "$RELUME" rays "$DIR/scenes/scale-$k.gltf" --width 256 --height 256 --threads 2
+    done
     for scene in glossy-enclosure classroom maze fiv-blobs cornell; do
         for run in 1 2 3; do
             "$RELUME" reference scenes/$scene.gltf --width 128 --height 96 --spp 32 --threads 2 --out "$DIR/$scene.exr"

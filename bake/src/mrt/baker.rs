@@ -54,20 +54,27 @@ pub fn bake_on(
 fn solve_feedback(level: &LevelData, dictionary: &Dictionary) -> Result<Vec<f32>, String> {
     let d = level.blocks.len() * k_max(dictionary);
     let mut feedback = vec![0f32; 3 * d * d];
-    feedback.par_chunks_mut(d * d.max(1)).enumerate().try_for_each(|(c, out)| {
-        let mut k = bounce_matrix(level, dictionary, c);
-        let radius = spectral_radius(&k);
-        if radius >= 1.0 {
-            return Err(format!(
-                "the level's feedback diverges: one bounce returns {radius:.3} of some light (above 1; an albedo near 1, or too few modes)"
-            ));
-        }
-        k.neg_mut();
-        (0..d).for_each(|i| k[(i, i)] += 1.0);
-        let inverse = inverse(k).ok_or("the level's feedback has no fixed point (I - K is singular: an albedo of 1 in a closed level?)")?;
-        out.iter_mut().zip(inverse.iter()).for_each(|(o, &v)| *o = v as f32);
-        Ok(())
-    })?;
+    // Each channel's result kept, so that the error reported is the first channel's whichever
+    // thread fails first.
+    let solved: Vec<Result<(), String>> = feedback
+        .par_chunks_mut((d * d).max(1))
+        .enumerate()
+        .map(|(c, out)| {
+            let mut k = bounce_matrix(level, dictionary, c);
+            let radius = spectral_radius(&k);
+            if radius >= 1.0 {
+                return Err(format!(
+                    "the level's feedback diverges: one bounce returns {radius:.3} of some light (above 1; an albedo near 1, or too few modes)"
+                ));
+            }
+            k.neg_mut();
+            (0..d).for_each(|i| k[(i, i)] += 1.0);
+            let inverse = inverse(k).ok_or("the level's feedback has no fixed point (I - K is singular: an albedo of 1 in a closed level?)")?;
+            out.iter_mut().zip(inverse.iter()).for_each(|(o, &v)| *o = v as f32);
+            Ok(())
+        })
+        .collect();
+    solved.into_iter().collect::<Result<(), String>>()?;
     Ok(feedback)
 }
 
