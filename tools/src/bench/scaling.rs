@@ -20,6 +20,9 @@ pub struct ScalingArgs {
     out: PathBuf,
 }
 
+/// A chart's file stem, its y axis's label and the cost it draws.
+type Axis = (&'static str, &'static str, fn(&Point) -> f64);
+
 /// One bake's size and costs, from its stats.json.
 #[derive(Clone, Debug, PartialEq)]
 struct Point {
@@ -37,10 +40,11 @@ struct Line {
 
 pub fn scaling_command(args: &ScalingArgs) -> Result<()> {
     let lines = read_lines(&args.bakes)?;
+    let summary = table(&lines);
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
     let mut outputs = Outputs::new();
-    outputs.bytes(&args.out.join("scaling.md"), table(&lines).as_bytes())?;
-    let axes: [(&str, &str, fn(&Point) -> f64); 2] =
+    outputs.bytes(&args.out.join("scaling.md"), summary.as_bytes())?;
+    let axes: [Axis; 2] =
         [("time", "bake time, seconds (the stages' sum)", |p| p.seconds), ("memory", "peak memory, bytes", |p| p.peak_bytes)];
     for (stem, y_label, y) in axes {
         let series = lines
@@ -67,7 +71,7 @@ pub fn scaling_command(args: &ScalingArgs) -> Result<()> {
         charts::write(&mut outputs, &args.out.join(format!("scaling-{stem}")), &chart)?;
     }
     outputs.commit()?;
-    print!("{}", table(&lines));
+    print!("{summary}");
     println!("wrote {}", args.out.display());
     Ok(())
 }
