@@ -274,6 +274,20 @@ figure_ray_casting() {
             "$RELUME" reference scenes/$scene.gltf --width 128 --height 96 --spp 32 --threads 2 --out "$DIR/$scene.exr"
         done
     done
+    # Embree behind relume's ray calls (--ray-backend embree): against Embree alone, then the
+    # path tracer's paths/s and the obscurance bake's rays/s with each backend.
+    local scale="$DIR/scenes/scale"
+    for scene in scenes/glossy-enclosure.gltf scenes/classroom.gltf scenes/maze.gltf "$scale-1.gltf" "$scale-10.gltf"; do
+        "$RELUME" rays "$scene" --width 256 --height 256 --threads 2 --ray-backend embree
+        for backend in obvhs embree; do
+            "$RELUME" reference "$scene" --width 128 --height 96 --spp 32 --threads 2 --ray-backend $backend --out "$DIR/$backend.exr"
+        done
+    done
+    for scene in scenes/classroom.gltf "$scale-5.gltf"; do
+        for backend in obvhs embree; do
+            "$RELUME" bake "$scene" --method obscurance --threads 2 --ray-backend $backend --out "$DIR/obscurance-$backend"
+        done
+    done
 }
 
 figure_atlas_utilization() {

@@ -2,7 +2,8 @@
 # relume's test command: installs what is missing, checks the formatting, builds the renderer
 # crate alone (so that a feature only the workspace turns on cannot hide a wrong dependency),
 # then runs every test of the workspace, and the ray-casting tests once more with Embree (the
-# yardstick `relume rays --features embree` measures relume's BVH against). GPU tests run on
+# yardstick `relume rays --features embree` measures relume's BVH against, and the backend
+# `--ray-backend embree` puts behind its ray calls). GPU tests run on
 # lavapipe (or a real GPU when there is one) with validation layers on.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,9 +1,10 @@
 //! Ray casting against a whole [`Scene`]: every mesh's triangles in one compressed wide BVH
-//! (obvhs' CWBVH), with a watertight triangle test.
+//! (obvhs' CWBVH), with a watertight triangle test; or, chosen by [`RayBackend`], in Embree 3's
+//! BVH (builds with the `embree` feature).
 //!
 //! The path tracer and the bakers reach the geometry only through [`SceneBvh::closest_hit`] and
-//! [`SceneBvh::occluded`] (plus [`SceneBvh::offset_origin`] for leaving a surface), so another
-//! backend can replace this one behind the same three calls.
+//! [`SceneBvh::occluded`] (plus [`SceneBvh::offset_origin`] for leaving a surface), so the
+//! backend is replaced behind those three calls and nothing else sees it.
 //!
 //! Two facts about obvhs shape this file:
 //! - The primitive ids its traversal hands to the intersection closure are positions in the
@@ -65,14 +66,56 @@ struct Primitive {
     material: u32,
 }
 
-/// The scene's triangles in a BVH, owning copies of the data a hit reports (no borrow of the
-/// scene, so it can be built once and shared between threads).
-pub struct SceneBvh {
-    bvh: Option<CwBvh>,
+/// Which library casts the rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RayBackend {
+    /// obvhs' CWBVH and relume's watertight test: in every build, the default.
+    #[default]
+    Obvhs,
+    /// Embree 3 in its robust (watertight) mode, Debian's `libembree-dev`: only in builds with
+    /// the `embree` feature. Its kernels are chosen for the CPU at run time, so its bytes may
+    /// differ between CPUs (never between thread counts).
+    Embree,
+}
+
+impl RayBackend {
+    pub const NAMES: [&'static str; 2] = ["obvhs", "embree"];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// The backend named `name`; refuses Embree in a build without it, saying how to get it.
+    pub fn parse(name: &str) -> Result<RayBackend, String> {
+        match name {
+            "obvhs" => Ok(RayBackend::Obvhs),
+            "embree" if cfg!(feature = "embree") => Ok(RayBackend::Embree),
+            "embree" => Err("this relume was built without Embree: build it with `cargo build --release -p relume-tools --features embree` (needs Debian's libembree-dev), or use obvhs".into()),
+            _ => Err(format!("unknown ray backend {name:?}: one of {}", Self::NAMES.join(", "))),
+        }
+    }
+}
+
+/// obvhs' BVH over the triangles, in the order its leaves list them.
+struct Obvhs {
+    bvh: CwBvh,
     /// Triangle vertices in the BVH's leaf order, for the intersection test.
     leaf_triangles: Vec<[Vec3A; 3]>,
     /// Flattened scene triangle of each leaf slot.
     leaf_primitive: Vec<u32>,
+}
+
+enum Caster {
+    /// None for a scene without triangles (obvhs builds no empty BVH).
+    Obvhs(Option<Obvhs>),
+    #[cfg(feature = "embree")]
+    Embree(crate::embree::EmbreeScene),
+}
+
+/// The scene's triangles in a BVH, owning copies of the data a hit reports (no borrow of the
+/// scene, so it can be built once and shared between threads).
+pub struct SceneBvh {
+    caster: Caster,
     primitives: Vec<Primitive>,
     /// First flattened index of each mesh.
     mesh_offsets: Vec<u32>,
@@ -80,52 +123,42 @@ pub struct SceneBvh {
 }
 
 impl SceneBvh {
-    /// Builds the BVH over every triangle of every mesh.
+    /// Builds obvhs' BVH over every triangle of every mesh.
     pub fn new(scene: &Scene) -> Self {
-        let mut primitives = Vec::with_capacity(scene.triangle_count());
-        let mut mesh_offsets = Vec::with_capacity(scene.meshes.len());
-        for (mesh_index, mesh) in scene.meshes.iter().enumerate() {
-            mesh_offsets.push(primitives.len() as u32);
-            for (triangle, idx) in mesh.indices.chunks_exact(3).enumerate() {
-                let i = [idx[0] as usize, idx[1] as usize, idx[2] as usize];
-                let uv = |k: usize| mesh.uv0.as_ref().map_or(Vec2::ZERO, |uv| uv[i[k]]);
-                primitives.push(Primitive {
-                    positions: i.map(|k| mesh.positions[k]),
-                    normals: i.map(|k| mesh.normals[k]),
-                    uvs: [uv(0), uv(1), uv(2)],
-                    mesh: mesh_index as u32,
-                    triangle: triangle as u32,
-                    material: mesh.material as u32,
-                });
-            }
-        }
-        let triangles: Vec<Triangle> = primitives
-            .iter()
-            .map(|p| Triangle { v0: p.positions[0].into(), v1: p.positions[1].into(), v2: p.positions[2].into() })
-            .collect();
-        let (bvh, leaf_triangles, leaf_primitive) = if triangles.is_empty() {
-            (None, Vec::new(), Vec::new())
-        } else {
-            // The slowest preset: its full reinsertion and wide search from the first merge keep
-            // finely triangulated scenes traversable (medium_build's BVH cast 5x fewer rays on
-            // classroom split 32 x 32, 2.6x fewer on glossy-enclosure: docs/BENCHMARKS.md,
-            // "Ray casting"). Its pre-split may list a triangle in several leaves.
-            let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::very_slow_build(), &mut Duration::default());
-            let leaf_triangles = bvh
-                .primitive_indices
-                .iter()
-                .map(|&i| {
-                    let t = &triangles[i as usize];
-                    [t.v0, t.v1, t.v2]
-                })
-                .collect();
-            let leaf_primitive = bvh.primitive_indices.clone();
-            (Some(bvh), leaf_triangles, leaf_primitive)
-        };
+        let primitives = primitives(scene);
+        let caster = Caster::Obvhs(Obvhs::build(&primitives));
+        Self::with_caster(scene, caster, primitives)
+    }
 
+    /// Builds `backend`'s BVH over every triangle of every mesh.
+    pub fn build(scene: &Scene, backend: RayBackend) -> Result<Self, String> {
+        match backend {
+            RayBackend::Obvhs => Ok(Self::new(scene)),
+            #[cfg(feature = "embree")]
+            // One build thread: Embree's tree, and so which of two triangles meeting at an
+            // edge a ray reports, must not depend on the thread count.
+            RayBackend::Embree => {
+                let caster = Caster::Embree(crate::embree::EmbreeScene::new(scene, Some(1), true)?);
+                Ok(Self::with_caster(scene, caster, primitives(scene)))
+            }
+            #[cfg(not(feature = "embree"))]
+            RayBackend::Embree => Err(RayBackend::parse("embree").unwrap_err()),
+        }
+    }
+
+    fn with_caster(scene: &Scene, caster: Caster, primitives: Vec<Primitive>) -> Self {
         let (lo, hi) = scene.bounds();
         let magnitude = if primitives.is_empty() { 0.0 } else { lo.abs().max(hi.abs()).max_element() };
-        SceneBvh { bvh, leaf_triangles, leaf_primitive, primitives, mesh_offsets, epsilon: 1e-4 + 1e-5 * magnitude }
+        let mesh_offsets = scene
+            .meshes
+            .iter()
+            .scan(0, |first, mesh| {
+                let at = *first;
+                *first += (mesh.indices.len() / 3) as u32;
+                Some(at)
+            })
+            .collect();
+        SceneBvh { caster, primitives, mesh_offsets, epsilon: 1e-4 + 1e-5 * magnitude }
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -166,36 +199,22 @@ impl SceneBvh {
     /// The closest triangle the ray `origin + t dir`, 0 < t < `t_max`, hits. `dir` should be
     /// unit length so that `t` is a distance.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
-        let bvh = self.bvh.as_ref()?;
-        let dir = positive_zeros(dir);
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
-        let wt = WatertightRay::new(origin, dir);
-        let mut hit = RayHit::none();
-        let mut best = (0.0f32, 0.0f32);
-        let found = bvh.ray_traverse(ray, &mut hit, |r, leaf| match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
-            Some((t, b1, b2)) => {
-                best = (b1, b2);
-                t
-            }
-            None => f32::INFINITY,
-        });
-        if !found {
-            return None;
-        }
-        let primitive = self.leaf_primitive[hit.primitive_id as usize];
-        Some(self.make_hit(primitive, hit.t, Vec2::new(best.0, best.1)))
+        let (primitive, t, barycentrics) = match &self.caster {
+            Caster::Obvhs(bvh) => bvh.as_ref()?.closest(origin, dir, t_max)?,
+            #[cfg(feature = "embree")]
+            Caster::Embree(embree) => embree.closest(origin, dir, t_max)?,
+        };
+        Some(self.make_hit(primitive, t, barycentrics))
     }
 
     /// Whether anything blocks the ray `origin + t dir` for 0 < t < `t_max` (a shadow ray;
     /// stops at the first blocker found, not the closest).
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        let Some(bvh) = self.bvh.as_ref() else {
-            return false;
-        };
-        let dir = positive_zeros(dir);
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
-        let wt = WatertightRay::new(origin, dir);
-        !bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
+        match &self.caster {
+            Caster::Obvhs(bvh) => bvh.as_ref().is_some_and(|bvh| bvh.occluded(origin, dir, t_max)),
+            #[cfg(feature = "embree")]
+            Caster::Embree(embree) => embree.occluded(origin, dir, t_max),
+        }
     }
 
     /// Whether nothing blocks the segment between two points in free space (no offsets: for
@@ -224,6 +243,78 @@ impl SceneBvh {
             primitive,
             material: p.material,
         }
+    }
+}
+
+/// Every triangle of every mesh, meshes in order: the flattened order hits report.
+fn primitives(scene: &Scene) -> Vec<Primitive> {
+    let mut primitives = Vec::with_capacity(scene.triangle_count());
+    for (mesh_index, mesh) in scene.meshes.iter().enumerate() {
+        for (triangle, idx) in mesh.indices.chunks_exact(3).enumerate() {
+            let i = [idx[0] as usize, idx[1] as usize, idx[2] as usize];
+            let uv = |k: usize| mesh.uv0.as_ref().map_or(Vec2::ZERO, |uv| uv[i[k]]);
+            primitives.push(Primitive {
+                positions: i.map(|k| mesh.positions[k]),
+                normals: i.map(|k| mesh.normals[k]),
+                uvs: [uv(0), uv(1), uv(2)],
+                mesh: mesh_index as u32,
+                triangle: triangle as u32,
+                material: mesh.material as u32,
+            });
+        }
+    }
+    primitives
+}
+
+impl Obvhs {
+    /// None for no triangles.
+    fn build(primitives: &[Primitive]) -> Option<Obvhs> {
+        let triangles: Vec<Triangle> = primitives
+            .iter()
+            .map(|p| Triangle { v0: p.positions[0].into(), v1: p.positions[1].into(), v2: p.positions[2].into() })
+            .collect();
+        if triangles.is_empty() {
+            return None;
+        }
+        // The slowest preset: its full reinsertion and wide search from the first merge keep
+        // finely triangulated scenes traversable (medium_build's BVH cast 5x fewer rays on
+        // classroom split 32 x 32, 2.6x fewer on glossy-enclosure: docs/BENCHMARKS.md,
+        // "Ray casting"). Its pre-split may list a triangle in several leaves.
+        let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::very_slow_build(), &mut Duration::default());
+        let leaf_triangles = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| {
+                let t = &triangles[i as usize];
+                [t.v0, t.v1, t.v2]
+            })
+            .collect();
+        let leaf_primitive = bvh.primitive_indices.clone();
+        Some(Obvhs { bvh, leaf_triangles, leaf_primitive })
+    }
+
+    /// (flattened triangle, t, barycentrics) of the closest hit.
+    fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(u32, f32, Vec2)> {
+        let dir = positive_zeros(dir);
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let wt = WatertightRay::new(origin, dir);
+        let mut hit = RayHit::none();
+        let mut best = Vec2::ZERO;
+        let found = self.bvh.ray_traverse(ray, &mut hit, |r, leaf| match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
+            Some((t, b1, b2)) => {
+                best = Vec2::new(b1, b2);
+                t
+            }
+            None => f32::INFINITY,
+        });
+        found.then(|| (self.leaf_primitive[hit.primitive_id as usize], hit.t, best))
+    }
+
+    fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        let dir = positive_zeros(dir);
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let wt = WatertightRay::new(origin, dir);
+        !self.bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
     }
 }
 

@@ -1,12 +1,14 @@
 //! Embree 3 (Debian's `libembree-dev`) as a second ray caster, behind the `embree` feature:
 //! the yardstick `relume rays` measures relume's own BVH against, on the same triangles and the
-//! same rays. relume's path tracer and bakers never use it.
+//! same rays, and the backend `--ray-backend embree` puts behind [`crate::bvh::SceneBvh`] for
+//! the path tracer and the bakers.
 //!
 //! The few declarations below mirror Embree 3.13's headers (`embree3/rtcore_*.h`) for a build
 //! with one instance level and no minimum width, which is how Debian builds it.
 
 use crate::ray_bench::{RayCaster, TracedRay};
 use crate::scene::Scene;
+use glam::{Vec2, Vec3};
 use std::ffi::{c_char, c_void, CString};
 
 type Device = *mut c_void;
@@ -19,6 +21,8 @@ const BUFFER_TYPE_VERTEX: u32 = 1;
 const FORMAT_UINT3: u32 = 0x5003;
 const FORMAT_FLOAT3: u32 = 0x9003;
 const INVALID_GEOMETRY_ID: u32 = u32::MAX;
+/// RTC_SCENE_FLAG_ROBUST: "avoid optimizations that reduce arithmetic accuracy".
+const SCENE_FLAG_ROBUST: u32 = 1 << 2;
 
 #[repr(C)]
 struct IntersectContext {
@@ -69,6 +73,7 @@ extern "C" {
     fn rtcCommitGeometry(geometry: Geometry);
     fn rtcAttachGeometry(scene: SceneHandle, geometry: Geometry) -> u32;
     fn rtcReleaseGeometry(geometry: Geometry);
+    fn rtcSetSceneFlags(scene: SceneHandle, flags: u32);
     fn rtcCommitScene(scene: SceneHandle);
     fn rtcIntersect1(scene: SceneHandle, context: *mut IntersectContext, rayhit: *mut RayHit);
     fn rtcOccluded1(scene: SceneHandle, context: *mut IntersectContext, ray: *mut Ray);
@@ -85,8 +90,10 @@ unsafe impl Send for EmbreeScene {}
 unsafe impl Sync for EmbreeScene {}
 
 impl EmbreeScene {
-    /// Builds Embree's BVH with `threads` build threads (None: all cores).
-    pub fn new(scene: &Scene, threads: Option<usize>) -> Result<EmbreeScene, String> {
+    /// Builds Embree's BVH with `threads` build threads (None: all cores); `watertight` asks
+    /// for its robust mode, whose triangle test lets no ray slip between two triangles that
+    /// share an edge (relume's own test does the same), else its fastest.
+    pub fn new(scene: &Scene, threads: Option<usize>, watertight: bool) -> Result<EmbreeScene, String> {
         let positions: Vec<[f32; 3]> = scene.meshes.iter().flat_map(|m| m.positions.iter().map(|p| p.to_array())).collect();
         let mut indices = Vec::with_capacity(scene.triangle_count());
         let mut base = 0u32;
@@ -103,6 +110,9 @@ impl EmbreeScene {
                 return Err("Embree could not create a device".into());
             }
             let embree = EmbreeScene { device, scene: rtcNewScene(device) };
+            if watertight {
+                rtcSetSceneFlags(embree.scene, SCENE_FLAG_ROBUST);
+            }
             if !indices.is_empty() {
                 let geometry = rtcNewGeometry(device, GEOMETRY_TYPE_TRIANGLE);
                 let v = rtcSetNewGeometryBuffer(geometry, BUFFER_TYPE_VERTEX, 0, FORMAT_FLOAT3, 12, positions.len()) as *mut [f32; 3];
@@ -125,8 +135,35 @@ impl EmbreeScene {
         }
     }
 
-    fn ray(ray: &TracedRay) -> Ray {
-        Ray { org: ray.origin.to_array(), tnear: 0.0, dir: ray.dir.to_array(), time: 0.0, tfar: ray.t_max, mask: u32::MAX, id: 0, flags: 0 }
+    fn ray(origin: Vec3, dir: Vec3, t_max: f32) -> Ray {
+        Ray { org: origin.to_array(), tnear: 0.0, dir: dir.to_array(), time: 0.0, tfar: t_max, mask: u32::MAX, id: 0, flags: 0 }
+    }
+
+    /// The closest triangle hit by `origin + t dir`, 0 <= t <= `t_max`: its index in the
+    /// scene's flattened triangle list (meshes in order), t, and the barycentric weights of its
+    /// second and third vertices.
+    pub fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(u32, f32, Vec2)> {
+        let hit = Hit {
+            ng: [0.0; 3],
+            u: 0.0,
+            v: 0.0,
+            prim_id: INVALID_GEOMETRY_ID,
+            geom_id: INVALID_GEOMETRY_ID,
+            inst_id: [INVALID_GEOMETRY_ID],
+        };
+        let mut rayhit = RayHit { ray: Self::ray(origin, dir, t_max), hit };
+        // SAFETY: a committed scene, a context and a ray hit laid out as Embree's.
+        unsafe { rtcIntersect1(self.scene, &mut context(), &mut rayhit) };
+        let found = rayhit.hit.geom_id != INVALID_GEOMETRY_ID;
+        found.then(|| (rayhit.hit.prim_id, rayhit.ray.tfar, Vec2::new(rayhit.hit.u, rayhit.hit.v)))
+    }
+
+    /// Whether anything blocks `origin + t dir` for 0 <= t <= `t_max`.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        let mut r = Self::ray(origin, dir, t_max);
+        // SAFETY: as above; Embree sets tfar to -inf when the ray is blocked.
+        unsafe { rtcOccluded1(self.scene, &mut context(), &mut r) };
+        r.tfar == f32::NEG_INFINITY
     }
 }
 
@@ -136,25 +173,11 @@ fn context() -> IntersectContext {
 
 impl RayCaster for EmbreeScene {
     fn closest_t(&self, ray: &TracedRay) -> Option<f32> {
-        let hit = Hit {
-            ng: [0.0; 3],
-            u: 0.0,
-            v: 0.0,
-            prim_id: INVALID_GEOMETRY_ID,
-            geom_id: INVALID_GEOMETRY_ID,
-            inst_id: [INVALID_GEOMETRY_ID],
-        };
-        let mut rayhit = RayHit { ray: Self::ray(ray), hit };
-        // SAFETY: a committed scene, a context and a ray hit laid out as Embree's.
-        unsafe { rtcIntersect1(self.scene, &mut context(), &mut rayhit) };
-        (rayhit.hit.geom_id != INVALID_GEOMETRY_ID).then_some(rayhit.ray.tfar)
+        self.closest(ray.origin, ray.dir, ray.t_max).map(|(_, t, _)| t)
     }
 
     fn occluded(&self, ray: &TracedRay) -> bool {
-        let mut r = Self::ray(ray);
-        // SAFETY: as above; Embree sets tfar to -inf when the ray is blocked.
-        unsafe { rtcOccluded1(self.scene, &mut context(), &mut r) };
-        r.tfar == f32::NEG_INFINITY
+        EmbreeScene::occluded(self, ray.origin, ray.dir, ray.t_max)
     }
 }
 

@@ -1,6 +1,7 @@
 //! What every long bake stage shares: its worker threads, its progress bar and the peak
 //! memory it reached.
 
+use crate::bvh::RayBackend;
 use crate::contract::{mib, Estimate};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
@@ -27,6 +28,8 @@ pub struct WorkOptions {
     /// When the job began (`begun`): its time limit counts from here over all its stages;
     /// None: each stage's own start.
     pub started: Option<Instant>,
+    /// Which library casts the job's rays.
+    pub ray_backend: RayBackend,
 }
 
 impl WorkOptions {

@@ -5,6 +5,7 @@
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use glam::Vec3;
+use relume_bake::bvh::RayBackend;
 use relume_bake::environment::{Environment, EnvironmentSettings};
 use relume_bake::gltf_load::{load_with_options, CameraOverride, LightChoice, LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
 use relume_bake::lights_file;
@@ -100,6 +101,10 @@ pub(crate) struct WorkArgs {
     /// or a number with K, M, G or T (binary units). Default: the machine's memory.
     #[arg(long, value_parser = bytes)]
     pub memory_limit: Option<u64>,
+    /// Which library casts the rays: obvhs (relume's BVH, every build) or embree (Embree 3, in
+    /// builds with `--features embree`).
+    #[arg(long, default_value = "obvhs", value_parser = ray_backend)]
+    pub ray_backend: RayBackend,
 }
 
 impl WorkArgs {
@@ -112,6 +117,7 @@ impl WorkArgs {
             progress: true,
             memory_limit: self.memory_limit.or_else(relume_bake::work::machine_memory_bytes),
             started: None,
+            ray_backend: self.ray_backend,
         };
         options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
         Ok(options)
@@ -298,6 +304,10 @@ fn number<T: std::str::FromStr + Into<f64> + Copy>(text: &str, allowed: impl Fn(
 }
 
 /// Worker threads: 1..=1024 (more only slows the work and can exhaust the machine).
+pub(crate) fn ray_backend(text: &str) -> Result<RayBackend, String> {
+    RayBackend::parse(text)
+}
+
 pub(crate) fn threads(text: &str) -> Result<usize, String> {
     text.parse::<usize>().ok().filter(|n| (1..=1024).contains(n)).ok_or_else(|| "give 1..=1024 worker threads".into())
 }

@@ -129,6 +129,7 @@ pub(crate) fn bake_scene(
     stats["peak_memory_bytes"] = json!(stages.peak_memory_bytes());
     stats["triangles"] = json!(scene.triangle_count());
     stats["threads"] = json!(work.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())));
+    stats["ray_backend"] = json!(work.ray_backend.name());
     let mut parameters = bake.parameters;
     parameters["given"] = values.json(&method.params(), Stage::Bake);
     let output = BakeOutput { method: method.name(), scene: Some(scene), parameters, sections: bake.sections, stats };

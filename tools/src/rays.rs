@@ -2,10 +2,10 @@
 //! rays per second), on a path tracer's rays, optionally with every triangle subdivided, and
 //! against Embree on the same rays where relume was built with it.
 
-use crate::args::{load_scene, threads, SceneArgs};
+use crate::args::{load_scene, ray_backend, threads, SceneArgs};
 use anyhow::{anyhow, Result};
 use clap::Args;
-use relume_bake::bvh::SceneBvh;
+use relume_bake::bvh::{RayBackend, SceneBvh};
 use relume_bake::ray_bench::{ray_set, time_rays, RayCaster, RayRate, RaySet};
 use relume_bake::scene::Scene;
 use relume_bake::tessellation::Tessellation;
@@ -32,14 +32,18 @@ pub(crate) struct RaysArgs {
     /// Worker threads, 1..=1024 (default: all cores).
     #[arg(long, value_parser = threads)]
     threads: Option<usize>,
+    /// The backend behind relume's ray calls to time: obvhs, or embree (builds with
+    /// `--features embree`; Embree behind the same calls, against Embree called alone).
+    #[arg(long, default_value = "obvhs", value_parser = ray_backend)]
+    ray_backend: RayBackend,
 }
 
 pub(crate) fn rays_command(args: &RaysArgs) -> Result<()> {
     let scene = subdivided(load_scene(&args.scene)?, args.subdivide)?;
     println!("{}: {} triangles (every triangle split {k} x {k})", args.scene.scene.display(), scene.triangle_count(), k = args.subdivide);
     let start = Instant::now();
-    let bvh = SceneBvh::new(&scene);
-    println!("relume BVH built in {:.3} s", start.elapsed().as_secs_f64());
+    let bvh = SceneBvh::build(&scene, args.ray_backend).map_err(|e| anyhow!("--ray-backend: {e}"))?;
+    println!("relume BVH ({}) built in {:.3} s", args.ray_backend.name(), start.elapsed().as_secs_f64());
     let set = ray_set(&scene, &bvh, args.scene.width, args.scene.height, args.bounces, args.seed);
     println!("{} closest-hit rays, {} shadow rays, each traced {} times", set.closest.len(), set.shadow.len(), args.repeats);
     let (closest, shadow) = report("relume", &bvh, &set, args);
@@ -57,7 +61,7 @@ fn compare_with_embree(_: &Scene, _: &SceneBvh, _: &RaySet, _: &RaysArgs, _: (Ra
 #[cfg(feature = "embree")]
 fn compare_with_embree(scene: &Scene, bvh: &SceneBvh, set: &RaySet, args: &RaysArgs, ours: (RayRate, RayRate)) -> Result<()> {
     let start = Instant::now();
-    let embree = relume_bake::embree::EmbreeScene::new(scene, args.threads).map_err(|e| anyhow!("{e}"))?;
+    let embree = relume_bake::embree::EmbreeScene::new(scene, args.threads, false).map_err(|e| anyhow!("{e}"))?;
     println!("Embree BVH built in {:.3} s", start.elapsed().as_secs_f64());
     let theirs = report("Embree", &embree, set, args);
     let ratio = |a: RayRate, b: RayRate| a.rays_per_second() / b.rays_per_second();

@@ -2,7 +2,7 @@
 //! NRMSE of one EXR against another, with a false-colour error image).
 
 use crate::args::{load_scene, positive, reference_settings, refuse_writing_over, scene_inputs, PathTracerArgs, SceneArgs};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use relume_bake::bvh::SceneBvh;
 use relume_bake::image;
@@ -54,11 +54,11 @@ pub(crate) struct ReferenceRun {
     pub seconds: f64,
 }
 
-pub(crate) fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> ReferenceRun {
+pub(crate) fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> Result<ReferenceRun> {
     let start = Instant::now();
-    let bvh = SceneBvh::new(scene);
+    let bvh = SceneBvh::build(scene, settings.work.ray_backend).map_err(|e| anyhow!("{e}"))?;
     let images = render_reference(scene, &bvh, settings);
-    ReferenceRun { images, seconds: start.elapsed().as_secs_f64() }
+    Ok(ReferenceRun { images, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// Stages the reference's EXR at `path` and its tonemapped PNG beside it.
@@ -73,7 +73,7 @@ pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
     refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
-    let run = trace_reference(&scene, &settings);
+    let run = trace_reference(&scene, &settings)?;
     let mut outputs = Outputs::new();
     write_reference(&mut outputs, &args.out, &run, args.exposure)?;
     outputs.commit()?;

@@ -105,7 +105,7 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     }
 
     println!("rendering the reference ({} spp)", args.trace.spp);
-    let reference = trace_reference(&scene, &reference_settings);
+    let reference = trace_reference(&scene, &reference_settings)?;
     let exposure = args.gpu.exposure;
     write_reference(&mut outputs, &args.out.join("reference.exr"), &reference, exposure)?;
 

@@ -190,11 +190,27 @@ fn impossible_parameters_are_refused() {
         ["render", "--frames", "0"],
         ["render", "--beta", "1"],
         ["bench", "--budget", "0"],
+        ["bake", "--ray-backend", "optix"],
     ] {
         let result = relume(&[args[0], scene, args[1], args[2]], &dir);
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(2), "{args:?}: {stderr}");
         assert!(stderr.contains(args[1]) && stderr.contains(args[2]), "{args:?}: {stderr}");
+    }
+}
+
+/// A build without Embree refuses `--ray-backend embree` as a usage error that says how to get
+/// it, before any work.
+#[cfg(not(feature = "embree"))]
+#[test]
+fn the_embree_backend_is_refused_by_a_build_without_it() {
+    let dir = temp_dir("embree");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    for command in ["reference", "bake", "rays"] {
+        let result = relume(&[command, scene.to_str().unwrap(), "--ray-backend", "embree"], &dir);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{command}: {stderr}");
+        assert!(stderr.contains("--ray-backend") && stderr.contains("--features embree"), "{command}: {stderr}");
     }
 }
 

@@ -104,7 +104,7 @@ pub fn occluder_table(
     work: &WorkOptions,
 ) -> Result<OccluderTable, String> {
     let (centre, radius) = bounding_sphere(&mesh.positions);
-    let bvh = SceneBvh::new(&alone(mesh, centre));
+    let bvh = SceneBvh::build(&alone(mesh, centre), work.ray_backend)?;
     let table = OccluderTable {
         grid: settings.grid,
         radius,

@@ -90,7 +90,7 @@ impl Baker for LightCloudBaker {
             (chosen.edge > 0.0).then(|| stages.timed("tessellation", || Tessellation::new(source, chosen.edge))).transpose()?;
         let fine = tessellation.as_ref().map(|t| t.apply(source));
         let scene = fine.as_ref().unwrap_or(source);
-        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+        let bvh = stages.timed("bvh", || SceneBvh::build(scene, work.ray_backend))?;
         let derive = !declared.declared && scene.local_lights().next().is_some();
         let reachable = derive.then(|| stages.timed("region", || region::reachable(scene, &bvh))).transpose()?;
         // Points where the scene declares a grid or has a light that stands somewhere.

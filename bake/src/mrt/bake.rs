@@ -11,7 +11,7 @@ use super::proxy::{dynamic_meshes, Proxy};
 use super::{BlockSettings, InterfaceSettings};
 use crate::artifact::{Artifact, BakeOutput};
 use crate::atlas::AtlasSection;
-use crate::bvh::SceneBvh;
+use crate::bvh::{RayBackend, SceneBvh};
 use crate::contract::{scene_bytes, Baked, Baker, Estimate, Stages};
 use crate::scene::Scene;
 use crate::tessellation;
@@ -142,18 +142,18 @@ impl MrtBaker {
 }
 
 /// The scene's block proxy and the meshes its light volume lights: as declared, or derived
-/// from the scene (with what was derived).
-pub fn proxy(scene: &Scene) -> Result<(Proxy, Vec<usize>, Option<Derived>), String> {
+/// from the scene with `backend`'s rays (with what was derived).
+pub fn proxy(scene: &Scene, backend: RayBackend) -> Result<(Proxy, Vec<usize>, Option<Derived>), String> {
     if Proxy::declared(scene) {
         return Ok((Proxy::of(scene)?, dynamic_meshes(scene)?, None));
     }
-    let derived = derive::derive(scene, &SceneBvh::new(scene))?;
+    let derived = derive::derive(scene, &SceneBvh::build(scene, backend)?)?;
     Ok((derived.proxy.clone(), derived.dynamic.clone(), Some(derived)))
 }
 
 impl Baker for MrtBaker {
     fn bake(&self, source: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String> {
-        let (proxy, dynamic, derived) = stages.timed("proxy", || proxy(source))?;
+        let (proxy, dynamic, derived) = stages.timed("proxy", || proxy(source, work.ray_backend))?;
         work.admit("mrt level", &self.level_estimate(source, proxy.corners.len(), work))?;
         let split = derived.as_ref().and_then(|d| d.split.as_ref());
         let fine = split.map(|s| s.apply(source));

@@ -29,7 +29,7 @@ impl ObscuranceBaker {
         settings.validate()?;
         let atlas = self.atlas.build(scene, stages)?;
         work.admit("obscurance", &self.estimate(scene, &atlas))?;
-        let bvh = stages.timed("bvh", || SceneBvh::new(scene));
+        let bvh = stages.timed("bvh", || SceneBvh::build(scene, work.ray_backend))?;
         let map = stages.timed("obscurance", || bake_obscurance(scene, &bvh, &atlas, &settings))?;
         let facts = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
         let obscurance = section(&map.values, atlas.layout(), facts)?;

@@ -151,7 +151,7 @@ impl Method for MrtMethod {
 
     /// A scene that declares its blocks, or whose blocks can be derived.
     fn suits(&self, scene: &Scene) -> bool {
-        mrt::proxy(scene).is_ok()
+        mrt::proxy(scene, relume_bake::bvh::RayBackend::Obvhs).is_ok()
     }
 
     /// It models all indirect light: an ambient term would count it twice.
