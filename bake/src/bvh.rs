@@ -11,10 +11,12 @@
 //!   BVH's leaf order, not input order. The triangles are therefore copied into leaf order
 //!   once at build time (`leaf_triangles`), and `leaf_primitive` maps a leaf slot back to the
 //!   scene's triangle.
-//! - Its box test never reports boxes closer than a fixed 1e-4 along the ray, so geometry
-//!   nearer than that to a ray origin may be missed. Rays that leave a surface therefore start
-//!   [`SceneBvh::epsilon`] off it (at least 1e-4, more in large scenes, where f32 positions are
-//!   coarser), along the geometric normal, on the side the ray leaves to.
+//! - Its box test never reports boxes closer than a fixed 1e-4 along the ray, so each ray is
+//!   traced from 1e-4 behind its origin and only hits past the origin count (`behind`); else
+//!   geometry nearer than that to the origin, such as the other wall of a corner, is missed.
+//!   Rays that leave a surface start [`SceneBvh::epsilon`] off it (at least 1e-4, more in
+//!   large scenes, where f32 positions are coarser), along the geometric normal, on the side
+//!   the ray leaves to, so the shifted start stays on that side too.
 
 use crate::scene::Scene;
 use glam::{Mat3A, Vec2, Vec3, Vec3A};
@@ -180,7 +182,8 @@ impl SceneBvh {
         self.primitives[primitive as usize].material
     }
 
-    /// How far rays start off a surface: 1e-4 (obvhs' minimum box distance) plus 1e-5 of the
+    /// How far rays start off a surface: 1e-4 (obvhs' minimum box distance, which the traced
+    /// ray's start is moved back by, so it stays off the surface it leaves) plus 1e-5 of the
     /// largest coordinate magnitude in the scene (about 170 f32 ulps there), which covers
     /// the rounding of hit positions.
     pub fn epsilon(&self) -> f32 {
@@ -295,27 +298,37 @@ impl Obvhs {
 
     /// (flattened triangle, t, barycentrics) of the closest hit.
     fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(u32, f32, Vec2)> {
-        let dir = positive_zeros(dir);
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
-        let wt = WatertightRay::new(origin, dir);
+        let (ray, wt) = behind(origin, dir, t_max);
         let mut hit = RayHit::none();
         let mut best = Vec2::ZERO;
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, leaf| match wt.intersect(&self.leaf_triangles[leaf], r.tmax) {
+        let found = self.bvh.ray_traverse(ray, &mut hit, |r, leaf| match wt.intersect(&self.leaf_triangles[leaf], OBVHS_NEAREST, r.tmax) {
             Some((t, b1, b2)) => {
                 best = Vec2::new(b1, b2);
                 t
             }
             None => f32::INFINITY,
         });
-        found.then(|| (self.leaf_primitive[hit.primitive_id as usize], hit.t, best))
+        found.then(|| (self.leaf_primitive[hit.primitive_id as usize], hit.t - OBVHS_NEAREST, best))
     }
 
     fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        let dir = positive_zeros(dir);
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
-        let wt = WatertightRay::new(origin, dir);
-        !self.bvh.ray_traverse_miss(ray, |r, leaf| wt.intersect(&self.leaf_triangles[leaf], r.tmax).map_or(f32::INFINITY, |h| h.0))
+        let (ray, wt) = behind(origin, dir, t_max);
+        let blocker = |r: &Ray, leaf: usize| wt.intersect(&self.leaf_triangles[leaf], OBVHS_NEAREST, r.tmax).map_or(f32::INFINITY, |h| h.0);
+        !self.bvh.ray_traverse_miss(ray, blocker)
     }
+}
+
+/// How near a ray's origin obvhs' box test stops seeing boxes (its `cwbvh::node::EPSILON`).
+const OBVHS_NEAREST: f32 = 1e-4;
+
+/// The ray `origin + t dir` started `OBVHS_NEAREST` behind its origin, for obvhs and for the
+/// triangle test, which then takes only hits past the origin. Started at the origin, a ray
+/// within 1e-4 of the other wall of a corner went through it (7 of 262,144 paths left
+/// glossy-enclosure's closed room so: docs/BENCHMARKS.md, "Ray casting").
+fn behind(origin: Vec3, dir: Vec3, t_max: f32) -> (Ray, WatertightRay) {
+    let dir = positive_zeros(dir);
+    let start = origin - dir * OBVHS_NEAREST;
+    (Ray::new(start.into(), dir.into(), 0.0, t_max + OBVHS_NEAREST), WatertightRay::new(start, dir))
 }
 
 /// Per-ray constants of the watertight ray/triangle test of Woop, Benthin and Wald,
@@ -357,9 +370,9 @@ impl WatertightRay {
         WatertightRay { origin: origin.into(), shear: Mat3A::from_cols(shear[0], shear[1], shear[2]).transpose() }
     }
 
-    /// (t, b1, b2) of a hit with 0 < t < t_max, or None.
+    /// (t, b1, b2) of a hit with t_min < t < t_max, or None.
     #[inline(always)]
-    fn intersect(&self, tri: &[Vec3A; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+    fn intersect(&self, tri: &[Vec3A; 3], t_min: f32, t_max: f32) -> Option<(f32, f32, f32)> {
         let a = self.shear * (tri[0] - self.origin);
         let b = self.shear * (tri[1] - self.origin);
         let c = self.shear * (tri[2] - self.origin);
@@ -384,7 +397,7 @@ impl WatertightRay {
         let t_scaled = u * a.z + v * b.z + w * c.z;
         let inv = 1.0 / det;
         let t = t_scaled * inv;
-        if !(t > 0.0 && t < t_max) {
+        if !(t > t_min && t < t_max) {
             return None;
         }
         Some((t, v * inv, w * inv))
@@ -410,15 +423,15 @@ mod tests {
     fn watertight_test_reports_distance_and_barycentrics() {
         let tri = single([Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]);
         let ray = WatertightRay::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z);
-        let (t, b1, b2) = ray.intersect(&tri, f32::INFINITY).unwrap();
+        let (t, b1, b2) = ray.intersect(&tri, 0.0, f32::INFINITY).unwrap();
         assert!((t - 2.0).abs() < 1e-6 && (b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // From behind too (surfaces are two-sided for intersection).
         let ray = WatertightRay::new(Vec3::new(0.25, 0.5, -3.0), Vec3::Z);
-        let (t, b1, b2) = ray.intersect(&tri, f32::INFINITY).unwrap();
+        let (t, b1, b2) = ray.intersect(&tri, 0.0, f32::INFINITY).unwrap();
         assert!((t - 3.0).abs() < 1e-6 && (b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
-        assert!(ray.intersect(&tri, 2.5).is_none());
+        assert!(ray.intersect(&tri, 0.0, 2.5).is_none());
         let miss = WatertightRay::new(Vec3::new(0.75, 0.5, 2.0), Vec3::NEG_Z);
-        assert!(miss.intersect(&tri, f32::INFINITY).is_none());
+        assert!(miss.intersect(&tri, 0.0, f32::INFINITY).is_none());
     }
 
     #[test]
@@ -433,9 +446,27 @@ mod tests {
             let origin = Vec3::new(0.3 * (i as f32).sin(), 0.7 * (i as f32 * 1.3).cos(), 1.0 + s);
             let dir = (target - origin).normalize();
             let ray = WatertightRay::new(origin, dir);
-            let hits = ray.intersect(&t0, f32::INFINITY).is_some() as u32 + ray.intersect(&t1, f32::INFINITY).is_some() as u32;
+            let hits = ray.intersect(&t0, 0.0, f32::INFINITY).is_some() as u32 + ray.intersect(&t1, 0.0, f32::INFINITY).is_some() as u32;
             assert!(hits >= 1, "ray {i} slipped through the shared edge");
         }
+    }
+
+    /// A ray leaving a floor within 1e-4 of the wall it meets (a corner) hits that wall; traced
+    /// from its origin, obvhs' box test skipped the wall.
+    #[test]
+    fn a_ray_from_a_corner_meets_the_wall_beside_it() {
+        use crate::testing::{look_at, material, scene, square};
+        let wall = square(Vec3::new(0.6, 0.5, 0.0), Vec3::Y * 0.5, Vec3::Z * 0.5, 2, 0);
+        let floor = square(Vec3::ZERO, Vec3::X * 0.6, Vec3::NEG_Z * 0.5, 2, 0);
+        let m = vec![material("m", Vec3::ONE, Vec3::ZERO)];
+        let s = scene("corner", vec![wall, floor], m, vec![], look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 1.0));
+        let bvh = SceneBvh::new(&s);
+        let origin = bvh.offset_origin(Vec3::new(0.59995, 0.0, 0.1), Vec3::Y, Vec3::Y);
+        let dir = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let hit = bvh.closest_hit(origin, dir, f32::INFINITY).expect("the wall 5e-5 away");
+        assert!((hit.position.x - 0.6).abs() < 1e-6 && (hit.t - 5e-5 * 2f32.sqrt()).abs() < 1e-6, "{hit:?}");
+        assert!(bvh.occluded(origin, dir, 1.0));
+        assert!(!bvh.occluded(origin, dir, 5e-5), "the wall lies beyond a shorter ray");
     }
 
     /// A ray straight up from a floor meets the ceiling whether its other components are +0.0

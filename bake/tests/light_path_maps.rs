@@ -118,6 +118,31 @@ fn compressed_transfer_reconstructs_what_the_fit_says() {
     assert!(budget.transfer.textures.len() <= fixed.transfer.textures.len() + fixed.transfer.weights.len());
 }
 
+/// The default budget searches only the sizes whose textures fit: with room for fewer textures
+/// than its choice, it takes the most accurate size that fits (a larger error), and with room
+/// for none it refuses, naming the memory limit.
+#[test]
+fn the_default_budget_chooses_within_the_textures_the_memory_leaves_room_for() {
+    let scene = cornell();
+    let b = bake(&scene, 2);
+    let textures = |(c, d): (usize, usize)| c * (1 + d);
+    let strict = Compression::BestWithin(1e-6);
+    let free = sizes(&b.transfers, &b.entries.entries, strict, None).unwrap().unwrap();
+    assert!(textures(free) > 4, "the search's most accurate size stores {free:?}");
+    let bound = sizes(&b.transfers, &b.entries.entries, strict, Some(4)).unwrap().unwrap();
+    assert!(textures(bound) <= 4 && textures(bound) >= 3, "{bound:?} within 4 textures");
+    let error = |(clusters, basis)| {
+        compress(&b.transfers, &b.entries.entries, b.atlas.texels.len(), 0.0, Compression::Fixed { clusters, basis })
+            .unwrap()
+            .relative_error
+    };
+    assert!(error(bound) > error(free), "fewer textures, yet no larger error: {} vs {}", error(bound), error(free));
+    let none = sizes(&b.transfers, &b.entries.entries, strict, Some(0)).unwrap_err();
+    assert!(none.contains("memory limit"), "{none}");
+    // An explicit budget is not bent to fit: its choice is admitted or refused as it is.
+    assert_eq!(sizes(&b.transfers, &b.entries.entries, Compression::Budget(1.0), Some(0)).unwrap(), Some((1, 0)));
+}
+
 /// sum_e I_e T~_e through the stored transfer, with I_e given in the bake's entry order.
 fn reconstruct_with(t: &ClusteredTransfer, entries: &[BakedEntry], irradiance: &[Vec3]) -> Vec<Vec3> {
     let ordered: Vec<Vec3> = t.entry_points.iter().map(|p| irradiance[entries.iter().position(|e| e.point == *p).unwrap()]).collect();

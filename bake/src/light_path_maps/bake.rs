@@ -5,7 +5,7 @@
 
 use super::{
     bake_transfers, compress, entry_points, fitted, sizes, test_points, Compressed, Compression, EntryPoints, LightPathMapSettings,
-    LightPathMapsSceneSettings, LightRegion, Transfers,
+    LightPathMapsSceneSettings, LightRegion, Transfers, BUDGET_TEXTURES_MAX,
 };
 use crate::atlas::stage::short;
 use crate::contract::{Baked, Baker, Estimate, Stages};
@@ -111,7 +111,12 @@ impl Baker for LightPathMapsBaker {
         };
         work.admit("light path maps", &self.estimate(&fixed, texels, covered, count, given))?;
         let transfers = stages.timed("transfer", || bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings))?;
-        let compressed = stages.timed("cpca", || match sizes(&transfers, &entries.entries, self.compression)? {
+        // The stored textures the memory limit leaves room for beside the transfers.
+        let most_textures = work.memory_limit.map(|limit| {
+            let room = limit.saturating_sub(self.estimate(&fixed, texels, covered, count, 0).bytes());
+            (room / (texels as u64 * BYTES_PER_TEXTURE_TEXEL).max(1)) as usize
+        });
+        let compressed = stages.timed("cpca", || match sizes(&transfers, &entries.entries, self.compression, most_textures)? {
             None => compress(&transfers, &entries.entries, texels, region.light_area, self.compression),
             Some((clusters, basis)) => {
                 let chosen = self.estimate(&fixed, texels, covered, count, clusters.min(count) * (1 + basis));
@@ -135,8 +140,14 @@ impl Baker for LightPathMapsBaker {
         baked.summary += &summary(&entries, &transfers, &compressed);
         if let Compression::BestWithin(budget) = self.compression {
             if compressed.relative_error > budget {
+                let room = match most_textures {
+                    Some(m) if m < BUDGET_TEXTURES_MAX => {
+                        format!(" that fits --memory-limit (at most {m} atlas-sized textures, C (1 + D), beside the transfers)")
+                    }
+                    _ => String::new(),
+                };
                 baked.summary += &format!(
-                    "warning: light path maps: no clustering reconstructs the transfers within the default error budget {budget}: the most accurate searched (C = {}, D = {}) reaches {:.4}; more --entry-points or --walks lower the noise PCA cannot compress, --error-budget refuses instead, --clusters with --basis fix the sizes\n",
+                    "warning: light path maps: no clustering{room} reconstructs the transfers within the default error budget {budget}: the most accurate searched (C = {}, D = {}) reaches {:.4}; more --entry-points or --walks lower the noise PCA cannot compress, --error-budget refuses instead, --clusters with --basis fix the sizes\n",
                     compressed.clusters, compressed.basis, compressed.relative_error
                 );
             }

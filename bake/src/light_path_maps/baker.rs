@@ -420,6 +420,8 @@ pub enum Compression {
 const BUDGET_CLUSTERS: [usize; 8] = [1, 2, 4, 8, 16, 32, 64, 128];
 const BUDGET_CLUSTERS_MAX: usize = BUDGET_CLUSTERS[7];
 const BUDGET_BASIS_MAX: usize = 8;
+/// The most stored textures, C (1 + D), of any size the error budget searches.
+pub const BUDGET_TEXTURES_MAX: usize = BUDGET_CLUSTERS_MAX * (1 + BUDGET_BASIS_MAX);
 
 /// The stored transfer and what compressing it cost in accuracy.
 #[derive(Clone, Debug)]
@@ -440,7 +442,7 @@ pub fn compress(
     light_area: f32,
     compression: Compression,
 ) -> Result<Compressed, String> {
-    match sizes(transfers, entries, compression)? {
+    match sizes(transfers, entries, compression, None)? {
         None => Ok(uncompressed(transfers, entries, texel_count, light_area)),
         Some((clusters, basis)) => Ok(fitted(transfers, entries, texel_count, light_area, clusters, basis)?),
     }
@@ -452,8 +454,16 @@ fn rows(transfers: &Transfers) -> (&[f32], usize) {
 }
 
 /// The clusters C and eigen-textures D the compression stores: given, or chosen by the error
-/// budget's search; None: uncompressed.
-pub fn sizes(transfers: &Transfers, entries: &[BakedEntry], compression: Compression) -> Result<Option<(usize, usize)>, String> {
+/// budget's search; None: uncompressed. The default budget (`BestWithin`) searches only the
+/// sizes of at most `most_textures` stored textures, C (1 + D), where given: those that fit
+/// the memory limit, so that a large scene gets the most accurate clustering it has room for
+/// instead of a refusal after its walks.
+pub fn sizes(
+    transfers: &Transfers,
+    entries: &[BakedEntry],
+    compression: Compression,
+    most_textures: Option<usize>,
+) -> Result<Option<(usize, usize)>, String> {
     let (budget, refuse) = match compression {
         Compression::None => return Ok(None),
         Compression::Fixed { clusters, basis } => return Ok(Some((clusters, basis))),
@@ -462,12 +472,16 @@ pub fn sizes(transfers: &Transfers, entries: &[BakedEntry], compression: Compres
     };
     let (data, cols) = rows(transfers);
     let counts: Vec<usize> = BUDGET_CLUSTERS.into_iter().filter(|&c| c <= entries.len()).collect();
-    let table = cpca::error_table(data, cols, &entry_features(entries), FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
+    let mut table = cpca::error_table(data, cols, &entry_features(entries), FEATURE_DIMS, &counts, BUDGET_BASIS_MAX)?;
+    if !refuse {
+        table.retain(|c| most_textures.is_none_or(|m| c.clusters * (1 + c.basis) <= m));
+    }
     let most_accurate =
         table.iter().min_by(|a, b| a.relative_error.total_cmp(&b.relative_error).then(a.stored_values.cmp(&b.stored_values)));
     let best = match (cpca::choose(&table, budget), most_accurate) {
         (Some(best), _) => best,
         (None, Some(most)) if !refuse => *most,
+        (None, None) => return Err("not even one cluster's mean texture fits the memory limit beside the transfers; raise --memory-limit or give fewer --entry-points".into()),
         _ => return Err(format!("no clustering of up to {BUDGET_CLUSTERS_MAX} clusters and {BUDGET_BASIS_MAX} eigen-textures reconstructs the transfers within a relative error of {budget}; raise the budget or give clusters and basis")),
     };
     Ok(Some((best.clusters, best.basis)))
