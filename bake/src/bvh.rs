@@ -202,12 +202,22 @@ impl SceneBvh {
     /// The closest triangle the ray `origin + t dir`, 0 < t < `t_max`, hits. `dir` should be
     /// unit length so that `t` is a distance.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
-        let (primitive, t, barycentrics) = match &self.caster {
-            Caster::Obvhs(bvh) => bvh.as_ref()?.closest(origin, dir, t_max)?,
-            #[cfg(feature = "embree")]
-            Caster::Embree(embree) => embree.closest(origin, dir, t_max)?,
-        };
+        let (primitive, t, barycentrics) = self.closest(origin, dir, t_max)?;
         Some(self.make_hit(primitive, t, barycentrics))
+    }
+
+    /// The distance to [`Self::closest_hit`]'s triangle, without the hit's data (what `relume
+    /// rays` times, as Embree alone returns only the distance).
+    pub fn closest_distance(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<f32> {
+        self.closest(origin, dir, t_max).map(|(_, t, _)| t)
+    }
+
+    fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(u32, f32, Vec2)> {
+        match &self.caster {
+            Caster::Obvhs(bvh) => bvh.as_ref()?.closest(origin, dir, t_max),
+            #[cfg(feature = "embree")]
+            Caster::Embree(embree) => embree.closest(origin, dir, t_max),
+        }
     }
 
     /// Whether anything blocks the ray `origin + t dir` for 0 < t < `t_max` (a shadow ray;
@@ -323,7 +333,7 @@ const OBVHS_NEAREST: f32 = 1e-4;
 
 /// The ray `origin + t dir` started `OBVHS_NEAREST` behind its origin, for obvhs and for the
 /// triangle test, which then takes only hits past the origin. Started at the origin, a ray
-/// within 1e-4 of the other wall of a corner went through it (7 of 262,144 paths left
+/// within 1e-4 of the other wall of a corner went through it (7 of about 262,000 paths left
 /// glossy-enclosure's closed room so: docs/BENCHMARKS.md, "Ray casting").
 fn behind(origin: Vec3, dir: Vec3, t_max: f32) -> (Ray, WatertightRay) {
     let dir = positive_zeros(dir);

@@ -37,7 +37,7 @@ pub trait RayCaster: Sync {
 
 impl RayCaster for SceneBvh {
     fn closest_t(&self, ray: &TracedRay) -> Option<f32> {
-        self.closest_hit(ray.origin, ray.dir, ray.t_max).map(|h| h.t)
+        self.closest_distance(ray.origin, ray.dir, ray.t_max)
     }
 
     fn occluded(&self, ray: &TracedRay) -> bool {
