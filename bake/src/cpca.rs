@@ -17,7 +17,7 @@
 //! are independent serial sums: the same bytes whatever the thread count.
 
 use crate::work::Progress;
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
@@ -297,11 +297,11 @@ fn descending(eigenvalues: &DVector<f64>) -> Vec<(f64, usize)> {
 pub fn cluster_pca(data: &[f32], cols: usize, members: &[u32], basis: usize) -> ClusterPca {
     let centred = Centred::new(Rows { values: data, cols }, members);
     let by_covariance = cols < members.len();
-    let eigen = SymmetricEigen::new(if by_covariance { centred.covariance() } else { centred.gram() });
-    let order = descending(&eigen.eigenvalues);
+    let (eigenvalues, eigenvectors) = eigen_decomposition(&if by_covariance { centred.covariance() } else { centred.gram() });
+    let order = descending(&eigenvalues);
     let floor = RANK_TOLERANCE * order[0].0;
-    let size = eigen.eigenvalues.len();
-    let eigenvector = |i: usize| &eigen.eigenvectors.as_slice()[i * size..][..size];
+    let size = eigenvalues.len();
+    let eigenvector = |i: usize| &eigenvectors.as_slice()[i * size..][..size];
     // The covariance's eigenvectors are the basis; the Gram matrix's map to it through X^T.
     let vector = |i: usize| if by_covariance { unit(eigenvector(i)) } else { centred.basis_vector(eigenvector(i)) };
     let mut basis_vectors: Vec<Vec<f32>> = order.iter().take(basis).filter(|o| o.0 > floor).map(|&(_, i)| vector(i)).collect();
@@ -340,7 +340,22 @@ fn centred(uncentred: &DMatrix<f64>, members: &[u32]) -> DMatrix<f64> {
 pub fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f64> {
     let centred = Centred::new(Rows { values: data, cols }, members);
     let matrix = if cols < members.len() { centred.covariance() } else { centred.gram() };
-    descending(&matrix.symmetric_eigenvalues()).iter().map(|o| o.0).collect()
+    descending(&symmetric_eigenvalues(&matrix)).iter().map(|o| o.0).collect()
+}
+
+/// A symmetric matrix's eigenvalues and its eigenvectors as the columns of a matrix, by faer
+/// on the calling thread (the Cargo.toml says why faer).
+fn eigen_decomposition(matrix: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
+    let n = matrix.nrows();
+    let eigen = faer::Mat::<f64>::from_fn(n, n, |i, j| matrix[(i, j)]).selfadjoint_eigendecomposition(faer::Side::Lower);
+    let (values, vectors) = (eigen.s().column_vector(), eigen.u());
+    (DVector::from_fn(n, |i, _| values.read(i)), DMatrix::from_fn(n, n, |i, j| vectors.read(i, j)))
+}
+
+/// A symmetric matrix's eigenvalues, in no order, without its eigenvectors (cheaper).
+fn symmetric_eigenvalues(matrix: &DMatrix<f64>) -> DVector<f64> {
+    let n = matrix.nrows();
+    DVector::from_vec(faer::Mat::<f64>::from_fn(n, n, |i, j| matrix[(i, j)]).selfadjoint_eigenvalues(faer::Side::Lower))
 }
 
 /// Members (ascending) of each of `clusters` clusters.
@@ -367,8 +382,15 @@ pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clu
     validate(data, cols, features, feature_dims, &[clusters])?;
     let tree = divisive_clusters(features, feature_dims, clusters);
     let assignment = tree.assignment(tree.max_clusters());
-    let clusters = groups(&assignment, tree.max_clusters()).iter().map(|m| cluster_pca(data, cols, m, basis)).collect();
-    Ok(Cpca { assignment, clusters, basis })
+    Ok(Cpca { clusters: cluster_pcas(data, cols, &groups(&assignment, tree.max_clusters()), basis), assignment, basis })
+}
+
+/// `cluster_pca` of each group, the clusters side by side on the worker threads: each one's
+/// eigen-decomposition runs on one thread, and it is most of a fit's time (light clouds on the
+/// scale scene: docs/BENCHMARKS.md, "Scale sweep"). Each is computed alone, so the bytes do
+/// not depend on the thread count.
+fn cluster_pcas(data: &[f32], cols: usize, groups: &[Vec<u32>], basis: usize) -> Vec<ClusterPca> {
+    groups.par_iter().map(|m| cluster_pca(data, cols, m, basis)).collect()
 }
 
 /// Sloan et al. 2003's refinement of a fitted clustered PCA: every point moves to the cluster
@@ -404,8 +426,7 @@ pub fn refine(data: &[f32], cols: usize, fitted: Cpca, iterations: usize) -> (Cp
         for (c, members) in groups.iter().enumerate() {
             members.iter().for_each(|&e| renumbered[e as usize] = c as u32);
         }
-        let clusters = groups.iter().map(|m| cluster_pca(data, cols, m, cpca.basis)).collect();
-        cpca = Cpca { assignment: renumbered, clusters, basis: cpca.basis };
+        cpca = Cpca { clusters: cluster_pcas(data, cols, &groups, cpca.basis), assignment: renumbered, basis: cpca.basis };
     }
     (cpca, iterations)
 }
@@ -494,7 +515,7 @@ pub fn error_table(
         let mut dropped = vec![0.0; max_basis + 1];
         for members in groups(&tree.assignment(c), c) {
             let values = eigenvalues.entry(members).or_insert_with_key(|m| match &uncentred {
-                Some(u) => descending(&centred(u, m).symmetric_eigenvalues()).iter().map(|o| o.0).collect(),
+                Some(u) => descending(&symmetric_eigenvalues(&centred(u, m))).iter().map(|o| o.0).collect(),
                 None => cluster_eigenvalues(data, cols, m),
             });
             dropped.iter_mut().enumerate().for_each(|(d, sum)| *sum += values.iter().skip(d).sum::<f64>());
