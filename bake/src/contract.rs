@@ -12,7 +12,7 @@ use serde_json::{json, Value};
 use std::time::Instant;
 
 /// A method's whole bake, its settings decided.
-pub trait Baker {
+pub trait Baker: Sync {
     /// Bakes `scene` through `work`, timing each stage in `stages`; an error says what failed
     /// and the fix (the caller names the scene).
     fn bake(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String>;

@@ -136,10 +136,12 @@ impl EmbreeScene {
     }
 
     fn ray(origin: Vec3, dir: Vec3, t_max: f32) -> Ray {
-        Ray { org: origin.to_array(), tnear: 0.0, dir: dir.to_array(), time: 0.0, tfar: t_max, mask: u32::MAX, id: 0, flags: 0 }
+        // Embree takes hits up to tfar included; relume's calls end short of t_max.
+        let tfar = t_max.next_down();
+        Ray { org: origin.to_array(), tnear: 0.0, dir: dir.to_array(), time: 0.0, tfar, mask: u32::MAX, id: 0, flags: 0 }
     }
 
-    /// The closest triangle hit by `origin + t dir`, 0 <= t <= `t_max`: its index in the
+    /// The closest triangle hit by `origin + t dir`, 0 <= t < `t_max`: its index in the
     /// scene's flattened triangle list (meshes in order), t, and the barycentric weights of its
     /// second and third vertices.
     pub fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(u32, f32, Vec2)> {
@@ -158,7 +160,7 @@ impl EmbreeScene {
         found.then(|| (rayhit.hit.prim_id, rayhit.ray.tfar, Vec2::new(rayhit.hit.u, rayhit.hit.v)))
     }
 
-    /// Whether anything blocks `origin + t dir` for 0 <= t <= `t_max`.
+    /// Whether anything blocks `origin + t dir` for 0 <= t < `t_max`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         let mut r = Self::ray(origin, dir, t_max);
         // SAFETY: as above; Embree sets tfar to -inf when the ray is blocked.

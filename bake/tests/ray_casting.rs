@@ -77,9 +77,9 @@ fn reference_with(scene: &Scene, backend: relume_bake::bvh::RayBackend, threads:
 }
 
 /// Embree behind relume's ray calls traces the same scene: the path tracer's image with its
-/// rays is the image with relume's own, but for the few paths that hit a shared edge or a
-/// corner (obvhs skips boxes nearer than 1e-4 to the origin) and go on differently, and its
-/// bytes do not depend on the threads.
+/// rays is the image with relume's own, but for the few paths that hit a shared edge and go
+/// on from the other triangle, or from the last bits of a hit, and its bytes do not depend on
+/// the threads.
 #[cfg(feature = "embree")]
 #[test]
 fn the_embree_backend_renders_what_obvhs_renders_at_any_thread_count() {

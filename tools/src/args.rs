@@ -103,7 +103,7 @@ pub(crate) struct WorkArgs {
     pub memory_limit: Option<u64>,
     /// Which library casts the rays: obvhs (relume's BVH, every build) or embree (Embree 3, in
     /// builds with `--features embree`).
-    #[arg(long, default_value = "obvhs", value_parser = ray_backend)]
+    #[arg(long, default_value = "obvhs", value_parser = RayBackend::parse)]
     pub ray_backend: RayBackend,
 }
 
@@ -304,10 +304,6 @@ fn number<T: std::str::FromStr + Into<f64> + Copy>(text: &str, allowed: impl Fn(
 }
 
 /// Worker threads: 1..=1024 (more only slows the work and can exhaust the machine).
-pub(crate) fn ray_backend(text: &str) -> Result<RayBackend, String> {
-    RayBackend::parse(text)
-}
-
 pub(crate) fn threads(text: &str) -> Result<usize, String> {
     text.parse::<usize>().ok().filter(|n| (1..=1024).contains(n)).ok_or_else(|| "give 1..=1024 worker threads".into())
 }

@@ -11,7 +11,7 @@ use relume_bake::artifact::BakeOutput;
 use relume_bake::contract::Stages;
 use relume_bake::gltf_load::{LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
 use relume_bake::scene::Scene;
-use relume_bake::work::WorkOptions;
+use relume_bake::work::{with_threads, WorkOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -123,15 +123,18 @@ pub(crate) fn bake_scene(
     }
     let baker = method.baker(scene, values)?;
     let mut stages = Stages::default();
-    let bake = baker.bake(scene, &work.begun(), &mut stages).map_err(|e| naming(scene, e))?;
+    // Every stage on the worker threads --threads asks for, those without a pool of their own
+    // (clustered PCA, light clustering) too.
+    let bake = with_threads(work.threads, || baker.bake(scene, &work.begun(), &mut stages)).map_err(|e| naming(scene, e))?;
     let mut stats = bake.stats;
     stats["stages"] = stages.json();
     stats["peak_memory_bytes"] = json!(stages.peak_memory_bytes());
     stats["triangles"] = json!(scene.triangle_count());
     stats["threads"] = json!(work.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())));
-    stats["ray_backend"] = json!(work.ray_backend.name());
     let mut parameters = bake.parameters;
     parameters["given"] = values.json(&method.params(), Stage::Bake);
+    // The two backends give equivalent bakes, not the same bytes.
+    parameters["ray_backend"] = json!(work.ray_backend.name());
     let output = BakeOutput { method: method.name(), scene: Some(scene), parameters, sections: bake.sections, stats };
     output.write(out)?;
     Ok(format!("{}{}wrote {}\n", bake.summary, stages.summary(), out.display()))

@@ -2,7 +2,7 @@
 //! rays per second), on a path tracer's rays, optionally with every triangle subdivided, and
 //! against Embree on the same rays where relume was built with it.
 
-use crate::args::{load_scene, ray_backend, threads, SceneArgs};
+use crate::args::{load_scene, threads, SceneArgs};
 use anyhow::{anyhow, Result};
 use clap::Args;
 use relume_bake::bvh::{RayBackend, SceneBvh};
@@ -34,7 +34,7 @@ pub(crate) struct RaysArgs {
     threads: Option<usize>,
     /// The backend behind relume's ray calls to time: obvhs, or embree (builds with
     /// `--features embree`; Embree behind the same calls, against Embree called alone).
-    #[arg(long, default_value = "obvhs", value_parser = ray_backend)]
+    #[arg(long, default_value = "obvhs", value_parser = RayBackend::parse)]
     ray_backend: RayBackend,
 }
 

@@ -56,7 +56,7 @@ pub(crate) struct ReferenceRun {
 
 pub(crate) fn trace_reference(scene: &Scene, settings: &ReferenceSettings) -> Result<ReferenceRun> {
     let start = Instant::now();
-    let bvh = SceneBvh::build(scene, settings.work.ray_backend).map_err(|e| anyhow!("{e}"))?;
+    let bvh = SceneBvh::build(scene, settings.work.ray_backend).map_err(|e| anyhow!("--ray-backend: {e}; or use obvhs"))?;
     let images = render_reference(scene, &bvh, settings);
     Ok(ReferenceRun { images, seconds: start.elapsed().as_secs_f64() })
 }

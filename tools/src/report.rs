@@ -57,7 +57,12 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let reference_settings = reference_settings(&args.scene, &args.trace, true)?;
     let frames = args.frames;
-    let work = relume_bake::work::WorkOptions { threads: reference_settings.work.threads, progress: true, ..Default::default() };
+    let work = relume_bake::work::WorkOptions {
+        threads: reference_settings.work.threads,
+        progress: true,
+        ray_backend: reference_settings.work.ray_backend,
+        ..Default::default()
+    };
     // A bad recommended file is refused before anything is written.
     let chosen = chosen_methods(args, &scene)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
