@@ -425,6 +425,7 @@ fn positive_zeros(dir: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{look_at, material, scene, square};
 
     fn single(tri: [Vec3; 3]) -> [Vec3A; 3] {
         tri.map(Vec3A::from)
@@ -462,16 +463,19 @@ mod tests {
         }
     }
 
+    /// The BVH of `meshes` in one white material.
+    fn bvh_of(meshes: Vec<crate::scene::Mesh>) -> SceneBvh {
+        let m = vec![material("m", Vec3::ONE, Vec3::ZERO)];
+        SceneBvh::new(&scene("surfaces", meshes, m, vec![], look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 1.0)))
+    }
+
     /// A ray leaving a floor within 1e-4 of the wall it meets (a corner) hits that wall; traced
     /// from its origin, obvhs' box test skipped the wall.
     #[test]
     fn a_ray_from_a_corner_meets_the_wall_beside_it() {
-        use crate::testing::{look_at, material, scene, square};
         let wall = square(Vec3::new(0.6, 0.5, 0.0), Vec3::Y * 0.5, Vec3::Z * 0.5, 2, 0);
         let floor = square(Vec3::ZERO, Vec3::X * 0.6, Vec3::NEG_Z * 0.5, 2, 0);
-        let m = vec![material("m", Vec3::ONE, Vec3::ZERO)];
-        let s = scene("corner", vec![wall, floor], m, vec![], look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 1.0));
-        let bvh = SceneBvh::new(&s);
+        let bvh = bvh_of(vec![wall, floor]);
         let origin = bvh.offset_origin(Vec3::new(0.59995, 0.0, 0.1), Vec3::Y, Vec3::Y);
         let dir = Vec3::new(1.0, 1.0, 0.0).normalize();
         let hit = bvh.closest_hit(origin, dir, f32::INFINITY).expect("the wall 5e-5 away");
@@ -484,12 +488,9 @@ mod tests {
     /// or -0.0 (the second once missed), and so does one a hair off the axis.
     #[test]
     fn a_ray_along_an_axis_meets_the_ceiling_whatever_the_sign_of_its_zeros() {
-        use crate::testing::{look_at, material, scene, square};
         let ceiling = square(Vec3::new(0.0, 2.6, 0.0), Vec3::X * 2.0, Vec3::Z * 2.0, 4, 0);
         let floor = square(Vec3::ZERO, Vec3::X * 2.0, Vec3::NEG_Z * 2.0, 4, 0);
-        let m = vec![material("m", Vec3::ONE, Vec3::ZERO)];
-        let s = scene("ceiling", vec![ceiling, floor], m, vec![], look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 1.0));
-        let bvh = SceneBvh::new(&s);
+        let bvh = bvh_of(vec![ceiling, floor]);
         for dir in [Vec3::Y, -Vec3::NEG_Y, Vec3::new(1e-6, 1.0, 0.0).normalize()] {
             for origin in [Vec3::new(0.3, 0.001, 0.2), Vec3::new(-0.7, 0.001, 0.45)] {
                 assert!(bvh.occluded(origin, dir, f32::INFINITY), "{dir:?} from {origin}");

@@ -347,15 +347,18 @@ pub fn cluster_eigenvalues(data: &[f32], cols: usize, members: &[u32]) -> Vec<f6
 /// on the calling thread (the Cargo.toml says why faer).
 fn eigen_decomposition(matrix: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
     let n = matrix.nrows();
-    let eigen = faer::Mat::<f64>::from_fn(n, n, |i, j| matrix[(i, j)]).selfadjoint_eigendecomposition(faer::Side::Lower);
+    let eigen = to_faer(matrix).selfadjoint_eigendecomposition(faer::Side::Lower);
     let (values, vectors) = (eigen.s().column_vector(), eigen.u());
     (DVector::from_fn(n, |i, _| values.read(i)), DMatrix::from_fn(n, n, |i, j| vectors.read(i, j)))
 }
 
 /// A symmetric matrix's eigenvalues, in no order, without its eigenvectors (cheaper).
 fn symmetric_eigenvalues(matrix: &DMatrix<f64>) -> DVector<f64> {
-    let n = matrix.nrows();
-    DVector::from_vec(faer::Mat::<f64>::from_fn(n, n, |i, j| matrix[(i, j)]).selfadjoint_eigenvalues(faer::Side::Lower))
+    DVector::from_vec(to_faer(matrix).selfadjoint_eigenvalues(faer::Side::Lower))
+}
+
+fn to_faer(matrix: &DMatrix<f64>) -> faer::Mat<f64> {
+    faer::Mat::from_fn(matrix.nrows(), matrix.ncols(), |i, j| matrix[(i, j)])
 }
 
 /// Members (ascending) of each of `clusters` clusters.
