@@ -51,26 +51,31 @@ fn sample_uv1(scene: &Scene, atlas: &Atlas, per_triangle: u32) -> Vec<(u32, u32,
     out
 }
 
-#[test]
-fn no_texel_is_shared_by_two_charts_and_every_triangle_is_covered() {
-    let scene = mixed_scene();
-    let atlas = Atlas::build(&scene, &settings(24.0)).unwrap();
+/// Every point of every triangle maps through uv1 to a covered texel, and no texel holds two
+/// charts (each covered texel belongs to the chart of its own triangle).
+fn assert_charts_own_their_texels(scene: &Scene, atlas: &Atlas) {
     assert!(atlas.too_small.is_empty(), "{:?}", atlas.too_small);
     let mut owner = vec![u32::MAX; atlas.texels.len()];
-    for (triangle, chart, uv) in sample_uv1(&scene, &atlas, 64) {
+    for (triangle, chart, uv) in sample_uv1(scene, atlas, 64) {
         let texel = atlas.texel_at(uv).unwrap_or_else(|| panic!("triangle {triangle}: uv1 {uv} is off the atlas"));
         assert!(atlas.texels[texel].coverage > 0.0, "triangle {triangle}: uv1 {uv} lands on an empty texel");
         assert!(owner[texel] == u32::MAX || owner[texel] == chart, "texel {texel} holds charts {} and {chart}", owner[texel]);
         owner[texel] = chart;
     }
-    // Conversely every covered texel is owned by the chart of its own triangle.
-    let offsets = mesh_offsets(&scene);
+    let offsets = mesh_offsets(scene);
     for (i, texel) in atlas.texels.iter().enumerate().filter(|(_, t)| t.coverage > 0.0) {
         let mesh = offsets.iter().rposition(|&o| o <= texel.triangle).unwrap();
         let local = texel.triangle - offsets[mesh];
         let chart = atlas.charts.iter().position(|c| c.mesh == mesh as u32 && c.triangles.contains(&local)).unwrap() as u32;
         assert!(owner[i] == u32::MAX || owner[i] == chart, "texel {i}");
     }
+}
+
+#[test]
+fn no_texel_is_shared_by_two_charts_and_every_triangle_is_covered() {
+    let scene = mixed_scene();
+    let atlas = Atlas::build(&scene, &settings(24.0)).unwrap();
+    assert_charts_own_their_texels(&scene, &atlas);
     println!(
         "charts {}, pages {}, {}x{}, utilization {:.3}",
         atlas.charts.len(),
@@ -79,6 +84,21 @@ fn no_texel_is_shared_by_two_charts_and_every_triangle_is_covered() {
         atlas.height,
         atlas.utilization()
     );
+}
+
+/// A desk's leg, 5 cm square and a metre tall at 16 texels a metre: its six faces, under a
+/// texel to 16 texels across, are unfolded into fewer charts than faces, laid flat without
+/// stretching (the coverage is the surface's area in texels), and still own their texels.
+#[test]
+fn a_thin_box_is_unfolded_into_fewer_charts_without_distortion() {
+    let scene = build_scene(vec![closed_box(Vec3::ZERO, Vec3::new(0.05, 1.0, 0.05), 2, Facing::Outward, 0)]);
+    let atlas = Atlas::build(&scene, &settings(16.0)).unwrap();
+    assert!(atlas.charts.len() < 6, "{} charts", atlas.charts.len());
+    assert_eq!(atlas.charts.iter().map(|c| c.parts).sum::<u32>(), 6);
+    let coverage: f32 = atlas.texels.iter().map(|t| t.coverage).sum();
+    let area = (4.0 * 0.05 * 1.0 + 2.0 * 0.05 * 0.05) * 16.0 * 16.0;
+    assert!((coverage - area).abs() < 1e-3 * area, "{coverage} vs {area}");
+    assert_charts_own_their_texels(&scene, &atlas);
 }
 
 #[test]

@@ -5,6 +5,7 @@
 //! patch centre, smoothed normal, triangle, and the pieces of faces the patch is made of (so a
 //! baker can spread its samples over the whole patch).
 
+use super::unfold::{unfold, ChartCost, Layout};
 use super::{AtlasMesh, AtlasSection, Texel, EMPTY};
 use crate::artifact::{PageLayout, Section};
 use crate::scene::{Mesh, Scene};
@@ -63,7 +64,11 @@ pub struct Chart {
     pub mesh: u32,
     /// Triangle indices within the mesh.
     pub triangles: Vec<u32>,
+    /// The mapping of its first part (of all, where `parts` is 1).
     pub mapping: ChartMapping,
+    /// How many of 001's charts were unfolded into it (`unfold.rs`): each part keeps its own
+    /// mapping, moved rigidly into the first part's plane.
+    pub parts: u32,
     pub page: u32,
     /// Top-left texel of the chart's rectangle on its page.
     pub origin: UVec2,
@@ -114,10 +119,12 @@ impl Atlas {
         settings.validate().map_err(AtlasError::Settings)?;
         let mut charts = Vec::new();
         let mut flat = Vec::new();
+        let limit = settings.max_size - 2 * settings.gutter;
+        let cost = ChartCost { density: settings.texel_density, gutter: settings.gutter, largest: limit };
         for (m, mesh) in scene.meshes.iter().enumerate() {
-            for (triangles, mapping) in segment_mesh(mesh, settings.discontinuity_angle) {
-                let chart = FlatChart::new(mesh, &triangles, mapping, settings.texel_density);
-                let limit = settings.max_size - 2 * settings.gutter;
+            let adjacency = Adjacency::new(mesh);
+            for layout in unfold(mesh, &adjacency, segment_mesh(mesh, &adjacency, settings.discontinuity_angle), cost) {
+                let chart = FlatChart::new(&layout.corners, settings.texel_density);
                 if chart.size.x > limit || chart.size.y > limit {
                     return Err(AtlasError::ChartTooLarge {
                         scene: scene.source.display().to_string(),
@@ -128,11 +135,12 @@ impl Atlas {
                         max: settings.max_size,
                     });
                 }
-                charts.push(Chart { mesh: m as u32, triangles, mapping, page: 0, origin: UVec2::ZERO, size: chart.size });
+                let Layout { triangles, mapping, parts, .. } = layout;
+                charts.push(Chart { mesh: m as u32, triangles, mapping, parts, page: 0, origin: UVec2::ZERO, size: chart.size });
                 flat.push(chart);
             }
         }
-        let (width, height, pages) = pack(&mut charts, settings);
+        let (width, height, pages) = pack(&mut charts, &mut flat, settings);
         let mut raster = Raster::new(width, height, pages);
         let mesh_offsets = mesh_offsets(scene);
         let mut too_small = Vec::new();
@@ -238,7 +246,7 @@ pub fn mesh_offsets(scene: &Scene) -> Vec<u32> {
         .collect()
 }
 
-fn triangle_positions(mesh: &Mesh, t: u32) -> [Vec3; 3] {
+pub(super) fn triangle_positions(mesh: &Mesh, t: u32) -> [Vec3; 3] {
     let i = 3 * t as usize;
     [0, 1, 2].map(|k| mesh.positions[mesh.indices[i + k] as usize])
 }
@@ -264,14 +272,13 @@ fn signed_area_2d(c: [Vec2; 3]) -> f32 {
 
 /// Groups a mesh's triangles into charts, each with its mapping. Criterion 2 (continuous uv0)
 /// when every face has a non-degenerate uv0 triangle, criterion 1 (axis projection) otherwise.
-fn segment_mesh(mesh: &Mesh, max_angle: f32) -> Vec<(Vec<u32>, ChartMapping)> {
+fn segment_mesh(mesh: &Mesh, adjacency: &Adjacency, max_angle: f32) -> Vec<Layout> {
     let count = (mesh.indices.len() / 3) as u32;
     let normals: Vec<Vec3> = (0..count).map(|t| face_normal(triangle_positions(mesh, t))).collect();
     let uv_faces: Option<Vec<[Vec2; 3]>> = mesh.uv0.as_ref().and_then(|uv| {
         let faces: Vec<[Vec2; 3]> = (0..count as usize).map(|t| [0, 1, 2].map(|k| uv[mesh.indices[3 * t + k] as usize])).collect();
         faces.iter().all(|f| signed_area_2d(*f).abs() > 1e-12).then_some(faces)
     });
-    let adjacency = Adjacency::new(mesh);
     let cos_max = max_angle.cos();
     let mut chart_of = vec![u32::MAX; count as usize];
     let mut charts = Vec::new();
@@ -321,16 +328,18 @@ fn segment_mesh(mesh: &Mesh, max_angle: f32) -> Vec<(Vec<u32>, ChartMapping)> {
             }
         }
         members.sort_unstable();
-        let mapping = match mapping {
+        let (mapping, scale) = match mapping {
             ChartMapping::Uv0 { .. } => {
                 let faces = uv_faces.as_ref().expect("uv0 charts only exist with uv0");
                 let world: f32 = members.iter().map(|&t| triangle_area(mesh, t)).sum();
                 let uv: f32 = members.iter().map(|&t| signed_area_2d(faces[t as usize]).abs()).sum();
-                ChartMapping::Uv0 { scale: (world / uv).sqrt() }
+                let scale = (world / uv).sqrt();
+                (ChartMapping::Uv0 { scale }, scale)
             }
-            projection => projection,
+            projection => (projection, 1.0),
         };
-        charts.push((members, mapping));
+        let corners = members.iter().map(|&t| flatten(t).map(|p| p * scale)).collect();
+        charts.push(Layout { triangles: members, corners, mapping, parts: 1 });
     }
     charts
 }
@@ -346,7 +355,7 @@ fn project(p: Vec3, axis: usize) -> Vec2 {
 
 /// Which triangles share an edge, with vertices welded by position (files split vertices
 /// at normal and uv seams, which must not split charts by themselves).
-struct Adjacency {
+pub(super) struct Adjacency {
     /// For each triangle's edge k (vertices k, k+1), the triangles across it.
     edges: HashMap<(u32, u32), Vec<(u32, usize)>>,
     welded: Vec<u32>,
@@ -355,7 +364,7 @@ struct Adjacency {
 }
 
 impl Adjacency {
-    fn new(mesh: &Mesh) -> Self {
+    pub(super) fn new(mesh: &Mesh) -> Self {
         let mut by_position: HashMap<[u32; 3], u32> = HashMap::new();
         let welded: Vec<u32> = mesh
             .positions
@@ -381,15 +390,26 @@ impl Adjacency {
     /// The triangles sharing an edge with `t`, in a fixed order, each with whether uv0 is
     /// continuous across that edge (the same uv0 at both of its ends on both sides).
     fn neighbours(&self, t: u32) -> Vec<(u32, bool)> {
+        self.shared_edges(t).into_iter().map(|(k, other, ok)| (other, self.uv_continuous((t, k), (other, ok)))).collect()
+    }
+
+    /// Per edge k of `t`, each other triangle across it with its own edge there.
+    pub(super) fn shared_edges(&self, t: u32) -> Vec<(usize, u32, usize)> {
         let mut out = Vec::new();
         for k in 0..3 {
             for &(other, ok) in &self.edges[&Self::edge_key(&self.welded, &self.mesh_indices, t, k)] {
                 if other != t {
-                    out.push((other, self.uv_continuous((t, k), (other, ok))));
+                    out.push((k, other, ok));
                 }
             }
         }
         out
+    }
+
+    /// Whether edge `k` of `t` and edge `ok` of `o` start at the same point.
+    pub(super) fn same_point(&self, (t, k): (u32, usize), (o, ok): (u32, usize)) -> bool {
+        let start = |t: u32, k: usize| self.welded[self.mesh_indices[3 * t as usize + k] as usize];
+        start(t, k) == start(o, ok)
     }
 
     fn uv_continuous(&self, (t, k): (u32, usize), (o, ok): (u32, usize)) -> bool {
@@ -404,14 +424,14 @@ impl Adjacency {
 
 /// The faces already in a chart, bucketed on a grid in the mapping plane, for criterion 3
 /// (a face joins only if it overlaps none of them).
-struct OverlapGrid {
+pub(super) struct OverlapGrid {
     cell: f32,
     cells: HashMap<(i32, i32), Vec<usize>>,
     faces: Vec<[Vec2; 3]>,
 }
 
 impl OverlapGrid {
-    fn new(seed: [Vec2; 3]) -> Self {
+    pub(super) fn new(seed: [Vec2; 3]) -> Self {
         let (lo, hi) = bounds_2d(&seed);
         OverlapGrid { cell: (hi - lo).max_element().max(1e-6), cells: HashMap::new(), faces: Vec::new() }
     }
@@ -425,7 +445,7 @@ impl OverlapGrid {
         (x0..=x1).flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
     }
 
-    fn insert(&mut self, face: [Vec2; 3]) {
+    pub(super) fn insert(&mut self, face: [Vec2; 3]) {
         let index = self.faces.len();
         self.faces.push(face);
         for key in self.cell_range(&face).collect::<Vec<_>>() {
@@ -433,7 +453,7 @@ impl OverlapGrid {
         }
     }
 
-    fn overlaps(&self, face: [Vec2; 3]) -> bool {
+    pub(super) fn overlaps(&self, face: [Vec2; 3]) -> bool {
         // Relative to the face and to where it lies: the rounding of projected coordinates
         // grows with their magnitude, and must not make neighbours of a finely triangulated
         // surface overlap (a face 1e-3 of its coordinates across split charts).
@@ -450,7 +470,7 @@ impl OverlapGrid {
     }
 }
 
-fn bounds_2d(points: &[Vec2]) -> (Vec2, Vec2) {
+pub(super) fn bounds_2d(points: &[Vec2]) -> (Vec2, Vec2) {
     points.iter().fold((Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
 }
 
@@ -479,23 +499,28 @@ struct FlatChart {
 }
 
 impl FlatChart {
-    fn new(mesh: &Mesh, triangles: &[u32], mapping: ChartMapping, density: f32) -> Self {
-        let to_plane = |t: u32| -> [Vec2; 3] {
-            match mapping {
-                ChartMapping::Projection { axis } => triangle_positions(mesh, t).map(|p| project(p, axis)),
-                ChartMapping::Uv0 { scale } => {
-                    let uv = mesh.uv0.as_ref().expect("uv0 charts only exist with uv0");
-                    [0, 1, 2].map(|k| uv[mesh.indices[3 * t as usize + k] as usize] * scale)
-                }
-            }
-        };
-        let plane: Vec<[Vec2; 3]> = triangles.iter().map(|&t| to_plane(t)).collect();
+    /// From the chart's corners in its plane, metres.
+    fn new(plane: &[[Vec2; 3]], density: f32) -> Self {
         let (lo, hi) = bounds_2d(plane.as_flattened());
         let extent = (hi - lo) * density;
-        let size = extent.ceil().max(Vec2::ONE).as_uvec2();
+        let size = texel_size(hi - lo, density);
         let corners = plane.iter().map(|face| face.map(|p| (p - lo) * density)).collect();
         FlatChart { corners, size, slack: (size.as_vec2() - extent) * 0.5 }
     }
+
+    /// The chart turned a quarter in its rectangle (which turns with it).
+    fn turn(&mut self) {
+        let (slack, width) = (self.slack, self.size.x as f32);
+        for face in &mut self.corners {
+            *face = face.map(|p| Vec2::new(p.y + slack.y, width - p.x - slack.x));
+        }
+        (self.size, self.slack) = (UVec2::new(self.size.y, self.size.x), Vec2::ZERO);
+    }
+}
+
+/// The whole-texel rectangle a chart of `extent` metres takes.
+pub(super) fn texel_size(extent: Vec2, density: f32) -> UVec2 {
+    (extent * density).ceil().max(Vec2::ONE).as_uvec2()
 }
 
 /// Skyline packing, bottom-left, in a few orders and at several page widths: sets each
@@ -503,24 +528,30 @@ impl FlatChart {
 /// height and count. Every chart keeps `gutter` texels to its neighbours and to the page
 /// border. (Shelf packing, before it, left 64 % of cornell's and classroom's atlases covered;
 /// docs/BENCHMARKS.md, "Atlas utilization".)
-fn pack(charts: &mut [Chart], settings: &AtlasSettings) -> (u32, u32, u32) {
+fn pack(charts: &mut [Chart], flat: &mut [FlatChart], settings: &AtlasSettings) -> (u32, u32, u32) {
     let g = settings.gutter;
     let sizes: Vec<UVec2> = charts.iter().map(|c| c.size + UVec2::splat(g)).collect();
     let area: u64 = sizes.iter().map(|s| s.x as u64 * s.y as u64).sum();
-    let widest = sizes.iter().map(|s| s.x).max().unwrap_or(1) + g;
+    let widest = sizes.iter().map(|s| s.x.min(s.y)).max().unwrap_or(1) + g;
     let width_for = |slack: f64| ((area as f64 * slack).sqrt().ceil() as u32).max(widest).min(settings.max_size);
     let orders: Vec<Vec<usize>> = PACKING_ORDERS.iter().map(|key| packing_order(&sizes, *key)).collect();
-    let (order, packing) = orders
-        .iter()
-        .flat_map(|order| PACKING_SLACKS.iter().map(move |&slack| (order, slack)))
-        .map(|(order, slack)| {
-            (order, skyline(&order.iter().map(|&i| sizes[i]).collect::<Vec<_>>(), width_for(slack), settings.max_size, g))
+    let (order, packing) = [false, true]
+        .into_iter()
+        .flat_map(|turn| orders.iter().flat_map(move |order| PACKING_SLACKS.iter().map(move |&slack| (turn, order, slack))))
+        .map(|(turn, order, slack)| {
+            let sizes: Vec<UVec2> = order.iter().map(|&i| sizes[i]).collect();
+            (order, skyline(&sizes, width_for(slack), settings.max_size, g, turn))
         })
+        .filter(|(_, p)| p.fits)
         .min_by_key(|(_, p)| (p.pages, p.pages as u64 * p.used.x.div_ceil(4) as u64 * p.used.y.div_ceil(4) as u64))
-        .expect("at least one packing is tried");
-    for (&i, &(page, origin)) in order.iter().zip(&packing.places) {
+        .expect("a packing without turning always fits");
+    for (&i, &(page, origin, turned)) in order.iter().zip(&packing.places) {
+        if turned {
+            flat[i].turn();
+        }
         charts[i].page = page;
         charts[i].origin = origin;
+        charts[i].size = flat[i].size;
     }
     let round4 = |v: u32| v.div_ceil(4) * 4;
     (round4(packing.used.x.max(1)).min(settings.max_size), round4(packing.used.y.max(1)).min(settings.max_size), packing.pages)
@@ -541,33 +572,49 @@ fn packing_order(sizes: &[UVec2], key: fn(UVec2) -> (u64, u64)) -> Vec<usize> {
 const PACKING_SLACKS: [f64; 16] = [1.0, 1.03, 1.06, 1.09, 1.12, 1.15, 1.2, 1.25, 1.3, 1.4, 1.5, 1.6, 1.75, 2.0, 2.5, 3.0];
 
 struct Packing {
-    /// Per chart (in packing order), its page and origin.
-    places: Vec<(u32, UVec2)>,
+    /// Per chart (in packing order), its page, origin and whether it was turned a quarter.
+    places: Vec<(u32, UVec2, bool)>,
     /// The extent used on any page, gutter included.
     used: UVec2,
     pages: u32,
+    /// Whether every chart fits a page as placed (a chart turned to fit may not).
+    fits: bool,
 }
 
 /// Places rectangles of `sizes` (gutter included) in order on pages `width` wide and at most
-/// `max_height` tall: each at the lowest point of the skyline where it fits, leftmost on ties.
-fn skyline(sizes: &[UVec2], width: u32, max_height: u32, g: u32) -> Packing {
+/// `max_height` tall: each at the lowest point of the skyline where it fits, leftmost on ties;
+/// with `turn`, in whichever of its two orientations leaves the skyline lower there.
+fn skyline(sizes: &[UVec2], width: u32, max_height: u32, g: u32, turn: bool) -> Packing {
     // The skyline: (x, top) steps from the left border on, each running to the next step's x.
     let fresh = || vec![(g, g)];
-    let (mut steps, mut page, mut used) = (fresh(), 0, UVec2::ZERO);
+    let (mut steps, mut page, mut used, mut fits) = (fresh(), 0, UVec2::ZERO, true);
     let mut places = Vec::with_capacity(sizes.len());
+    let best_fit = |steps: &[(u32, u32)], size: UVec2| {
+        let turned = (turn && size.x != size.y).then(|| lowest_fit(steps, UVec2::new(size.y, size.x), width, max_height)).flatten();
+        let upright = lowest_fit(steps, size, width, max_height);
+        match (upright, turned) {
+            (Some(u), Some(t)) if t.y + size.x < u.y + size.y => Some((t, true)),
+            (None, Some(t)) => Some((t, true)),
+            (u, _) => u.map(|u| (u, false)),
+        }
+    };
     for &size in sizes {
-        let place = match lowest_fit(&steps, size, width, max_height) {
-            Some(place) => place,
+        let (place, turned) = match best_fit(&steps, size) {
+            Some(fit) => fit,
             None => {
                 (steps, page) = (fresh(), page + 1);
-                lowest_fit(&steps, size, width, max_height).unwrap_or(UVec2::splat(g))
+                best_fit(&steps, size).unwrap_or_else(|| {
+                    fits &= size.x + g <= width;
+                    (UVec2::splat(g), false)
+                })
             }
         };
+        let size = if turned { UVec2::new(size.y, size.x) } else { size };
         raise(&mut steps, place, size);
         used = used.max(place + size);
-        places.push((page, place));
+        places.push((page, place, turned));
     }
-    Packing { places, used, pages: page + 1 }
+    Packing { places, used, pages: page + 1, fits }
 }
 
 /// The lowest origin at a step's x where `size` fits under `max_height` and within `width`.

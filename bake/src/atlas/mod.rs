@@ -15,6 +15,8 @@ mod builder;
 pub use builder::*;
 #[cfg(feature = "baking")]
 pub mod stage;
+#[cfg(feature = "baking")]
+mod unfold;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, PageLayout, Section, REBAKE};
 use crate::binary::{Reader, Writer};
