@@ -356,8 +356,10 @@ fn project(p: Vec3, axis: usize) -> Vec2 {
 /// Which triangles share an edge, with vertices welded by position (files split vertices
 /// at normal and uv seams, which must not split charts by themselves).
 pub(super) struct Adjacency {
-    /// For each triangle's edge k (vertices k, k+1), the triangles across it.
-    edges: HashMap<(u32, u32), Vec<(u32, usize)>>,
+    /// Per triangle t, `across[start[t]..start[t + 1]]`: for each of its edges k (vertices
+    /// k, k+1) in order, each other triangle across it with its own edge there.
+    across: Vec<(u8, u32, u8)>,
+    start: Vec<u32>,
     welded: Vec<u32>,
     mesh_indices: Vec<u32>,
     uv0: Option<Vec<Vec2>>,
@@ -372,13 +374,23 @@ impl Adjacency {
             .enumerate()
             .map(|(i, p)| *by_position.entry(p.to_array().map(f32::to_bits)).or_insert(i as u32))
             .collect();
-        let mut edges: HashMap<(u32, u32), Vec<(u32, usize)>> = HashMap::new();
-        for t in 0..(mesh.indices.len() / 3) as u32 {
+        let count = (mesh.indices.len() / 3) as u32;
+        let mut edges: HashMap<(u32, u32), Vec<(u32, u8)>> = HashMap::new();
+        for t in 0..count {
             for k in 0..3 {
-                edges.entry(Self::edge_key(&welded, &mesh.indices, t, k)).or_default().push((t, k));
+                edges.entry(Self::edge_key(&welded, &mesh.indices, t, k)).or_default().push((t, k as u8));
             }
         }
-        Adjacency { edges, welded, mesh_indices: mesh.indices.clone(), uv0: mesh.uv0.clone() }
+        let (mut across, mut start) = (Vec::new(), Vec::with_capacity(count as usize + 1));
+        for t in 0..count {
+            start.push(across.len() as u32);
+            for k in 0..3 {
+                let sharing = &edges[&Self::edge_key(&welded, &mesh.indices, t, k)];
+                across.extend(sharing.iter().filter(|&&(o, _)| o != t).map(|&(o, ok)| (k as u8, o, ok)));
+            }
+        }
+        start.push(across.len() as u32);
+        Adjacency { across, start, welded, mesh_indices: mesh.indices.clone(), uv0: mesh.uv0.clone() }
     }
 
     fn edge_key(welded: &[u32], indices: &[u32], t: u32, k: usize) -> (u32, u32) {
@@ -390,20 +402,13 @@ impl Adjacency {
     /// The triangles sharing an edge with `t`, in a fixed order, each with whether uv0 is
     /// continuous across that edge (the same uv0 at both of its ends on both sides).
     fn neighbours(&self, t: u32) -> Vec<(u32, bool)> {
-        self.shared_edges(t).into_iter().map(|(k, other, ok)| (other, self.uv_continuous((t, k), (other, ok)))).collect()
+        self.shared_edges(t).map(|(k, other, ok)| (other, self.uv_continuous((t, k), (other, ok)))).collect()
     }
 
     /// Per edge k of `t`, each other triangle across it with its own edge there.
-    pub(super) fn shared_edges(&self, t: u32) -> Vec<(usize, u32, usize)> {
-        let mut out = Vec::new();
-        for k in 0..3 {
-            for &(other, ok) in &self.edges[&Self::edge_key(&self.welded, &self.mesh_indices, t, k)] {
-                if other != t {
-                    out.push((k, other, ok));
-                }
-            }
-        }
-        out
+    pub(super) fn shared_edges(&self, t: u32) -> impl Iterator<Item = (usize, u32, usize)> + '_ {
+        let range = self.start[t as usize] as usize..self.start[t as usize + 1] as usize;
+        self.across[range].iter().map(|&(k, o, ok)| (k as usize, o, ok as usize))
     }
 
     /// Whether edge `k` of `t` and edge `ok` of `o` start at the same point.

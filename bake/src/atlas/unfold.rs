@@ -49,38 +49,86 @@ impl ChartCost {
         texel_size(hi - lo, self.density)
     }
 
+    /// The faces' area in texels.
+    fn area(&self, corners: &[[Vec2; 3]]) -> f32 {
+        corners.iter().map(|c| 0.5 * (c[1] - c[0]).perp_dot(c[2] - c[0]).abs()).sum::<f32>() * self.density * self.density
+    }
+
     fn packed(&self, size: UVec2) -> f32 {
         ((size.x + self.gutter) as f32) * ((size.y + self.gutter) as f32)
     }
 }
 
-/// The layouts after unfolding, the pair that saves most first, until no pair saves
-/// [`UNFOLD_SAVING`]. Ties follow the charts' and triangles' indices, so the result depends
-/// on nothing else.
-pub fn unfold(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost: ChartCost) -> Vec<Layout> {
+/// Which admitted pair is folded first: the one saving the largest share of its smaller
+/// chart, or the most texels. Neither is best everywhere (a thin panel folded strips first
+/// can end as two halves no fold joins), so both are run and the cheaper kept.
+#[derive(Clone, Copy)]
+enum Order {
+    Share,
+    Texels,
+}
+
+/// What folding one chart onto another saves: its share of the smaller chart's packed texels
+/// (the bar), and the texels.
+#[derive(Clone, Copy)]
+struct Saving {
+    share: f32,
+    texels: f32,
+}
+
+impl Saving {
+    fn key(&self, order: Order) -> f32 {
+        match order {
+            Order::Share => self.share,
+            Order::Texels => self.texels,
+        }
+    }
+}
+
+/// The layouts after unfolding, admitted pairs (those saving [`UNFOLD_SAVING`]) folded in
+/// each [`Order`] until none is left; of the two results, the one whose charts pack into
+/// fewer texels (the first on a tie). Ties within a run follow the charts' and triangles'
+/// indices, so the result depends on nothing else.
+pub fn unfold(mesh: &Mesh, adjacency: &Adjacency, layouts: Vec<Layout>, cost: ChartCost) -> Vec<Layout> {
+    let packed = |layouts: &[Layout]| -> f32 { layouts.iter().map(|l| cost.packed(cost.size(&l.corners))).sum() };
+    let by_share = unfold_in(mesh, adjacency, layouts.clone(), cost, Order::Share);
+    let by_texels = unfold_in(mesh, adjacency, layouts, cost, Order::Texels);
+    if packed(&by_texels) < packed(&by_share) {
+        by_texels
+    } else {
+        by_share
+    }
+}
+
+/// One run of [`unfold`]: the admitted pair first in `order`, until none is left.
+fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost: ChartCost, order: Order) -> Vec<Layout> {
     let mut owner = vec![(0u32, 0u32); mesh.indices.len() / 3];
     for (c, layout) in layouts.iter().enumerate() {
         for (i, &t) in layout.triangles.iter().enumerate() {
             owner[t as usize] = (c as u32, i as u32);
         }
     }
+    let mut areas: Vec<f32> = layouts.iter().map(|l| cost.area(&l.corners)).collect();
     let mut alive = vec![true; layouts.len()];
-    // Best saving first; a chart's entry is checked against what its neighbours are now.
+    // A chart's entry is checked against what its neighbours are now when it comes up.
     let mut queue: BinaryHeap<(u32, Reverse<usize>)> = BinaryHeap::new();
+    let key = |fold: &Option<Fold>| fold.as_ref().map(|f| f.saving.key(order).to_bits());
     for a in 0..layouts.len() {
-        if let Some((saving, _, _)) = best_fold(adjacency, &layouts, &owner, a, cost) {
-            queue.push((saving.to_bits(), Reverse(a)));
+        if let Some(k) = key(&best_fold(adjacency, &layouts, &areas, &owner, a, cost, order)) {
+            queue.push((k, Reverse(a)));
         }
     }
-    while let Some((saving, Reverse(a))) = queue.pop() {
+    while let Some((k, Reverse(a))) = queue.pop() {
         if !alive[a] {
             continue;
         }
-        let Some((now, b, corners)) = best_fold(adjacency, &layouts, &owner, a, cost) else { continue };
-        if now.to_bits() != saving {
-            queue.push((now.to_bits(), Reverse(a)));
+        let fold = best_fold(adjacency, &layouts, &areas, &owner, a, cost, order);
+        let Some(now) = key(&fold) else { continue };
+        if now != k {
+            queue.push((now, Reverse(a)));
             continue;
         }
+        let Fold { onto: b, corners, .. } = fold.expect("its key was read");
         let emptied = Layout { triangles: Vec::new(), corners: Vec::new(), ..layouts[b] };
         let other = std::mem::replace(&mut layouts[b], emptied);
         let start = layouts[a].triangles.len() as u32;
@@ -91,36 +139,52 @@ pub fn unfold(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost
         target.triangles.extend(other.triangles);
         target.corners.extend(corners);
         target.parts += other.parts;
+        areas[a] += areas[b];
         alive[b] = false;
-        if let Some((saving, _, _)) = best_fold(adjacency, &layouts, &owner, a, cost) {
-            queue.push((saving.to_bits(), Reverse(a)));
+        if let Some(k) = key(&best_fold(adjacency, &layouts, &areas, &owner, a, cost, order)) {
+            queue.push((k, Reverse(a)));
         }
     }
     layouts.into_iter().zip(alive).filter(|(_, alive)| *alive).map(|(layout, _)| layout).collect()
 }
 
-/// The neighbour of chart `a` that saves most by being unfolded onto it: the saving (a share
-/// of the smaller chart's packed texels), the neighbour, and its corners moved into `a`'s
-/// plane.
+/// A neighbour unfolded onto a chart: what it saves, which chart it is, and its corners
+/// moved into the chart's plane.
+struct Fold {
+    saving: Saving,
+    onto: usize,
+    corners: Vec<[Vec2; 3]>,
+}
+
+/// The admitted neighbour of chart `a` that comes first in `order` when unfolded onto it.
 fn best_fold(
     adjacency: &Adjacency,
     layouts: &[Layout],
+    areas: &[f32],
     owner: &[(u32, u32)],
     a: usize,
     cost: ChartCost,
-) -> Option<(f32, usize, Vec<[Vec2; 3]>)> {
+    order: Order,
+) -> Option<Fold> {
     let here = &layouts[a];
     let own = cost.packed(cost.size(&here.corners));
     let mut grid: Option<OverlapGrid> = None;
-    let mut best: Option<(f32, usize, Vec<[Vec2; 3]>)> = None;
+    let mut best: Option<Fold> = None;
     for (i, &t) in here.triangles.iter().enumerate() {
         for (k, o, ok) in adjacency.shared_edges(t) {
             let (b, j) = owner[o as usize];
             let b = b as usize;
-            if b == a || best.as_ref().is_some_and(|(_, seen, _)| *seen == b) {
+            if b == a || best.as_ref().is_some_and(|f| f.onto == b) {
                 continue;
             }
             let there = &layouts[b];
+            let theirs = cost.packed(cost.size(&there.corners));
+            // No rectangle holding both is smaller than a square of their areas: large charts
+            // are turned away here before any corner is moved.
+            let least = (areas[a] + areas[b]).sqrt() + cost.gutter as f32;
+            if (own + theirs - least * least) / own.min(theirs) < UNFOLD_SAVING {
+                continue;
+            }
             let Some(motion) = Motion::along(adjacency, (t, k, here.corners[i]), (o, ok, there.corners[j as usize])) else {
                 continue;
             };
@@ -129,9 +193,9 @@ fn best_fold(
             if size.max_element() > cost.largest {
                 continue;
             }
-            let theirs = cost.packed(cost.size(&there.corners));
-            let saving = (own + theirs - cost.packed(size)) / own.min(theirs);
-            if saving < UNFOLD_SAVING || best.as_ref().is_some_and(|(s, _, _)| *s >= saving) {
+            let texels = own + theirs - cost.packed(size);
+            let saving = Saving { share: texels / own.min(theirs), texels };
+            if saving.share < UNFOLD_SAVING || best.as_ref().is_some_and(|f| f.saving.key(order) >= saving.key(order)) {
                 continue;
             }
             let grid = grid.get_or_insert_with(|| {
@@ -140,7 +204,7 @@ fn best_fold(
                 g
             });
             if moved.iter().all(|c| !grid.overlaps(*c)) {
-                best = Some((saving, b, moved));
+                best = Some(Fold { saving, onto: b, corners: moved });
             }
         }
     }
