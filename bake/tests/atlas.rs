@@ -101,6 +101,49 @@ fn a_thin_box_is_unfolded_into_fewer_charts_without_distortion() {
     assert_charts_own_their_texels(&scene, &atlas);
 }
 
+/// `mesh` with its vertices welded by position (one index per point, as an indexed file
+/// stores a smooth or shared-corner mesh).
+fn welded(mesh: &Mesh) -> Mesh {
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let indices = mesh
+        .indices
+        .iter()
+        .map(|&i| {
+            let p = mesh.positions[i as usize];
+            *index.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
+                positions.push(p);
+                normals.push(mesh.normals[i as usize]);
+                positions.len() as u32 - 1
+            })
+        })
+        .collect();
+    Mesh { positions, normals, uv0: None, uv1: None, indices, ..mesh.clone() }
+}
+
+/// The same leg with its corners shared by index: unfolding its sides into a strip puts a
+/// corner vertex at two places of one chart (the strip's two ends), and each place keeps its
+/// own uv1, so every triangle's uv1 has its own area in texels.
+#[test]
+fn a_welded_box_unfolds_with_a_uv1_for_each_place_of_a_vertex() {
+    let scene = build_scene(vec![welded(&closed_box(Vec3::ZERO, Vec3::new(0.05, 1.0, 0.05), 1, Facing::Outward, 0))]);
+    assert_eq!(scene.meshes[0].positions.len(), 8);
+    let density = 16.0;
+    let atlas = Atlas::build(&scene, &settings(density)).unwrap();
+    assert!(atlas.charts.iter().any(|c| c.parts > 2), "{:?}", atlas.charts.iter().map(|c| c.parts).collect::<Vec<_>>());
+    let page = Vec2::new(atlas.width as f32, atlas.height as f32);
+    let mesh = &atlas.meshes[0];
+    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+        let uv = [0, 1, 2].map(|k| mesh.uv1[tri[k] as usize] * page);
+        let texels = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs();
+        let p = [0, 1, 2].map(|k| scene.meshes[0].positions[mesh.source_vertex[tri[k] as usize] as usize]);
+        let world = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() * density * density;
+        assert!((texels - world).abs() < 1e-3 * world, "triangle {t}: {texels} texels in uv1, {world} on the surface");
+    }
+    assert_charts_own_their_texels(&scene, &atlas);
+}
+
 #[test]
 fn a_box_gets_one_chart_per_face_projected_on_its_axis() {
     let scene = build_scene(vec![closed_box(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0), 2, Facing::Outward, 0)]);

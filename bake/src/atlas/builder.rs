@@ -1,7 +1,8 @@
 //! Building the atlas (Iones et al., "Fast realistic lighting for video games", §3): triangles
 //! grouped into charts by breadth-first search over their adjacency, each chart mapped to a
-//! plane and cut into patches by a regular grid (one patch a texel), the charts packed into
-//! pages with a gutter between them, and per texel the geometry a baker needs: coverage,
+//! plane, small charts unfolded onto their neighbours (`unfold.rs`), each cut into patches by
+//! a regular grid (one patch a texel), the charts packed into pages with a gutter between
+//! them (turned a quarter where that packs lower), and per texel the geometry a baker needs: coverage,
 //! patch centre, smoothed normal, triangle, and the pieces of faces the patch is made of (so a
 //! baker can spread its samples over the whole patch).
 
@@ -66,8 +67,8 @@ pub struct Chart {
     pub triangles: Vec<u32>,
     /// The mapping of its first part (of all, where `parts` is 1).
     pub mapping: ChartMapping,
-    /// How many of 001's charts were unfolded into it (`unfold.rs`): each part keeps its own
-    /// mapping, moved rigidly into the first part's plane.
+    /// How many of 001's charts were unfolded into it (`unfold.rs`): each part is laid out by
+    /// its own mapping, moved rigidly into the first part's plane; only the first's is kept.
     pub parts: u32,
     pub page: u32,
     /// Top-left texel of the chart's rectangle on its page.
@@ -120,7 +121,7 @@ impl Atlas {
         let mut charts = Vec::new();
         let mut flat = Vec::new();
         let limit = settings.max_size - 2 * settings.gutter;
-        let cost = ChartCost { density: settings.texel_density, gutter: settings.gutter, largest: limit };
+        let cost = ChartCost { density: settings.texel_density, gutter: settings.gutter, limit };
         for (m, mesh) in scene.meshes.iter().enumerate() {
             let adjacency = Adjacency::new(mesh);
             for layout in unfold(mesh, &adjacency, segment_mesh(mesh, &adjacency, settings.discontinuity_angle), cost) {
@@ -246,7 +247,7 @@ pub fn mesh_offsets(scene: &Scene) -> Vec<u32> {
         .collect()
 }
 
-pub(super) fn triangle_positions(mesh: &Mesh, t: u32) -> [Vec3; 3] {
+fn triangle_positions(mesh: &Mesh, t: u32) -> [Vec3; 3] {
     let i = 3 * t as usize;
     [0, 1, 2].map(|k| mesh.positions[mesh.indices[i + k] as usize])
 }
@@ -537,19 +538,19 @@ fn pack(charts: &mut [Chart], flat: &mut [FlatChart], settings: &AtlasSettings) 
     let g = settings.gutter;
     let sizes: Vec<UVec2> = charts.iter().map(|c| c.size + UVec2::splat(g)).collect();
     let area: u64 = sizes.iter().map(|s| s.x as u64 * s.y as u64).sum();
-    let widest = sizes.iter().map(|s| s.x.min(s.y)).max().unwrap_or(1) + g;
-    let width_for = |slack: f64| ((area as f64 * slack).sqrt().ceil() as u32).max(widest).min(settings.max_size);
+    // Turned, a chart needs only its shorter side across the page.
+    let widest = |turn: bool| sizes.iter().map(|s| if turn { s.x.min(s.y) } else { s.x }).max().unwrap_or(1) + g;
+    let width_for = |slack: f64, turn: bool| ((area as f64 * slack).sqrt().ceil() as u32).max(widest(turn)).min(settings.max_size);
     let orders: Vec<Vec<usize>> = PACKING_ORDERS.iter().map(|key| packing_order(&sizes, *key)).collect();
     let (order, packing) = [false, true]
         .into_iter()
         .flat_map(|turn| orders.iter().flat_map(move |order| PACKING_SLACKS.iter().map(move |&slack| (turn, order, slack))))
         .map(|(turn, order, slack)| {
             let sizes: Vec<UVec2> = order.iter().map(|&i| sizes[i]).collect();
-            (order, skyline(&sizes, width_for(slack), settings.max_size, g, turn))
+            (order, skyline(&sizes, width_for(slack, turn), settings.max_size, g, turn))
         })
-        .filter(|(_, p)| p.fits)
         .min_by_key(|(_, p)| (p.pages, p.pages as u64 * p.used.x.div_ceil(4) as u64 * p.used.y.div_ceil(4) as u64))
-        .expect("a packing without turning always fits");
+        .expect("at least one packing is tried");
     for (&i, &(page, origin, turned)) in order.iter().zip(&packing.places) {
         if turned {
             flat[i].turn();
@@ -582,8 +583,6 @@ struct Packing {
     /// The extent used on any page, gutter included.
     used: UVec2,
     pages: u32,
-    /// Whether every chart fits a page as placed (a chart turned to fit may not).
-    fits: bool,
 }
 
 /// Places rectangles of `sizes` (gutter included) in order on pages `width` wide and at most
@@ -592,7 +591,7 @@ struct Packing {
 fn skyline(sizes: &[UVec2], width: u32, max_height: u32, g: u32, turn: bool) -> Packing {
     // The skyline: (x, top) steps from the left border on, each running to the next step's x.
     let fresh = || vec![(g, g)];
-    let (mut steps, mut page, mut used, mut fits) = (fresh(), 0, UVec2::ZERO, true);
+    let (mut steps, mut page, mut used) = (fresh(), 0, UVec2::ZERO);
     let mut places = Vec::with_capacity(sizes.len());
     let best_fit = |steps: &[(u32, u32)], size: UVec2| {
         let turned = (turn && size.x != size.y).then(|| lowest_fit(steps, UVec2::new(size.y, size.x), width, max_height)).flatten();
@@ -608,10 +607,7 @@ fn skyline(sizes: &[UVec2], width: u32, max_height: u32, g: u32, turn: bool) -> 
             Some(fit) => fit,
             None => {
                 (steps, page) = (fresh(), page + 1);
-                best_fit(&steps, size).unwrap_or_else(|| {
-                    fits &= size.x + g <= width;
-                    (UVec2::splat(g), false)
-                })
+                best_fit(&steps, size).unwrap_or((UVec2::splat(g), false))
             }
         };
         let size = if turned { UVec2::new(size.y, size.x) } else { size };
@@ -619,7 +615,7 @@ fn skyline(sizes: &[UVec2], width: u32, max_height: u32, g: u32, turn: bool) -> 
         used = used.max(place + size);
         places.push((page, place, turned));
     }
-    Packing { places, used, pages: page + 1, fits }
+    Packing { places, used, pages: page + 1 }
 }
 
 /// The lowest origin at a step's x where `size` fits under `max_height` and within `width`.
@@ -805,10 +801,11 @@ fn split_vertices(mesh: &Mesh, m: u32, charts: &[Chart], flat: &[FlatChart], pag
         }
     }
     let mut out = AtlasMesh::default();
-    let mut new_index: HashMap<(u32, u32), u32> = HashMap::new();
+    // A vertex of two parts of an unfolded chart may lie at two places in it: one per place.
+    let mut new_index: HashMap<(u32, u32, [u32; 2]), u32> = HashMap::new();
     for (i, &source) in mesh.indices.iter().enumerate() {
         let t = i / 3;
-        let key = (source, chart_of[t]);
+        let key = (source, chart_of[t], corner_uv[t][i % 3].to_array().map(f32::to_bits));
         let index = *new_index.entry(key).or_insert_with(|| {
             out.source_vertex.push(source);
             out.uv1.push(corner_uv[t][i % 3]);

@@ -17,8 +17,8 @@ use std::collections::BinaryHeap;
 /// The share of the smaller chart's packed texels (gutters included) that unfolding it and
 /// its neighbour into one chart must save. A texel across a fold averages two faces, which
 /// pays only where the gutters are a large part of a chart: at 0.2, two equal square charts
-/// fold when they are at most four gutters across, and the faces of a 1 x 2 x 3 m box at 10
-/// texels a metre (10 to 30 texels across) stay apart.
+/// fold when they are at most four gutters across, and at the default 2-texel gutter the faces
+/// of a 1 x 2 x 3 m box at 10 texels a metre (10 to 30 texels across) stay apart.
 const UNFOLD_SAVING: f32 = 0.2;
 
 /// A chart laid flat in metres: its triangles with their corners in its plane.
@@ -40,7 +40,7 @@ pub struct Layout {
 pub struct ChartCost {
     pub density: f32,
     pub gutter: u32,
-    pub largest: u32,
+    pub limit: u32,
 }
 
 impl ChartCost {
@@ -86,7 +86,8 @@ impl Saving {
 }
 
 /// The layouts after unfolding, admitted pairs (those saving [`UNFOLD_SAVING`]) folded in
-/// each [`Order`] until none is left; of the two results, the one whose charts pack into
+/// each [`Order`] until no queued chart has one left (each chart is queued at the start and
+/// again when it grows); of the two results, the one whose charts pack into
 /// fewer texels (the first on a tie). Ties within a run follow the charts' and triangles'
 /// indices, so the result depends on nothing else.
 pub fn unfold(mesh: &Mesh, adjacency: &Adjacency, layouts: Vec<Layout>, cost: ChartCost) -> Vec<Layout> {
@@ -100,7 +101,7 @@ pub fn unfold(mesh: &Mesh, adjacency: &Adjacency, layouts: Vec<Layout>, cost: Ch
     }
 }
 
-/// One run of [`unfold`]: the admitted pair first in `order`, until none is left.
+/// One run of [`unfold`]: the admitted pair first in `order`, one at a time.
 fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost: ChartCost, order: Order) -> Vec<Layout> {
     let mut owner = vec![(0u32, 0u32); mesh.indices.len() / 3];
     for (c, layout) in layouts.iter().enumerate() {
@@ -129,18 +130,21 @@ fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost:
             continue;
         }
         let Fold { onto: b, corners, .. } = fold.expect("its key was read");
-        let emptied = Layout { triangles: Vec::new(), corners: Vec::new(), ..layouts[b] };
-        let other = std::mem::replace(&mut layouts[b], emptied);
+        let triangles = std::mem::take(&mut layouts[b].triangles);
         let start = layouts[a].triangles.len() as u32;
-        for (i, &t) in other.triangles.iter().enumerate() {
+        for (i, &t) in triangles.iter().enumerate() {
             owner[t as usize] = (a as u32, start + i as u32);
         }
+        let parts = layouts[b].parts;
         let target = &mut layouts[a];
-        target.triangles.extend(other.triangles);
+        target.triangles.extend(triangles);
         target.corners.extend(corners);
-        target.parts += other.parts;
+        target.parts += parts;
         areas[a] += areas[b];
         alive[b] = false;
+        // Only the merged chart is looked at again: also re-queuing its neighbours (a fold
+        // onto the grown chart might be admitted from their side) changed no chart on the
+        // scenes measured and doubled scale-10's atlas stage.
         if let Some(k) = key(&best_fold(adjacency, &layouts, &areas, &owner, a, cost, order)) {
             queue.push((k, Reverse(a)));
         }
@@ -190,7 +194,7 @@ fn best_fold(
             };
             let moved: Vec<[Vec2; 3]> = there.corners.iter().map(|c| c.map(|p| motion.apply(p))).collect();
             let size = cost.size(&[here.corners.as_slice(), moved.as_slice()].concat());
-            if size.max_element() > cost.largest {
+            if size.max_element() > cost.limit {
                 continue;
             }
             let texels = own + theirs - cost.packed(size);
