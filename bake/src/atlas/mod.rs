@@ -14,6 +14,8 @@ mod builder;
 #[cfg(feature = "baking")]
 pub use builder::*;
 #[cfg(feature = "baking")]
+mod pack;
+#[cfg(feature = "baking")]
 pub mod stage;
 #[cfg(feature = "baking")]
 mod unfold;

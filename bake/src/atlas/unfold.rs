@@ -8,7 +8,7 @@
 //! nothing. Large faces gain too little from it to be folded: their charts stay as 001 has
 //! them.
 
-use super::builder::{bounds_2d, texel_size, Adjacency, ChartMapping, OverlapGrid};
+use super::builder::{bounds_2d, signed_area_2d, texel_size, Adjacency, ChartMapping, OverlapGrid};
 use crate::scene::Mesh;
 use glam::{UVec2, Vec2};
 use std::cmp::Reverse;
@@ -51,7 +51,7 @@ impl ChartCost {
 
     /// The faces' area in texels.
     fn area(&self, corners: &[[Vec2; 3]]) -> f32 {
-        corners.iter().map(|c| 0.5 * (c[1] - c[0]).perp_dot(c[2] - c[0]).abs()).sum::<f32>() * self.density * self.density
+        corners.iter().map(|c| signed_area_2d(*c).abs()).sum::<f32>() * self.density * self.density
     }
 
     fn packed(&self, size: UVec2) -> f32 {
@@ -109,13 +109,14 @@ fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost:
             owner[t as usize] = (c as u32, i as u32);
         }
     }
-    let mut areas: Vec<f32> = layouts.iter().map(|l| cost.area(&l.corners)).collect();
+    // Per chart, its faces' area and its packed texels, kept as charts grow.
+    let mut extents: Vec<Extent> = layouts.iter().map(|l| Extent::of(&l.corners, cost)).collect();
     let mut alive = vec![true; layouts.len()];
     // A chart's entry is checked against what its neighbours are now when it comes up.
     let mut queue: BinaryHeap<(u32, Reverse<usize>)> = BinaryHeap::new();
     let key = |fold: &Option<Fold>| fold.as_ref().map(|f| f.saving.key(order).to_bits());
     for a in 0..layouts.len() {
-        if let Some(k) = key(&best_fold(adjacency, &layouts, &areas, &owner, a, cost, order)) {
+        if let Some(k) = key(&best_fold(adjacency, &layouts, &extents, &owner, a, cost, order)) {
             queue.push((k, Reverse(a)));
         }
     }
@@ -123,7 +124,7 @@ fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost:
         if !alive[a] {
             continue;
         }
-        let fold = best_fold(adjacency, &layouts, &areas, &owner, a, cost, order);
+        let fold = best_fold(adjacency, &layouts, &extents, &owner, a, cost, order);
         let Some(now) = key(&fold) else { continue };
         if now != k {
             queue.push((now, Reverse(a)));
@@ -140,16 +141,29 @@ fn unfold_in(mesh: &Mesh, adjacency: &Adjacency, mut layouts: Vec<Layout>, cost:
         target.triangles.extend(triangles);
         target.corners.extend(corners);
         target.parts += parts;
-        areas[a] += areas[b];
+        extents[a] = Extent::of(&layouts[a].corners, cost);
         alive[b] = false;
         // Only the merged chart is looked at again: also re-queuing its neighbours (a fold
         // onto the grown chart might be admitted from their side) changed no chart on the
         // scenes measured and doubled scale-10's atlas stage.
-        if let Some(k) = key(&best_fold(adjacency, &layouts, &areas, &owner, a, cost, order)) {
+        if let Some(k) = key(&best_fold(adjacency, &layouts, &extents, &owner, a, cost, order)) {
             queue.push((k, Reverse(a)));
         }
     }
     layouts.into_iter().zip(alive).filter(|(_, alive)| *alive).map(|(layout, _)| layout).collect()
+}
+
+/// A chart's faces' area in texels and the texels it packs into, gutters included.
+#[derive(Clone, Copy)]
+struct Extent {
+    area: f32,
+    packed: f32,
+}
+
+impl Extent {
+    fn of(corners: &[[Vec2; 3]], cost: ChartCost) -> Self {
+        Extent { area: cost.area(corners), packed: cost.packed(cost.size(corners)) }
+    }
 }
 
 /// A neighbour unfolded onto a chart: what it saves, which chart it is, and its corners
@@ -164,14 +178,14 @@ struct Fold {
 fn best_fold(
     adjacency: &Adjacency,
     layouts: &[Layout],
-    areas: &[f32],
+    extents: &[Extent],
     owner: &[(u32, u32)],
     a: usize,
     cost: ChartCost,
     order: Order,
 ) -> Option<Fold> {
     let here = &layouts[a];
-    let own = cost.packed(cost.size(&here.corners));
+    let own = extents[a].packed;
     let mut grid: Option<OverlapGrid> = None;
     let mut best: Option<Fold> = None;
     for (i, &t) in here.triangles.iter().enumerate() {
@@ -182,10 +196,10 @@ fn best_fold(
                 continue;
             }
             let there = &layouts[b];
-            let theirs = cost.packed(cost.size(&there.corners));
+            let theirs = extents[b].packed;
             // No rectangle holding both is smaller than a square of their areas: large charts
             // are turned away here before any corner is moved.
-            let least = (areas[a] + areas[b]).sqrt() + cost.gutter as f32;
+            let least = (extents[a].area + extents[b].area).sqrt() + cost.gutter as f32;
             if (own + theirs - least * least) / own.min(theirs) < UNFOLD_SAVING {
                 continue;
             }
