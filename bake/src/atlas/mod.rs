@@ -1,7 +1,8 @@
 //! The lightmap atlas every per-texel method shares (Iones et al., "Fast realistic lighting
 //! for video games", §3), as plain data: the meshes re-indexed with uv1, the page layout and
 //! each texel's geometry; and its artifact section, `atlas`. Building it (behind the `baking`
-//! feature) is `builder.rs`.
+//! feature) is `builder.rs`, with `unfold.rs` (charts unfolded onto their neighbours) and
+//! `pack.rs` (charts packed into pages).
 //!
 //! Texel space: page `p` is `width` x `height` texels; texel (i, j) is the square
 //! [i, i+1] x [j, j+1], row 0 at the top. A vertex's uv1 is its texel-space position divided
