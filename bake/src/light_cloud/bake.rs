@@ -1,11 +1,12 @@
 //! The light clouds' whole bake behind the bake contract: the meshes tessellated where they
 //! are flat-shaded, the cloud's grid (declared, or the space the lights reach), the gather
-//! (004 eq. 6-7), light clustering by zone (§4) and the clustered PCA (§5), with the facts the
-//! manifest and stats.json keep.
+//! (004 eq. 6-7), light clustering by zone (§4) and the clustered PCA (§5), one zone at a time
+//! (zones.rs), with the facts the manifest and stats.json keep.
 
+use super::zones::{gather_zones, reduce_zones, ZoneRows, ZoneSettings, Zoned};
 use super::{
-    bake, cloud_points, compress, explained_variance, reduce, region, relative_error, section, vertex_count, LightCloud,
-    LightCloudBakeSettings, LightCloudSceneSettings, Reduction, Vectors,
+    region, section, split_zones, vertex_count, vertex_positions, Gatherer, LightCloud, LightCloudBakeSettings, LightCloudSceneSettings,
+    Reduction, Vectors,
 };
 use crate::bvh::SceneBvh;
 use crate::contract::{scene_bytes, Baked, Baker, Estimate, Stages};
@@ -24,7 +25,10 @@ pub struct LightCloudBaker {
     pub directions: Option<usize>,
     /// None: the scene's diagonal / `EDGES_PER_DIAGONAL` when it is flat-shaded, else 0.
     pub max_edge: Option<f32>,
-    pub reduction: Reduction,
+    /// Zones; None: `ZONES`, or one per `VERTICES_PER_ZONE` vertices where that is more.
+    pub zones: Option<usize>,
+    /// Light clustering's weights (004 eq. 9); None: every zone keeps every cloud light.
+    pub weights: Option<(f32, f32)>,
     /// Clusters and vectors; None: uncompressed.
     pub compression: Option<(usize, Vectors)>,
     /// Record 004 Fig. 5's shares of the first `VARIANCE_COMPONENTS` components.
@@ -40,12 +44,21 @@ pub const SPOT_BANDS: usize = 2;
 /// The directions a scene with a directional light gets when none are given (about 18
 /// degrees apart; docs/BENCHMARKS.md measures 16 to 256 against the path tracer).
 pub const SUN_DIRECTIONS: usize = 128;
+/// The zones a scene gets when none are given (004 Table 1's Cornell box) ...
+pub const ZONES: usize = 8;
+/// ... or one per this many vertices where that is more: a zone's gather then holds at most
+/// this many vertices' rows (004 §4.1 gathers one zone at a time; Table 1's Sponza has 247 zones
+/// for 114k triangles).
+pub const VERTICES_PER_ZONE: usize = 16_384;
 /// Components of 004 Fig. 5 recorded.
 const VARIANCE_COMPONENTS: usize = 16;
 /// Bytes a transfer value (a vertex's, per cloud light, emission function, SH coefficient and
-/// colour) holds at the bake's peak: the gather's f64 sum and its f32 row (measured:
-/// docs/BENCHMARKS.md, "Peak memory").
-pub const BYTES_PER_VALUE: u64 = 12;
+/// colour) of the zone being baked holds at the bake's peak: the gather's f64 sum and f32 row,
+/// or, reduced, its row read back, the clustering's light-major copy and the reduced row and
+/// its centred copy (docs/BENCHMARKS.md, "Peak memory").
+pub const ZONE_BYTES_PER_VALUE: u64 = 16;
+/// Bytes every zone's gathered value holds until the last zone is gathered, when kept in memory.
+pub const KEPT_BYTES_PER_VALUE: u64 = 4;
 
 /// What the bake chose where nothing was given.
 struct Chosen {
@@ -66,19 +79,38 @@ impl LightCloudBaker {
         }
     }
 
-    /// The gather's peak: every vertex's transfer values from every cloud light and direction.
-    pub fn estimate(&self, scene: &Scene, lights: usize, settings: &LightCloudBakeSettings) -> Estimate {
+    /// The bake's peak: the largest zone's transfer values from every cloud light and direction,
+    /// and every zone's gathered values when they are kept in memory (`spill`: in a scratch
+    /// file).
+    pub fn estimate(
+        &self,
+        scene: &Scene,
+        (lights, largest_zone, spill): (usize, usize, bool),
+        settings: &LightCloudBakeSettings,
+    ) -> Estimate {
         let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { crate::sh::COEFFICIENTS } else { 1 };
-        let per_light = 3 * coefficients * settings.emission;
+        let per_vertex = (lights * 3 * coefficients * settings.emission) as u64;
+        let kept = if spill { 0 } else { vertex_count(scene) as u64 * per_vertex * KEPT_BYTES_PER_VALUE };
         Estimate {
             fixed: scene_bytes(scene),
-            count: (vertex_count(scene) * lights * per_light) as u64,
-            bytes_per_unit: BYTES_PER_VALUE,
-            unit: "transfer values (vertices x cloud lights x colours, emission functions, SH coefficients)".into(),
-            lever: "cloud lights (the grid's counts, extras.relume.light_cloud.grid, and --directions)",
+            count: (largest_zone as u64 * per_vertex * ZONE_BYTES_PER_VALUE + kept) / KEPT_BYTES_PER_VALUE,
+            bytes_per_unit: KEPT_BYTES_PER_VALUE,
+            unit: "4-byte transfer values (vertices x cloud lights x colours, emission functions, SH coefficients: the largest zone's x 4, every zone's when kept in memory)".into(),
+            lever: "cloud lights (the grid's counts, extras.relume.light_cloud.grid, and --directions), or more --zones",
             value: lights as u64,
             power: 1.0,
         }
+    }
+
+    /// The zones: as given, or `ZONES`, or one per `VERTICES_PER_ZONE` where that is more.
+    fn zone_count(&self, scene: &Scene) -> usize {
+        self.zones.unwrap_or_else(|| ZONES.max(vertex_count(scene).div_ceil(VERTICES_PER_ZONE)))
+    }
+
+    /// Whether every zone's gathered rows would not fit the memory limit beside the zone baked.
+    fn spills(&self, scene: &Scene, shape: (usize, usize), settings: &LightCloudBakeSettings) -> bool {
+        let kept = self.estimate(scene, (shape.0, shape.1, false), settings);
+        settings.work.memory_limit.is_some_and(|limit| kept.bytes() > limit)
     }
 }
 
@@ -100,24 +132,26 @@ impl Baker for LightCloudBaker {
         };
         let emission = (chosen.bands + 1) * (chosen.bands + 1);
         let settings = LightCloudBakeSettings { grid, directions: chosen.directions, samples: self.samples, emission, work: *work };
-        let lights = settings.grid.as_ref().map_or(0, |g| cloud_points(&bvh, g).len()) + chosen.directions;
-        work.admit("light cloud", &self.estimate(scene, lights, &settings))?;
-        let gathered = stages.timed("gather", || bake(scene, &bvh, &settings))?;
-        let raw_bytes = gathered.terms.len() * 4;
-        let reduced = stages.timed("light clustering", || reduce(scene, &bvh, &gathered, self.reduction))?;
-        let clustering_error = reduced.relative_error;
-        let (cloud, error, variance) = match self.compression {
-            None => (reduced.cloud, 0.0, None),
-            Some((clusters, vectors)) => {
-                let cloud = stages.timed("cpca", || compress(&reduced.cloud, clusters, vectors, work.progress))?;
-                let error = relative_error(&reduced.cloud, &cloud);
-                let variance = self.explained_variance.then(|| {
-                    stages.timed("explained variance", || explained_variance(scene, &bvh, &reduced.cloud, &cloud, VARIANCE_COMPONENTS))
-                });
-                (cloud, error, variance.map(|v| (v.indirect, v.direct)))
-            }
+        let gatherer = Gatherer::new(scene, &bvh, &settings)?;
+        let reduction = Reduction { zones: self.zone_count(scene), weights: self.weights };
+        let zones = split_zones(&vertex_positions(scene), reduction.zones);
+        let shape = (gatherer.lights(), zones.iter().map(Vec::len).max().unwrap_or(0));
+        let spill = self.spills(scene, shape, &settings);
+        work.admit("light cloud", &self.estimate(scene, (shape.0, shape.1, spill), &settings))?;
+        let mut store = ZoneRows::new(spill)?;
+        let (taken, scale) = stages.timed("gather", || gather_zones(&gatherer, &zones, settings.samples, &mut store))?;
+        let gathered = gatherer.shape(taken, Vec::new());
+        let zone_settings = ZoneSettings {
+            reduction,
+            compression: self.compression,
+            variance_components: self.explained_variance.then_some(VARIANCE_COMPONENTS),
         };
-        let facts = Facts::of(&cloud, clustering_error, &settings, gathered.lights.len() - chosen.directions, error);
+        let zoned =
+            stages.timed("zones", || reduce_zones(scene, &bvh, &gathered, (&zones, store, scale), &zone_settings, work.progress))?;
+        let Zoned { cloud, clustering_error, error, variance, raw_values, seconds, cloud_lights } = zoned;
+        let raw_bytes = raw_values * 4;
+        let variance = variance.map(|v| (v.indirect, v.direct));
+        let facts = Facts::of(&cloud, clustering_error, &settings, cloud_lights - chosen.directions, error);
         let mut sections = vec![section(&cloud, facts.manifest(&cloud))];
         sections.extend(tessellation.as_ref().map(tessellation::section));
         let mut summary = facts.summary(&cloud, raw_bytes);
@@ -137,21 +171,27 @@ impl Baker for LightCloudBaker {
         }
         let mut stats = facts.stats(&cloud, raw_bytes);
         stats["explained_variance"] = json!(variance.map(|(indirect, direct)| json!({ "indirect": indirect, "direct": direct })));
-        let mut baked = Baked { sections, parameters: self.parameters(&chosen, &settings), stats, summary };
+        stats["zones_seconds"] = json!({ "light_clustering": seconds.0, "cpca": seconds.1 });
+        stats["scratch_file"] = json!(spill);
+        let mut baked = Baked { sections, parameters: self.parameters(&chosen, &settings, reduction.zones), stats, summary };
         self.record_derived(&mut baked, source, &chosen, tessellation.as_ref(), reachable.as_ref());
+        if self.zones.is_none() && reduction.zones > ZONES {
+            let how = format!("{} (one per {VERTICES_PER_ZONE} of the scene's {} vertices)", reduction.zones, vertex_count(scene));
+            baked.derived("zones", json!(reduction.zones), &how, "--zones");
+        }
         Ok(baked)
     }
 }
 
 impl LightCloudBaker {
-    fn parameters(&self, chosen: &Chosen, settings: &LightCloudBakeSettings) -> Value {
+    fn parameters(&self, chosen: &Chosen, settings: &LightCloudBakeSettings, zones: usize) -> Value {
         let compression = self.compression;
         json!({
             "samples": settings.samples,
             "emission_bands": chosen.bands,
             "max_edge": chosen.edge,
-            "zones": self.reduction.zones,
-            "light_clustering": self.reduction.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
+            "zones": zones,
+            "light_clustering": self.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
             "clusters": compression.map(|c| c.0),
             "vectors": compression.map(|(_, v)| v.count()),
             "variable_vectors": matches!(compression, Some((_, Vectors::Shared(_)))),

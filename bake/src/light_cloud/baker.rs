@@ -15,7 +15,8 @@
 //! hemisphere of y_k(wo) f(wi, wo) dwo (a fixed quadrature), and the sums become the
 //! least-squares coefficients a = G^-1 b, G the hemisphere's Gram matrix of the y_k.
 
-use super::{vertex_count, CloudGrid, Columns, LightCloud};
+use super::zones::ZonesBuilder;
+use super::{CloudGrid, Columns, LightCloud};
 use crate::bsdf::Bsdf;
 use crate::bvh::SceneBvh;
 use crate::cpca;
@@ -91,50 +92,108 @@ fn points(bvh: &SceneBvh, grid: Option<&CloudGrid>) -> Result<Vec<Vec3>, String>
 /// Bakes the cloud's transfer; refused when no cloud light is left outside closed geometry,
 /// and when there is neither a grid nor a direction.
 pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) -> Result<LightCloud, String> {
-    settings.work.validate()?;
-    if settings.samples == 0 {
-        return Err("the gather needs at least one path per vertex".into());
-    }
-    if !super::EMISSION_COUNTS.contains(&settings.emission) {
-        return Err(format!("{} emission functions a cloud light: one of {:?}", settings.emission, super::EMISSION_COUNTS));
-    }
-    if settings.grid.is_none() && settings.directions == 0 {
-        return Err("a cloud needs a grid of points or some directions".into());
-    }
-    if settings.directions > super::MAX_DIRECTIONS {
-        return Err(format!("{} directions: at most {}", settings.directions, super::MAX_DIRECTIONS));
-    }
-    let mut points = points(bvh, settings.grid.as_ref())?;
-    let mut lights: Vec<Light> = points.iter().map(|&p| unit_light(p)).collect();
-    let directions = super::directions(settings.directions);
-    lights.extend(directions.iter().map(|&d| unit_directional_light(d)));
-    points.extend(directions);
-    let supports = Supports::new(scene);
-    let vertices = vertex_count(scene);
-    let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { sh::COEFFICIENTS } else { 1 };
-    let emission = settings.emission;
-    let row = lights.len() * 3 * coefficients * emission;
-    let mut sums = vec![0f64; vertices * row];
-    let mut progress = Progress::new(vertices as u64 * settings.samples as u64, "light cloud", settings.work.progress);
-    let gather = Gather { scene, bvh, lights: &lights, coefficients, emission };
-    let taken = settings.work.in_passes(settings.samples, SAMPLES_PER_PASS, |samples| {
-        sums.par_chunks_mut(row).enumerate().for_each(|(v, sums)| {
-            let hemisphere = (coefficients > 1).then(|| Hemisphere::new(supports.normals[v]));
-            for s in samples.clone() {
-                let sampler = PathSampler::new(settings.work.seed, v as u32, s);
-                if let Some(point) = supports.point(v, &sampler) {
-                    gather.path(&sampler, &point, hemisphere.as_ref(), sums);
-                }
-            }
-            progress.inc(samples.len() as u64);
-        });
-    });
+    let gatherer = Gatherer::new(scene, bvh, settings)?;
+    let vertices: Vec<u32> = (0..gatherer.vertices() as u32).collect();
+    let mut progress = gatherer.progress(vertices.len());
+    let (rows, taken) = gatherer.rows(&vertices, settings.samples, &progress);
     progress.finish();
-    let mut rows: Vec<f32> = sums.iter().map(|s| (s / taken as f64) as f32).collect();
-    if coefficients > 1 {
-        rows.par_chunks_mut(row).enumerate().for_each(|(v, row)| Hemisphere::new(supports.normals[v]).fit(row));
+    Ok(gatherer.shape(taken, rows))
+}
+
+/// The gather's cloud lights and its vertices' supports, made once for every zone.
+pub struct Gatherer<'s> {
+    scene: &'s Scene,
+    bvh: &'s SceneBvh,
+    settings: &'s LightCloudBakeSettings,
+    points: Vec<Vec3>,
+    lights: Vec<Light>,
+    supports: Supports<'s>,
+    coefficients: usize,
+}
+
+impl<'s> Gatherer<'s> {
+    /// Refused when no cloud light is left outside closed geometry, and when there is neither a
+    /// grid nor a direction.
+    pub fn new(scene: &'s Scene, bvh: &'s SceneBvh, settings: &'s LightCloudBakeSettings) -> Result<Gatherer<'s>, String> {
+        settings.work.validate()?;
+        if settings.samples == 0 {
+            return Err("the gather needs at least one path per vertex".into());
+        }
+        if !super::EMISSION_COUNTS.contains(&settings.emission) {
+            return Err(format!("{} emission functions a cloud light: one of {:?}", settings.emission, super::EMISSION_COUNTS));
+        }
+        if settings.grid.is_none() && settings.directions == 0 {
+            return Err("a cloud needs a grid of points or some directions".into());
+        }
+        if settings.directions > super::MAX_DIRECTIONS {
+            return Err(format!("{} directions: at most {}", settings.directions, super::MAX_DIRECTIONS));
+        }
+        let mut points = points(bvh, settings.grid.as_ref())?;
+        let mut lights: Vec<Light> = points.iter().map(|&p| unit_light(p)).collect();
+        let directions = super::directions(settings.directions);
+        lights.extend(directions.iter().map(|&d| unit_directional_light(d)));
+        points.extend(directions);
+        let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { sh::COEFFICIENTS } else { 1 };
+        Ok(Gatherer { scene, bvh, settings, points, lights, supports: Supports::new(scene), coefficients })
     }
-    Ok(LightCloud { directions: settings.directions, ..LightCloud::uncompressed(points, (coefficients, emission), taken, rows) })
+
+    pub fn vertices(&self) -> usize {
+        self.supports.positions.len()
+    }
+
+    /// Cloud lights: points and directions.
+    pub fn lights(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Values a vertex's row holds: per light, emission function, coefficient and colour.
+    pub fn row_values(&self) -> usize {
+        self.lights.len() * 3 * self.coefficients * self.settings.emission
+    }
+
+    /// The gather's progress over `vertices` vertices' paths.
+    pub fn progress(&self, vertices: usize) -> Progress {
+        Progress::new(vertices as u64 * self.settings.samples as u64, "light cloud", self.settings.work.progress)
+    }
+
+    /// The rows of `vertices` (in their order) from at most `samples` paths each, fewer when
+    /// the time limit passes (a whole pass at least), and the paths taken.
+    pub fn rows(&self, vertices: &[u32], samples: u32, progress: &Progress) -> (Vec<f32>, u32) {
+        let (row, coefficients) = (self.row_values(), self.coefficients);
+        let mut sums = vec![0f64; vertices.len() * row];
+        let gather = Gather { scene: self.scene, bvh: self.bvh, lights: &self.lights, coefficients, emission: self.settings.emission };
+        let work = &self.settings.work;
+        let taken = work.in_passes(samples, SAMPLES_PER_PASS, |range| {
+            sums.par_chunks_mut(row).zip(vertices.par_iter()).for_each(|(sums, &v)| {
+                let hemisphere = (coefficients > 1).then(|| Hemisphere::new(self.supports.normals[v as usize]));
+                for s in range.clone() {
+                    let sampler = PathSampler::new(work.seed, v, s);
+                    if let Some(point) = self.supports.point(v as usize, &sampler) {
+                        gather.path(&sampler, &point, hemisphere.as_ref(), sums);
+                    }
+                }
+                progress.inc(range.len() as u64);
+            });
+        });
+        let mut rows: Vec<f32> = sums.iter().map(|s| (s / taken as f64) as f32).collect();
+        drop(sums);
+        if coefficients > 1 {
+            rows.par_chunks_mut(row)
+                .zip(vertices.par_iter())
+                .for_each(|(row, &v)| Hemisphere::new(self.supports.normals[v as usize]).fit(row));
+        }
+        (rows, taken)
+    }
+
+    /// The gathered cloud of `rows` (every vertex's, or none: its shape alone) from `taken`
+    /// paths a vertex.
+    pub fn shape(&self, taken: u32, rows: Vec<f32>) -> LightCloud {
+        let (coefficients, emission) = (self.coefficients, self.settings.emission);
+        LightCloud {
+            directions: self.settings.directions,
+            ..LightCloud::uncompressed(self.points.clone(), (coefficients, emission), taken, rows)
+        }
+    }
 }
 
 /// Directions over a vertex's hemisphere (uniform in solid angle: 16 bands of cos theta by 16
@@ -205,6 +264,16 @@ impl Hemisphere {
 /// sqrt(sum |X_v - X~_v|^2 / sum |X_v|^2) of `compressed` against the `uncompressed` cloud it
 /// was made from, over every vertex and cloud light.
 pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64 {
+    let (error, total) = error_sums(uncompressed, compressed);
+    if total > 0.0 {
+        (error / total).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// sum |X_v - X~_v|^2 and sum |X_v|^2 of `compressed` against `uncompressed`.
+pub fn error_sums(uncompressed: &LightCloud, compressed: &LightCloud) -> (f64, f64) {
     let (mut error, mut total) = (0.0f64, 0.0f64);
     let (before, after) = (Columns::new(uncompressed), Columns::new(compressed));
     for v in 0..uncompressed.vertex_count() {
@@ -216,11 +285,7 @@ pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64
             }
         }
     }
-    if total > 0.0 {
-        (error / total).sqrt()
-    } else {
-        0.0
-    }
+    (error, total)
 }
 
 /// The most rounds of Sloan's refinement (004 §5: "20-30 iterations or until no vertex moves").
@@ -256,46 +321,65 @@ pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors, progress:
     if cloud.basis() != 0 || cloud.cluster_count() != cloud.vertex_count() {
         return Err("only an uncompressed cloud can be compressed".into());
     }
-    let layout = cloud.layout();
     let mut zones = vec![Vec::new(); cloud.zone_count()];
     for (v, &c) in cloud.assignment.iter().enumerate() {
         zones[cloud.zone_clusters.partition_point(|&start| start <= c) - 1].push(v as u32);
     }
-    let mut out = LightCloud { zone_clusters: vec![0], vectors: Vec::new(), terms: Vec::new(), coords: Vec::new(), ..cloud.clone() };
-    let mut coords = vec![Vec::new(); cloud.vertex_count()];
+    let mut out = ZonesBuilder::new(cloud, cloud.vertex_count());
     let mut done = Progress::new(cloud.vertex_count() as u64, "light cloud's clustered PCA", progress);
     for (zone, members) in zones.iter().enumerate() {
-        let cols = cloud.per_light() * cloud.zone_light_range(zone).len();
-        let rows: Vec<f32> =
-            members.iter().flat_map(|&v| &cloud.terms[layout[cloud.assignment[v as usize] as usize].offset..][..cols]).copied().collect();
-        let share = ((clusters * members.len()) as f64 / cloud.vertex_count() as f64).round() as usize;
-        let first = cpca::fit(&rows, cols, &rows, cols, share.clamp(1, members.len()), vectors.count())?;
-        let (fitted, _) = cpca::refine(&rows, cols, first, REFINE_ROUNDS);
-        let clusters = match vectors {
-            Vectors::Each(_) => fitted.clusters,
-            Vectors::Shared(mean) => {
-                let eigenvalues: Vec<&[f64]> = fitted.clusters.iter().map(|c| c.eigenvalues.as_slice()).collect();
-                let counts = cpca::allocate(&eigenvalues, mean * fitted.clusters.len(), super::MAX_VECTORS);
-                let refit = |(c, d): (cpca::ClusterPca, usize)| if d == mean { c } else { cpca::cluster_pca(&rows, cols, &c.members, d) };
-                fitted.clusters.into_iter().zip(counts).map(refit).collect()
-            }
-        };
-        let base = out.cluster_count() as u32;
-        for cluster in &clusters {
-            out.vectors.push(cluster.basis.len() as u32);
-            out.terms.extend(&cluster.mean);
-            cluster.basis.iter().for_each(|b| out.terms.extend(b));
-            for (&k, z) in cluster.members.iter().zip(&cluster.weights) {
-                coords[members[k as usize] as usize] = z.clone();
-            }
-        }
-        for (&v, &c) in members.iter().zip(&fitted.assignment) {
-            out.assignment[v as usize] = base + c;
-        }
-        out.zone_clusters.push(base + clusters.len() as u32);
+        let share = zone_share(clusters, members.len(), cloud.vertex_count());
+        out.push(members, compress_zone(&cloud.zone(zone, members), share, vectors)?);
         done.inc(members.len() as u64);
     }
     done.finish();
+    out.finish()
+}
+
+/// A zone's share of `clusters`, by its vertices (at least one, at most one a vertex).
+pub fn zone_share(clusters: usize, members: usize, vertices: usize) -> usize {
+    (((clusters * members) as f64 / vertices as f64).round() as usize).clamp(1, members.max(1))
+}
+
+/// The clustered PCA of one zone's uncompressed cloud: `share` clusters by the divisive 2-means
+/// of its rows, D vectors each, then refined: vertices move to the cluster that reconstructs
+/// them best until none moves (at most 20 rounds). Clusters left empty are dropped. With
+/// `Vectors::Shared`, the refined clusters then share their vectors out.
+pub fn compress_zone(zone: &LightCloud, share: usize, vectors: Vectors) -> Result<LightCloud, String> {
+    let (rows, cols) = (&zone.terms, zone.per_light() * zone.lights.len());
+    let first = cpca::fit(rows, cols, rows, cols, share, vectors.count())?;
+    let (fitted, _) = cpca::refine(rows, cols, first, REFINE_ROUNDS);
+    let clusters = match vectors {
+        Vectors::Each(_) => fitted.clusters,
+        Vectors::Shared(mean) => {
+            let eigenvalues: Vec<&[f64]> = fitted.clusters.iter().map(|c| c.eigenvalues.as_slice()).collect();
+            let counts = cpca::allocate(&eigenvalues, mean * fitted.clusters.len(), super::MAX_VECTORS);
+            let refit = |(c, d): (cpca::ClusterPca, usize)| if d == mean { c } else { cpca::cluster_pca(rows, cols, &c.members, d) };
+            fitted.clusters.into_iter().zip(counts).map(refit).collect()
+        }
+    };
+    let mut coords = vec![Vec::new(); zone.vertex_count()];
+    let mut out = LightCloud {
+        lights: zone.lights.clone(),
+        coefficients: zone.coefficients,
+        emission: zone.emission,
+        directions: zone.directions,
+        zone_lights: zone.zone_lights.clone(),
+        zone_clusters: vec![0, clusters.len() as u32],
+        samples: zone.samples,
+        vectors: Vec::new(),
+        assignment: fitted.assignment,
+        terms: Vec::new(),
+        coords: Vec::new(),
+    };
+    for cluster in &clusters {
+        out.vectors.push(cluster.basis.len() as u32);
+        out.terms.extend(&cluster.mean);
+        cluster.basis.iter().for_each(|b| out.terms.extend(b));
+        for (&k, z) in cluster.members.iter().zip(&cluster.weights) {
+            coords[k as usize] = z.clone();
+        }
+    }
     out.coords = coords.concat();
     Ok(out)
 }

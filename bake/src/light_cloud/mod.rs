@@ -21,6 +21,7 @@ pub mod region;
 #[cfg(feature = "baking")]
 mod variance;
 mod weights;
+mod zones;
 #[cfg(feature = "baking")]
 pub use baker::*;
 #[cfg(feature = "baking")]
@@ -32,6 +33,7 @@ pub use reduce::*;
 #[cfg(feature = "baking")]
 pub use variance::*;
 pub use weights::*;
+pub use zones::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
 use crate::binary::{Reader, Writer};
@@ -229,6 +231,20 @@ impl LightCloud {
 
     pub fn vertex_count(&self) -> usize {
         self.assignment.len()
+    }
+
+    /// Zone `z` of an uncompressed cloud as a cloud of its own: its lights, and the rows of
+    /// `members` (its vertices), in their order.
+    pub fn zone(&self, z: usize, members: &[u32]) -> LightCloud {
+        let layout = self.layout();
+        let cols = self.per_light() * self.zone_light_range(z).len();
+        let rows =
+            members.iter().flat_map(|&v| &self.terms[layout[self.assignment[v as usize] as usize].offset..][..cols]).copied().collect();
+        let lights = self.lights[self.zone_light_range(z)].to_vec();
+        LightCloud {
+            directions: self.directions,
+            ..LightCloud::uncompressed(lights, (self.coefficients, self.emission), self.samples, rows)
+        }
     }
 
     pub fn zone_count(&self) -> usize {

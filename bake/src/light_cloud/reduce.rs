@@ -18,6 +18,7 @@
 //! - The merged light (spec B3): its members' mean position (the member nearest it when the
 //!   mean does not see every member), and per vertex the mean of its members' transfer.
 
+use super::zones::ZonesBuilder;
 use super::LightCloud;
 use crate::bvh::SceneBvh;
 use crate::scene::Scene;
@@ -50,67 +51,115 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
     if gathered.basis() != 0 || gathered.zone_count() != 1 || gathered.cluster_count() != gathered.vertex_count() {
         return Err("only a gathered cloud (one zone, uncompressed) can be reduced".into());
     }
-    if reduction.zones == 0 {
-        return Err("zones must be at least 1".into());
+    let zones = split_zones(&vertex_positions(scene), reduction.zones);
+    let scale = gathered.terms.iter().fold(0f32, |m, &x| m.max(x));
+    let clustering = Clustering::new(scene, bvh, gathered, reduction, scale)?;
+    let row_values = gathered.per_light() * gathered.lights.len();
+    let mut out = ZonesBuilder::new(gathered, gathered.vertex_count());
+    let (mut groups, mut error, mut total) = (Vec::new(), 0f64, 0f64);
+    for zone in &zones {
+        let rows: Vec<f32> = zone.iter().flat_map(|&v| &gathered.terms[v as usize * row_values..][..row_values]).copied().collect();
+        let mut reduced = clustering.reduce_zone(bvh, &gathered.lights, &rows);
+        (error, total) = (error + reduced.error, total + reduced.total);
+        groups.push(std::mem::take(&mut reduced.groups));
+        out.push(zone, reduced.cloud(gathered));
     }
-    if let Some((w1, w2)) = reduction.weights {
+    let cloud = out.finish()?;
+    Ok(Reduced { cloud, groups, relative_error: if total > 0.0 { (error / total).sqrt() } else { 0.0 } })
+}
+
+/// Every vertex's position, meshes in order (the renderer's vertex order).
+pub fn vertex_positions(scene: &Scene) -> Vec<Vec3> {
+    scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect()
+}
+
+/// What light clustering needs of the whole cloud: eq. (9)'s part every zone shares and the
+/// response weight per largest transfer value.
+pub struct Clustering {
+    /// None: every zone keeps every cloud light.
+    base: Option<Vec<f32>>,
+    w2: f32,
+    per_light: usize,
+}
+
+impl Clustering {
+    /// Refuses negative or non-finite weights and no zones. `scale`: the largest transfer value
+    /// of the whole gathered cloud.
+    pub fn new(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction, scale: f32) -> Result<Clustering, String> {
+        if reduction.zones == 0 {
+            return Err("zones must be at least 1".into());
+        }
+        let per_light = gathered.per_light();
+        let Some((w1, w2)) = reduction.weights else { return Ok(Clustering { base: None, w2: 0.0, per_light }) };
         if !(w1.is_finite() && w2.is_finite() && w1 >= 0.0 && w2 >= 0.0) {
             return Err(format!("light clustering's weights w1 = {w1}, w2 = {w2} must be finite and >= 0"));
         }
+        let (lo, hi) = scene.settings.bounds;
+        let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
+        let n = gathered.lights.len();
+        let base = pair_base(bvh, &gathered.lights[..n - gathered.directions], n, w1 / diagonal);
+        Ok(Clustering { base: Some(base), w2: w2 / scale.max(f32::MIN_POSITIVE), per_light })
     }
-    let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
-    let zones = split_zones(&positions, reduction.zones);
-    let (n, per_light) = (gathered.lights.len(), gathered.per_light());
-    let row = |v: u32| &gathered.terms[v as usize * per_light * n..][..per_light * n];
-    let groups: Vec<Vec<Vec<u32>>> = match reduction.weights {
-        None => vec![(0..n as u32).map(|j| vec![j]).collect(); zones.len()],
-        Some((w1, w2)) => {
-            let (lo, hi) = scene.settings.bounds;
-            let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
-            let scale = gathered.terms.iter().fold(0f32, |m, &x| m.max(x)).max(f32::MIN_POSITIVE);
-            let base = pair_base(bvh, &gathered.lights[..n - gathered.directions], n, w1 / diagonal);
-            zones.iter().map(|zone| complete_linkage(n, &zone_metric(&base, zone, &row, (n, per_light), w2 / scale))).collect()
-        }
-    };
-    let (mut lights, mut zone_lights, mut zone_clusters) = (Vec::new(), vec![0u32], vec![0u32]);
-    let (mut terms, mut assignment, mut cluster) = (Vec::new(), vec![0u32; gathered.vertex_count()], 0u32);
-    let (mut error, mut total) = (0f64, 0f64);
-    for (zone, groups) in zones.iter().zip(&groups) {
-        lights.extend(groups.iter().map(|g| merged_position(bvh, &gathered.lights, g)));
-        zone_lights.push(lights.len() as u32);
-        for &v in zone {
-            assignment[v as usize] = cluster;
-            cluster += 1;
+
+    /// One zone's lights clustered over its gathered `rows` (vertex after vertex, every cloud
+    /// light's values): its merged lights and its rows over them.
+    pub fn reduce_zone(&self, bvh: &SceneBvh, lights: &[Vec3], rows: &[f32]) -> ReducedZone {
+        let (n, per_light) = (lights.len(), self.per_light);
+        let vertices = rows.len() / (n * per_light).max(1);
+        let row = |v: u32| &rows[v as usize * per_light * n..][..per_light * n];
+        let groups: Vec<Vec<u32>> = match &self.base {
+            None => (0..n as u32).map(|j| vec![j]).collect(),
+            Some(base) => {
+                let local: Vec<u32> = (0..vertices as u32).collect();
+                complete_linkage(n, &zone_metric(base, &local, &row, (n, per_light), self.w2))
+            }
+        };
+        let mut zone = ReducedZone {
+            lights: groups.iter().map(|g| merged_position(bvh, lights, g)).collect(),
+            rows: Vec::with_capacity(vertices * groups.len() * per_light),
+            groups: Vec::new(),
+            error: 0.0,
+            total: 0.0,
+        };
+        for v in 0..vertices as u32 {
             let x = row(v);
-            for group in groups {
+            for group in &groups {
                 for k in (0..per_light).step_by(3) {
                     let value = |j: u32| Vec3::from_slice(&x[per_light * j as usize + k..][..3]);
                     let mean = group.iter().fold(Vec3::ZERO, |s, &j| s + value(j)) / group.len() as f32;
-                    terms.extend(mean.to_array());
+                    zone.rows.extend(mean.to_array());
                     for &j in group {
-                        error += (value(j).as_dvec3() - mean.as_dvec3()).length_squared();
-                        total += value(j).as_dvec3().length_squared();
+                        zone.error += (value(j).as_dvec3() - mean.as_dvec3()).length_squared();
+                        zone.total += value(j).as_dvec3().length_squared();
                     }
                 }
             }
         }
-        zone_clusters.push(cluster);
+        zone.groups = groups;
+        zone
     }
-    let cloud = LightCloud {
-        lights,
-        coefficients: gathered.coefficients,
-        emission: gathered.emission,
-        directions: gathered.directions,
-        zone_lights,
-        zone_clusters,
-        samples: gathered.samples,
-        vectors: vec![0; cluster as usize],
-        assignment,
-        terms,
-        coords: Vec::new(),
-    };
-    cloud.validate()?;
-    Ok(Reduced { cloud, groups, relative_error: if total > 0.0 { (error / total).sqrt() } else { 0.0 } })
+}
+
+/// One zone's reduced cloud: its lights and, vertex after vertex (the zone's order), its
+/// transfer from each of them; with the squared error and squared total of the merge.
+pub struct ReducedZone {
+    pub lights: Vec<Vec3>,
+    pub rows: Vec<f32>,
+    /// The cloud lights each of its lights stands for.
+    pub groups: Vec<Vec<u32>>,
+    pub error: f64,
+    pub total: f64,
+}
+
+impl ReducedZone {
+    /// The zone as a cloud of its own (uncompressed, its vertices in the zone's order), shaped as
+    /// `gathered`.
+    pub fn cloud(self, gathered: &LightCloud) -> LightCloud {
+        LightCloud {
+            directions: gathered.directions,
+            ..LightCloud::uncompressed(self.lights, (gathered.coefficients, gathered.emission), gathered.samples, self.rows)
+        }
+    }
 }
 
 /// The vertices of each zone (each list ascending): the zone with the most vertices is split

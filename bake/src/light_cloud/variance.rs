@@ -35,33 +35,57 @@ pub fn explained_variance(
 ) -> ExplainedVariance {
     let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
     let normals: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.normals.iter().copied()).collect();
-    let (columns, layout) = (Columns::new(reduced), compressed.layout());
-    let members = cpca::groups(&compressed.assignment, compressed.cluster_count());
-    let (mut indirect_shares, mut direct_shares) = (Shares::new(components), Shares::new(components));
-    for (vertices, at) in members.iter().zip(&layout).filter(|(m, _)| !m.is_empty()) {
-        let cloud_columns = at.first_column as usize..(at.first_column + at.columns) as usize;
-        let lights = cloud_columns.start / reduced.emission..cloud_columns.end / reduced.emission;
-        let mut indirect = Vec::with_capacity(vertices.len() * cloud_columns.len() * reduced.per_column());
-        for &v in vertices {
-            for j in cloud_columns.clone() {
-                (0..reduced.coefficients).for_each(|k| indirect.extend(columns.coefficient(v as usize, j, k).to_array()));
-            }
-        }
-        // White light: one value a light (its rgb are equal and share the same components).
-        let direct: Vec<f32> = vertices
-            .par_iter()
-            .flat_map_iter(|&v| {
-                let (p, n) = (positions[v as usize], normals[v as usize]);
-                lights.clone().map(move |j| match reduced.is_direction(j) {
-                    true => punctual_irradiance(bvh, &unit_directional_light(reduced.lights[j]), p, n, n, true).map_or(0.0, |(e, _)| e.x),
-                    false => direct_irradiance(bvh, p, n, reduced.lights[j]),
-                })
-            })
-            .collect();
-        indirect_shares.add(&indirect, vertices.len());
-        direct_shares.add(&direct, vertices.len());
+    let mut sums = VarianceSums::new(components);
+    sums.add(bvh, (&positions, &normals), reduced, compressed);
+    sums.finish()
+}
+
+/// Explained variance summed over clouds (a bake's zones, one after another).
+pub struct VarianceSums {
+    indirect: Shares,
+    direct: Shares,
+}
+
+impl VarianceSums {
+    pub fn new(components: usize) -> VarianceSums {
+        VarianceSums { indirect: Shares::new(components), direct: Shares::new(components) }
     }
-    ExplainedVariance { indirect: indirect_shares.mean(), direct: direct_shares.mean() }
+
+    /// Adds the clusters of `compressed`, made from `reduced`, whose vertices stand at
+    /// `positions` facing `normals`.
+    pub fn add(&mut self, bvh: &SceneBvh, (positions, normals): (&[Vec3], &[Vec3]), reduced: &LightCloud, compressed: &LightCloud) {
+        let (columns, layout) = (Columns::new(reduced), compressed.layout());
+        let members = cpca::groups(&compressed.assignment, compressed.cluster_count());
+        for (vertices, at) in members.iter().zip(&layout).filter(|(m, _)| !m.is_empty()) {
+            let cloud_columns = at.first_column as usize..(at.first_column + at.columns) as usize;
+            let lights = cloud_columns.start / reduced.emission..cloud_columns.end / reduced.emission;
+            let mut indirect = Vec::with_capacity(vertices.len() * cloud_columns.len() * reduced.per_column());
+            for &v in vertices {
+                for j in cloud_columns.clone() {
+                    (0..reduced.coefficients).for_each(|k| indirect.extend(columns.coefficient(v as usize, j, k).to_array()));
+                }
+            }
+            // White light: one value a light (its rgb are equal and share the same components).
+            let direct: Vec<f32> = vertices
+                .par_iter()
+                .flat_map_iter(|&v| {
+                    let (p, n) = (positions[v as usize], normals[v as usize]);
+                    lights.clone().map(move |j| match reduced.is_direction(j) {
+                        true => {
+                            punctual_irradiance(bvh, &unit_directional_light(reduced.lights[j]), p, n, n, true).map_or(0.0, |(e, _)| e.x)
+                        }
+                        false => direct_irradiance(bvh, p, n, reduced.lights[j]),
+                    })
+                })
+                .collect();
+            self.indirect.add(&indirect, vertices.len());
+            self.direct.add(&direct, vertices.len());
+        }
+    }
+
+    pub fn finish(self) -> ExplainedVariance {
+        ExplainedVariance { indirect: self.indirect.mean(), direct: self.direct.mean() }
+    }
 }
 
 /// Per component, the shares of the clusters' variance summed by vertices.

@@ -86,7 +86,7 @@ const ZONES: Param = Param::count(
     "zones of vertices, each with its own reduced cloud and clusters (004 §4.2: split at the median of the longest axis)",
     1,
     256,
-    Default::Value("8"),
+    Default::From("8, or one per 16,384 vertices where that is more (004 §4.1: a zone is gathered at a time)"),
 );
 const W1: Param = Param::number(
     "w1",
@@ -125,14 +125,13 @@ const PARAMS: [&Param; 16] = [
     &FADE,
 ];
 
-/// The zones and light clustering the flags ask for.
-fn reduction(values: &Values) -> Result<lc::Reduction> {
+/// Light clustering's weights as the flags ask; None: no light clustering.
+fn weights(values: &Values) -> Result<Option<(f32, f32)>> {
     let clustering = !values.given(&NO_LIGHT_CLUSTERING);
     if !clustering && (values.given(&W1) || values.given(&W2)) {
         anyhow::bail!("--w1 and --w2 weigh light clustering: give them without --no-light-clustering");
     }
-    let weights = clustering.then(|| (values.number(&W1) as f32, values.number(&W2) as f32));
-    Ok(lc::Reduction { zones: values.count(&ZONES) as usize, weights })
+    Ok(clustering.then(|| (values.number(&W1) as f32, values.number(&W2) as f32)))
 }
 
 /// The clusters and vectors the flags ask for; None: uncompressed.
@@ -233,7 +232,8 @@ impl Method for LightCloudMethod {
             directions: values.given_count(&DIRECTIONS).map(|d| d as usize),
             max_edge: values.given_number(&MAX_EDGE).map(|e| e as f32),
             compression: compression(values)?,
-            reduction: reduction(values)?,
+            zones: values.given_count(&ZONES).map(|z| z as usize),
+            weights: weights(values)?,
             explained_variance: values.given(&EXPLAINED_VARIANCE),
         }))
     }

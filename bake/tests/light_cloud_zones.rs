@@ -1,0 +1,64 @@
+//! A cloud baked zone by zone (004 §4.1, one zone's gather in memory at a time): the same
+//! cloud as the whole gather reduced and compressed at once, whether the zones' rows wait in
+//! memory or in a scratch file.
+#![cfg(feature = "baking")]
+
+use glam::Vec3;
+use relume_bake::bvh::SceneBvh;
+use relume_bake::light_cloud::{self as lc, CloudGrid, LightCloudBakeSettings, Reduction, ZoneRows, ZoneSettings};
+use relume_bake::scene::Scene;
+use relume_bake::testing::{closed_box, look_at, material, point_light, scene, Facing};
+use relume_bake::work::WorkOptions;
+use serde_json::json;
+
+/// A 4 m room with a pillar, lit by a point light.
+fn room() -> Scene {
+    let m = material("white", Vec3::splat(0.6), Vec3::ZERO);
+    let room = closed_box(Vec3::ZERO, Vec3::new(4.0, 2.0, 2.0), 6, Facing::Inward, 0);
+    let pillar = closed_box(Vec3::new(1.8, 0.0, 0.8), Vec3::new(2.2, 2.0, 1.2), 2, Facing::Outward, 0);
+    let camera = look_at(Vec3::new(1.0, 1.0, 1.0), Vec3::new(3.0, 1.0, 1.0), Vec3::Y, 1.0);
+    scene("room", vec![room, pillar], vec![m], vec![point_light(Vec3::new(1.0, 1.0, 1.0), Vec3::ONE)], camera)
+}
+
+fn bytes(cloud: &lc::LightCloud) -> Vec<(String, Vec<u8>)> {
+    lc::section(cloud, json!({})).files
+}
+
+#[test]
+fn a_cloud_baked_zone_by_zone_is_the_whole_cloud_reduced_and_compressed() {
+    let s = room();
+    let bvh = SceneBvh::new(&s);
+    let settings = LightCloudBakeSettings {
+        grid: Some(CloudGrid { min: Vec3::new(0.2, 0.2, 0.2), max: Vec3::new(3.8, 1.8, 1.8), counts: [6, 2, 2] }),
+        directions: 0,
+        samples: 8,
+        emission: 1,
+        work: WorkOptions { seed: 5, ..WorkOptions::default() },
+    };
+    let reduction = Reduction { zones: 5, weights: Some((0.5, 2.0)) };
+    let (clusters, vectors) = (6, lc::Vectors::Each(2));
+    let gathered = lc::bake(&s, &bvh, &settings).unwrap();
+    let reduced = lc::reduce(&s, &bvh, &gathered, reduction).unwrap();
+    let whole = lc::compress(&reduced.cloud, clusters, vectors, false).unwrap();
+    let kept = (reduced.cloud.lights.len(), 5 * gathered.lights.len());
+    assert!(kept.0 < kept.1, "light clustering merged some lights: {kept:?}");
+
+    let gatherer = lc::Gatherer::new(&s, &bvh, &settings).unwrap();
+    let zones = lc::split_zones(&lc::vertex_positions(&s), reduction.zones);
+    let zone_settings = ZoneSettings { reduction, compression: Some((clusters, vectors)), variance_components: None };
+    for spill in [false, true] {
+        let mut store = ZoneRows::new(spill).unwrap();
+        let (taken, scale) = lc::gather_zones(&gatherer, &zones, settings.samples, &mut store).unwrap();
+        assert_eq!((taken, scale), (8, gathered.terms.iter().fold(0f32, |m, &x| m.max(x))));
+        let zoned = lc::reduce_zones(&s, &bvh, &gatherer.shape(taken, Vec::new()), (&zones, store, scale), &zone_settings, false).unwrap();
+        assert!(bytes(&zoned.cloud) == bytes(&whole), "zone by zone (scratch file: {spill}) differs from the whole cloud");
+        assert!(
+            (zoned.clustering_error - reduced.relative_error).abs() < 1e-12,
+            "{} against {}",
+            zoned.clustering_error,
+            reduced.relative_error
+        );
+        let error = lc::relative_error(&reduced.cloud, &whole);
+        assert!(error > 0.0 && (zoned.error - error).abs() < 1e-12, "{} against {error}", zoned.error);
+    }
+}
