@@ -39,6 +39,17 @@ pub fn remove_unfinished() {
     std::mem::forget(held);
 }
 
+/// Holds a scratch file of this process: an interrupt removes it with the unfinished outputs.
+pub fn hold_scratch(path: &Path) {
+    unfinished().push(path.to_path_buf());
+}
+
+/// Removes a held scratch file.
+pub fn remove_scratch(path: &Path) {
+    remove(path);
+    unfinished().retain(|p| p != path);
+}
+
 fn remove(path: &Path) {
     let _ = match std::fs::symlink_metadata(path) {
         Ok(m) if m.is_dir() => std::fs::remove_dir_all(path),

@@ -165,17 +165,16 @@ pub(crate) fn replace_environment(scene: &mut Scene, image: Option<&Path>) -> Re
     Ok(())
 }
 
-/// The scene's environment read from `image` instead of its own file.
+/// The scene's environment read from `image` instead of its own file, keeping its intensity,
+/// rotation and cube face; a scene that declares none gets the block's defaults.
 fn replaced_environment(scene: &Scene, image: &Path) -> Result<Environment> {
-    let Some(declared) = &scene.settings.environment else {
-        bail!(
-            "--environment {}: {} declares no environment to replace (extras.relume.environment)",
-            image.display(),
-            scene.source.display()
-        );
-    };
     let image = std::path::absolute(image).with_context(|| format!("--environment {}: not a usable path", image.display()))?;
-    let settings = EnvironmentSettings { image: image.clone(), ..declared.clone() };
+    let settings = match &scene.settings.environment {
+        Some(declared) => EnvironmentSettings { image: image.clone(), ..declared.clone() },
+        None => {
+            EnvironmentSettings::from_json(&serde_json::json!({ "image": image })).map_err(|e| anyhow::anyhow!("--environment: {e}"))?
+        }
+    };
     let environment = Environment::load(&settings, &scene.source)
         .map_err(|e| anyhow::anyhow!("--environment: {e}; give a lat-long RGB EXR of finite radiance >= 0"))?;
     if environment.clamped_texels > 0 {

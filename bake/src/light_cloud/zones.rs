@@ -132,7 +132,7 @@ impl Drop for ZoneRows {
     fn drop(&mut self) {
         if let ZoneRows::File { path, writer, .. } = self {
             writer.take();
-            let _ = std::fs::remove_file(&*path);
+            crate::outputs::remove_scratch(path);
         }
     }
 }
