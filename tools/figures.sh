@@ -328,8 +328,9 @@ figure_bake_memory() {
 # --scale K`), under --memory-limit 16G: its stats.json (stages' seconds, peak memory) or its
 # refusal; then `relume scaling` charts them. Light path maps at 384 entry points (4,096 would
 # not fit the largest in 16 GiB); MRT's dictionary made once, before the sweep; light clouds
-# at K = 1 and 2 (K = 10 is refused at once; K = 2 takes 25 minutes, so it runs last); the path
-# tracer's paths per second on the smallest and largest.
+# at every K with 8 gather paths a vertex (K = 10 about 50 minutes; at the default 64 its gather
+# alone would take hours) and at the defaults at K = 1 and 2 (K = 2 takes 10 minutes, so it runs
+# last); the path tracer's paths per second on the smallest and largest.
 figure_scale_sweep() {
     local limit=(--memory-limit 16G --threads 2)
     for k in 1 2 5 10; do
@@ -344,7 +345,10 @@ figure_scale_sweep() {
             --out "$DIR/light-path-maps-fixed-$k" || true
         "$RELUME" bake "$scene" --method mrt "${limit[@]}" --dictionary-cache "$DIR/dictionaries" --out "$DIR/mrt-$k" || true
     done
-    for k in 1 10 2; do
+    for k in 1 2 5 10; do
+        "$RELUME" bake "$DIR/scenes/scale-$k.gltf" --method light-cloud --samples 8 "${limit[@]}" --out "$DIR/light-cloud-8-$k" || true
+    done
+    for k in 1 2; do
         "$RELUME" bake "$DIR/scenes/scale-$k.gltf" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
     done
     for k in 1 10; do

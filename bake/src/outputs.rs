@@ -39,9 +39,13 @@ pub fn remove_unfinished() {
     std::mem::forget(held);
 }
 
-/// Holds a scratch file of this process: an interrupt removes it with the unfinished outputs.
-pub fn hold_scratch(path: &Path) {
-    unfinished().push(path.to_path_buf());
+/// Creates a scratch file of this process, which an interrupt removes with the unfinished
+/// outputs (created under the lock, as an output's temporary is).
+pub fn create_scratch(path: &Path) -> std::io::Result<File> {
+    let mut held = unfinished();
+    let file = File::create(path)?;
+    held.push(path.to_path_buf());
+    Ok(file)
 }
 
 /// Removes a held scratch file.

@@ -86,9 +86,7 @@ impl ZoneRows {
             return Ok(ZoneRows::Memory(Vec::new()));
         }
         let path = std::env::temp_dir().join(format!("relume-light-cloud-{}.rows", std::process::id()));
-        let file = File::create(&path).map_err(|e| {
-            format!("{}: cannot write the light cloud's scratch file: {e} (set TMPDIR to a folder with room)", path.display())
-        })?;
+        let file = crate::outputs::create_scratch(&path).map_err(|e| scratch_error(&path, e))?;
         Ok(ZoneRows::File { path, writer: Some(BufWriter::new(file)), starts: vec![0] })
     }
 
