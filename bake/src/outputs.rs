@@ -39,21 +39,6 @@ pub fn remove_unfinished() {
     std::mem::forget(held);
 }
 
-/// Creates a scratch file of this process, which an interrupt removes with the unfinished
-/// outputs (created under the lock, as an output's temporary is).
-pub fn create_scratch(path: &Path) -> std::io::Result<File> {
-    let mut held = unfinished();
-    let file = File::create(path)?;
-    held.push(path.to_path_buf());
-    Ok(file)
-}
-
-/// Removes a held scratch file.
-pub fn remove_scratch(path: &Path) {
-    remove(path);
-    unfinished().retain(|p| p != path);
-}
-
 fn remove(path: &Path) {
     let _ = match std::fs::symlink_metadata(path) {
         Ok(m) if m.is_dir() => std::fs::remove_dir_all(path),

@@ -24,41 +24,57 @@ fn bytes(cloud: &lc::LightCloud) -> Vec<(String, Vec<u8>)> {
     lc::section(cloud, json!({})).files
 }
 
+/// A gathered cloud of `directions` directions besides the grid, reduced into `zones` zones.
+fn settings(directions: usize) -> LightCloudBakeSettings {
+    LightCloudBakeSettings {
+        grid: Some(CloudGrid { min: Vec3::new(0.2, 0.2, 0.2), max: Vec3::new(3.8, 1.8, 1.8), counts: [6, 2, 2] }),
+        directions,
+        samples: 8,
+        emission: 1,
+        work: WorkOptions { seed: 5, ..WorkOptions::default() },
+    }
+}
+
+/// Light clustering merges some lights, compressed with D vectors each or shared, uncompressed,
+/// without light clustering, with directions: every way the same bytes as the whole cloud.
 #[test]
 fn a_cloud_baked_zone_by_zone_is_the_whole_cloud_reduced_and_compressed() {
     let s = room();
     let bvh = SceneBvh::new(&s);
-    let settings = LightCloudBakeSettings {
-        grid: Some(CloudGrid { min: Vec3::new(0.2, 0.2, 0.2), max: Vec3::new(3.8, 1.8, 1.8), counts: [6, 2, 2] }),
-        directions: 0,
-        samples: 8,
-        emission: 1,
-        work: WorkOptions { seed: 5, ..WorkOptions::default() },
-    };
-    let reduction = Reduction { zones: 5, weights: Some((0.5, 2.0)) };
-    let (clusters, vectors) = (6, lc::Vectors::Each(2));
-    let gathered = lc::bake(&s, &bvh, &settings).unwrap();
-    let reduced = lc::reduce(&s, &bvh, &gathered, reduction).unwrap();
-    let whole = lc::compress(&reduced.cloud, clusters, vectors, false).unwrap();
-    let kept = (reduced.cloud.lights.len(), 5 * gathered.lights.len());
-    assert!(kept.0 < kept.1, "light clustering merged some lights: {kept:?}");
+    let cases = [
+        (0, Some((0.5, 2.0)), Some((6, lc::Vectors::Each(2)))),
+        (0, Some((0.5, 2.0)), Some((6, lc::Vectors::Shared(2)))),
+        (0, Some((0.5, 2.0)), None),
+        (8, Some((0.5, 2.0)), Some((6, lc::Vectors::Each(2)))),
+        (0, None, Some((6, lc::Vectors::Each(3)))),
+    ];
+    for (directions, weights, compression) in cases {
+        let case = format!("{directions} directions, weights {weights:?}, {compression:?}");
+        let settings = settings(directions);
+        let reduction = Reduction { zones: 5, weights };
+        let gathered = lc::bake(&s, &bvh, &settings).unwrap();
+        let reduced = lc::reduce(&s, &bvh, &gathered, reduction).unwrap();
+        let whole = compression.map(|(c, v)| lc::compress(&reduced.cloud, c, v, false).unwrap());
+        if weights.is_some() {
+            let kept = (reduced.cloud.lights.len(), 5 * gathered.lights.len());
+            assert!(kept.0 < kept.1, "{case}: light clustering merged some lights: {kept:?}");
+        }
 
-    let gatherer = lc::Gatherer::new(&s, &bvh, &settings).unwrap();
-    let zones = lc::split_zones(&lc::vertex_positions(&s), reduction.zones);
-    let zone_settings = ZoneSettings { reduction, compression: Some((clusters, vectors)), variance_components: None };
-    for spill in [false, true] {
-        let mut store = ZoneRows::new(spill).unwrap();
-        let (taken, scale) = lc::gather_zones(&gatherer, &zones, settings.samples, &mut store).unwrap();
-        assert_eq!((taken, scale), (8, gathered.terms.iter().fold(0f32, |m, &x| m.max(x))));
-        let zoned = lc::reduce_zones(&s, &bvh, &gatherer.shape(taken, Vec::new()), (&zones, store, scale), &zone_settings, false).unwrap();
-        assert!(bytes(&zoned.cloud) == bytes(&whole), "zone by zone (scratch file: {spill}) differs from the whole cloud");
-        assert!(
-            (zoned.clustering_error - reduced.relative_error).abs() < 1e-12,
-            "{} against {}",
-            zoned.clustering_error,
-            reduced.relative_error
-        );
-        let error = lc::relative_error(&reduced.cloud, &whole);
-        assert!(error > 0.0 && (zoned.error - error).abs() < 1e-12, "{} against {error}", zoned.error);
+        let gatherer = lc::Gatherer::new(&s, &bvh, &settings).unwrap();
+        let zones = lc::split_zones(&lc::vertex_positions(&s), reduction.zones);
+        let zone_settings = ZoneSettings { reduction, compression, variance_components: None };
+        for spill in [false, true] {
+            let mut store = ZoneRows::new(spill).unwrap();
+            let (taken, scale) = lc::gather_zones(&gatherer, &zones, settings.samples, &mut store).unwrap();
+            assert_eq!((taken, scale), (8, gathered.terms.iter().fold(0f32, |m, &x| m.max(x))), "{case}");
+            let shape = gatherer.shape(taken, Vec::new());
+            let zoned = lc::reduce_zones(&s, &bvh, &shape, (&zones, store, scale), &zone_settings, false).unwrap();
+            let expected = whole.as_ref().unwrap_or(&reduced.cloud);
+            assert!(bytes(&zoned.cloud) == bytes(expected), "{case}: zone by zone (scratch file: {spill}) differs from the whole cloud");
+            let clustering = (zoned.clustering_error, reduced.relative_error);
+            assert!((clustering.0 - clustering.1).abs() < 1e-12, "{case}: {clustering:?}");
+            let error = whole.as_ref().map_or(0.0, |w| lc::relative_error(&reduced.cloud, w));
+            assert!((zoned.error - error).abs() < 1e-12, "{case}: {} against {error}", zoned.error);
+        }
     }
 }

@@ -1,6 +1,6 @@
 //! The light clouds' whole bake behind the bake contract: the meshes tessellated where they
 //! are flat-shaded, the cloud's grid (declared, or the space the lights reach), the gather
-//! (004 eq. 6-7), light clustering by zone (§4) and the clustered PCA (§5), one zone at a time
+//! (004 eq. 6-7), light clustering by zone (§4) and the clustered PCA (§5), a zone at a time
 //! (zones.rs), with the facts the manifest and stats.json keep.
 
 use super::zones::{gather_zones, reduce_zones, ZoneRows, ZoneSettings, Zoned};
@@ -46,19 +46,22 @@ pub const SPOT_BANDS: usize = 2;
 pub const SUN_DIRECTIONS: usize = 128;
 /// The zones a scene gets when none are given (004 Table 1's Cornell box) ...
 pub const ZONES: usize = 8;
-/// ... or one per this many vertices where that is more: a zone's gather then holds at most
-/// this many vertices' rows (004 §4.1 gathers one zone at a time; Table 1's Sponza has 247 zones
-/// for 114k triangles).
+/// ... or one per this many vertices where that is more: a zone then holds about this many
+/// vertices, at most twice as many (zones split the largest in halves; 004 §4.2 holds one zone
+/// in memory at a time; Table 1's Sponza has 247 zones for 114k triangles).
 pub const VERTICES_PER_ZONE: usize = 16_384;
 /// Components of 004 Fig. 5 recorded.
 const VARIANCE_COMPONENTS: usize = 16;
 /// Bytes a transfer value (a vertex's, per cloud light, emission function, SH coefficient and
-/// colour) of the zone being baked holds at the bake's peak: the gather's f64 sum and f32 row,
-/// or, reduced, its row read back, the clustering's light-major copy and the reduced row and
-/// its centred copy (docs/BENCHMARKS.md, "Peak memory").
-pub const ZONE_BYTES_PER_VALUE: u64 = 16;
-/// Bytes every zone's gathered value holds until the last zone is gathered, when kept in memory.
+/// colour) of the zone being gathered holds: its f64 sum and its f32 row (reduced, a zone holds
+/// less: its row read back and its reduced row) (docs/BENCHMARKS.md, "Peak memory").
+pub const ZONE_BYTES_PER_VALUE: u64 = 12;
+/// Bytes every zone's gathered value holds until the last zone is gathered, when kept in memory
+/// (and, uncompressed, in the cloud the bake returns).
 pub const KEPT_BYTES_PER_VALUE: u64 = 4;
+/// Copies of a cluster's covariance (P x P f64, P the values per vertex of its zone's lights)
+/// alive at once: the matrix, the eigensolver's copy and its eigenvectors.
+const COVARIANCE_COPIES: u64 = 3;
 
 /// What the bake chose where nothing was given.
 struct Chosen {
@@ -80,8 +83,9 @@ impl LightCloudBaker {
     }
 
     /// The bake's peak: the largest zone's transfer values from every cloud light and direction,
-    /// and every zone's gathered values when they are kept in memory (`spill`: in a scratch
-    /// file).
+    /// every zone's gathered values when they are kept in memory (`spill`: in a scratch file),
+    /// and, compressed, a cluster's covariance over every cloud light (a zone that keeps them
+    /// all).
     pub fn estimate(
         &self,
         scene: &Scene,
@@ -91,8 +95,9 @@ impl LightCloudBaker {
         let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { crate::sh::COEFFICIENTS } else { 1 };
         let per_vertex = (lights * 3 * coefficients * settings.emission) as u64;
         let kept = if spill { 0 } else { vertex_count(scene) as u64 * per_vertex * KEPT_BYTES_PER_VALUE };
+        let covariance = if self.compression.is_some() { COVARIANCE_COPIES * 8 * per_vertex * per_vertex } else { 0 };
         Estimate {
-            fixed: scene_bytes(scene),
+            fixed: scene_bytes(scene) + covariance,
             count: (largest_zone as u64 * per_vertex * ZONE_BYTES_PER_VALUE + kept) / KEPT_BYTES_PER_VALUE,
             bytes_per_unit: KEPT_BYTES_PER_VALUE,
             unit: "4-byte transfer values (vertices x cloud lights x colours, emission functions, SH coefficients: the largest zone's x 4, every zone's when kept in memory)".into(),
@@ -107,10 +112,12 @@ impl LightCloudBaker {
         self.zones.unwrap_or_else(|| ZONES.max(vertex_count(scene).div_ceil(VERTICES_PER_ZONE)))
     }
 
-    /// Whether every zone's gathered rows would not fit the memory limit beside the zone baked.
+    /// Whether the zones' gathered rows wait in a scratch file: when they would not fit the
+    /// memory limit beside the zone baked, and the cloud is compressed (uncompressed, they are
+    /// the cloud the bake returns).
     fn spills(&self, scene: &Scene, shape: (usize, usize), settings: &LightCloudBakeSettings) -> bool {
         let kept = self.estimate(scene, (shape.0, shape.1, false), settings);
-        settings.work.memory_limit.is_some_and(|limit| kept.bytes() > limit)
+        self.compression.is_some() && settings.work.memory_limit.is_some_and(|limit| kept.bytes() > limit)
     }
 }
 
@@ -134,6 +141,7 @@ impl Baker for LightCloudBaker {
         let settings = LightCloudBakeSettings { grid, directions: chosen.directions, samples: self.samples, emission, work: *work };
         let gatherer = Gatherer::new(scene, &bvh, &settings)?;
         let reduction = Reduction { zones: self.zone_count(scene), weights: self.weights };
+        reduction.validate()?;
         let zones = split_zones(&vertex_positions(scene), reduction.zones);
         let shape = (gatherer.lights(), zones.iter().map(Vec::len).max().unwrap_or(0));
         let spill = self.spills(scene, shape, &settings);

@@ -89,13 +89,14 @@ fn points(bvh: &SceneBvh, grid: Option<&CloudGrid>) -> Result<Vec<Vec3>, String>
     Ok(points)
 }
 
-/// Bakes the cloud's transfer; refused when no cloud light is left outside closed geometry,
-/// and when there is neither a grid nor a direction.
+/// Bakes the cloud's transfer, every vertex at once (a bake gathers a zone at a time,
+/// zones.rs); refused when no cloud light is left outside closed geometry, and when there is
+/// neither a grid nor a direction.
 pub fn bake(scene: &Scene, bvh: &SceneBvh, settings: &LightCloudBakeSettings) -> Result<LightCloud, String> {
     let gatherer = Gatherer::new(scene, bvh, settings)?;
     let vertices: Vec<u32> = (0..gatherer.vertices() as u32).collect();
     let mut progress = gatherer.progress(vertices.len());
-    let (rows, taken) = gatherer.rows(&vertices, settings.samples, &progress);
+    let (rows, taken) = gatherer.rows(&vertices, settings.samples, &settings.work, &progress);
     progress.finish();
     Ok(gatherer.shape(taken, rows))
 }
@@ -156,13 +157,16 @@ impl<'s> Gatherer<'s> {
         Progress::new(vertices as u64 * self.settings.samples as u64, "light cloud", self.settings.work.progress)
     }
 
+    pub fn work(&self) -> &WorkOptions {
+        &self.settings.work
+    }
+
     /// The rows of `vertices` (in their order) from at most `samples` paths each, fewer when
-    /// the time limit passes (a whole pass at least), and the paths taken.
-    pub fn rows(&self, vertices: &[u32], samples: u32, progress: &Progress) -> (Vec<f32>, u32) {
+    /// `work`'s time limit passes (a whole pass at least), and the paths taken.
+    pub fn rows(&self, vertices: &[u32], samples: u32, work: &WorkOptions, progress: &Progress) -> (Vec<f32>, u32) {
         let (row, coefficients) = (self.row_values(), self.coefficients);
         let mut sums = vec![0f64; vertices.len() * row];
         let gather = Gather { scene: self.scene, bvh: self.bvh, lights: &self.lights, coefficients, emission: self.settings.emission };
-        let work = &self.settings.work;
         let taken = work.in_passes(samples, SAMPLES_PER_PASS, |range| {
             sums.par_chunks_mut(row).zip(vertices.par_iter()).for_each(|(sums, &v)| {
                 let hemisphere = (coefficients > 1).then(|| Hemisphere::new(self.supports.normals[v as usize]));
@@ -265,11 +269,7 @@ impl Hemisphere {
 /// was made from, over every vertex and cloud light.
 pub fn relative_error(uncompressed: &LightCloud, compressed: &LightCloud) -> f64 {
     let (error, total) = error_sums(uncompressed, compressed);
-    if total > 0.0 {
-        (error / total).sqrt()
-    } else {
-        0.0
-    }
+    super::ratio(error, total)
 }
 
 /// sum |X_v - X~_v|^2 and sum |X_v|^2 of `compressed` against `uncompressed`.
@@ -316,7 +316,8 @@ impl Vectors {
 /// its rows, D vectors each, then refined: vertices move to the cluster that reconstructs them
 /// best until none moves (at most 20 rounds). Clusters left empty are dropped. With
 /// `Vectors::Shared`, the refined clusters then share their vectors out. With `progress`, a
-/// line every few seconds (zones' vertices done).
+/// line every few seconds (zones' vertices done). The whole cloud at once: a bake compresses a
+/// zone at a time (zones.rs), and the tests hold one against the other.
 pub fn compress(cloud: &LightCloud, clusters: usize, vectors: Vectors, progress: bool) -> Result<LightCloud, String> {
     if cloud.basis() != 0 || cloud.cluster_count() != cloud.vertex_count() {
         return Err("only an uncompressed cloud can be compressed".into());

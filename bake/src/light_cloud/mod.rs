@@ -21,6 +21,7 @@ pub mod region;
 #[cfg(feature = "baking")]
 mod variance;
 mod weights;
+#[cfg(feature = "baking")]
 mod zones;
 #[cfg(feature = "baking")]
 pub use baker::*;
@@ -33,6 +34,7 @@ pub use reduce::*;
 #[cfg(feature = "baking")]
 pub use variance::*;
 pub use weights::*;
+#[cfg(feature = "baking")]
 pub use zones::*;
 
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
@@ -234,7 +236,7 @@ impl LightCloud {
     }
 
     /// Zone `z` of an uncompressed cloud as a cloud of its own: its lights, and the rows of
-    /// `members` (its vertices), in their order.
+    /// `members` (its vertices), in their order (`compress` of a whole cloud, zone by zone).
     pub fn zone(&self, z: usize, members: &[u32]) -> LightCloud {
         let layout = self.layout();
         let cols = self.per_light() * self.zone_light_range(z).len();
@@ -462,6 +464,25 @@ fn check_zones(zone_lights: &[u32], zone_clusters: &[u32], lights: usize, cluste
 /// The scene's vertex count in the renderer's order.
 pub fn vertex_count(scene: &Scene) -> usize {
     scene.meshes.iter().map(|m| m.positions.len()).sum()
+}
+
+/// Every vertex's position, meshes in order (the renderer's vertex order).
+pub fn vertex_positions(scene: &Scene) -> Vec<Vec3> {
+    scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect()
+}
+
+/// Every vertex's normal, meshes in order.
+pub fn vertex_normals(scene: &Scene) -> Vec<Vec3> {
+    scene.meshes.iter().flat_map(|m| m.normals.iter().copied()).collect()
+}
+
+/// sqrt(error / total), 0 where there is nothing: a relative error from its squared sums.
+pub fn ratio(error: f64, total: f64) -> f64 {
+    if total > 0.0 {
+        (error / total).sqrt()
+    } else {
+        0.0
+    }
 }
 
 pub const SECTION: &str = "light-cloud";

@@ -19,7 +19,7 @@
 //!   mean does not see every member), and per vertex the mean of its members' transfer.
 
 use super::zones::ZonesBuilder;
-use super::LightCloud;
+use super::{ratio, vertex_positions, LightCloud};
 use crate::bvh::SceneBvh;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -35,6 +35,21 @@ pub struct Reduction {
     pub weights: Option<(f32, f32)>,
 }
 
+impl Reduction {
+    /// Refuses no zones and negative or non-finite weights.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.zones == 0 {
+            return Err("zones must be at least 1".into());
+        }
+        match self.weights {
+            Some((w1, w2)) if !(w1.is_finite() && w2.is_finite() && w1 >= 0.0 && w2 >= 0.0) => {
+                Err(format!("light clustering's weights w1 = {w1}, w2 = {w2} must be finite and >= 0"))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A reduced cloud (uncompressed, by zone) and what the reduction cost.
 pub struct Reduced {
     pub cloud: LightCloud,
@@ -46,7 +61,8 @@ pub struct Reduced {
 }
 
 /// Splits a gathered cloud (one zone, uncompressed) into zones and clusters each zone's
-/// lights.
+/// lights: the whole cloud at once (a bake reduces a zone at a time, zones.rs; the tests hold
+/// one against the other).
 pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction) -> Result<Reduced, String> {
     if gathered.basis() != 0 || gathered.zone_count() != 1 || gathered.cluster_count() != gathered.vertex_count() {
         return Err("only a gathered cloud (one zone, uncompressed) can be reduced".into());
@@ -64,13 +80,7 @@ pub fn reduce(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: R
         groups.push(std::mem::take(&mut reduced.groups));
         out.push(zone, reduced.cloud(gathered));
     }
-    let cloud = out.finish()?;
-    Ok(Reduced { cloud, groups, relative_error: if total > 0.0 { (error / total).sqrt() } else { 0.0 } })
-}
-
-/// Every vertex's position, meshes in order (the renderer's vertex order).
-pub fn vertex_positions(scene: &Scene) -> Vec<Vec3> {
-    scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect()
+    Ok(Reduced { cloud: out.finish()?, groups, relative_error: ratio(error, total) })
 }
 
 /// What light clustering needs of the whole cloud: eq. (9)'s part every zone shares and the
@@ -86,14 +96,9 @@ impl Clustering {
     /// Refuses negative or non-finite weights and no zones. `scale`: the largest transfer value
     /// of the whole gathered cloud.
     pub fn new(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction, scale: f32) -> Result<Clustering, String> {
-        if reduction.zones == 0 {
-            return Err("zones must be at least 1".into());
-        }
+        reduction.validate()?;
         let per_light = gathered.per_light();
         let Some((w1, w2)) = reduction.weights else { return Ok(Clustering { base: None, w2: 0.0, per_light }) };
-        if !(w1.is_finite() && w2.is_finite() && w1 >= 0.0 && w2 >= 0.0) {
-            return Err(format!("light clustering's weights w1 = {w1}, w2 = {w2} must be finite and >= 0"));
-        }
         let (lo, hi) = scene.settings.bounds;
         let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
         let n = gathered.lights.len();
@@ -242,9 +247,13 @@ fn largest_differences(rows: &[f32], (n, per_light): (usize, usize)) -> Vec<f32>
         largest
     };
     let zero = || vec![0f32; n * n];
-    rows.par_chunks(row_values * VERTICES_A_TASK)
-        .map(|chunk| chunk.chunks_exact(row_values).fold(zero(), pairs))
-        .reduce(zero, |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect())
+    rows.par_chunks(row_values * VERTICES_A_TASK).fold(zero, |largest, chunk| chunk.chunks_exact(row_values).fold(largest, pairs)).reduce(
+        zero,
+        |mut a, b| {
+            a.iter_mut().zip(&b).for_each(|(x, y)| *x = x.max(*y));
+            a
+        },
+    )
 }
 
 /// Vertices one task of `largest_differences` compares.

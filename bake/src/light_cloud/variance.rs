@@ -33,8 +33,7 @@ pub fn explained_variance(
     compressed: &LightCloud,
     components: usize,
 ) -> ExplainedVariance {
-    let positions: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.positions.iter().copied()).collect();
-    let normals: Vec<Vec3> = scene.meshes.iter().flat_map(|m| m.normals.iter().copied()).collect();
+    let (positions, normals) = (super::vertex_positions(scene), super::vertex_normals(scene));
     let mut sums = VarianceSums::new(components);
     sums.add(bvh, (&positions, &normals), reduced, compressed);
     sums.finish()

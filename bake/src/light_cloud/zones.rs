@@ -1,22 +1,22 @@
-//! A cloud baked zone by zone (004 §4.1: "only one zone at a time needs to reside in memory";
-//! spec light-clouds.md 3): each zone's vertices are gathered, their lights clustered and their
-//! transfer compressed before the next zone's are gathered. Light clustering weighs responses
-//! by the largest transfer value of the whole cloud, so every zone's gathered rows are kept
-//! until the last zone is gathered: in memory where they fit `--memory-limit`, else in a
-//! scratch file (under the system's temporary folder, `TMPDIR`) removed when the bake ends.
-//! The bytes are the same either way, and the same as a bake of the whole cloud at once.
+//! A cloud baked zone by zone (004 §4.2: "only one zone at a time needs to reside in memory";
+//! spec light-clouds.md 3): each zone's vertices are gathered in turn, then each zone's lights
+//! are clustered and its transfer compressed in turn. Light clustering weighs responses by the
+//! largest transfer value of the whole cloud, so every zone's gathered rows wait until the last
+//! zone is gathered: in memory where they fit `--memory-limit`, else in a scratch file (under
+//! the system's temporary folder, `TMPDIR`, unlinked at once). The bytes are the same either
+//! way, and the same as a bake of the whole cloud at once (`bake`, `reduce` and `compress`).
 
-use super::reduce::{vertex_positions, Clustering, Reduction};
+use super::reduce::{Clustering, Reduction};
 use super::variance::{ExplainedVariance, VarianceSums};
-use super::{compress_zone, error_sums, zone_share, Gatherer, LightCloud, Vectors};
+use super::{compress_zone, error_sums, ratio, vertex_normals, vertex_positions, zone_share, Gatherer, LightCloud, Vectors};
 use crate::bvh::SceneBvh;
 use crate::scene::Scene;
-use crate::work::Progress;
+use crate::work::{Progress, WorkOptions};
 use glam::Vec3;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
-use std::path::PathBuf;
-use std::time::Instant;
+use std::os::unix::fs::FileExt;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
 
 /// A cloud put together zone after zone.
 pub struct ZonesBuilder {
@@ -46,6 +46,7 @@ impl ZonesBuilder {
 
     /// Appends `cloud`, one zone whose vertices are `members` of this one, in their order.
     pub fn push(&mut self, members: &[u32], cloud: LightCloud) {
+        debug_assert_eq!(members.len(), cloud.vertex_count(), "a zone's cloud has a row per member");
         let c = &mut self.cloud;
         let first = c.cluster_count() as u32;
         let starts = cloud.coord_starts();
@@ -71,33 +72,37 @@ impl ZonesBuilder {
 /// Every zone's gathered rows until the last zone is gathered.
 pub enum ZoneRows {
     Memory(Vec<Vec<f32>>),
-    /// The file and each zone's first value in it.
+    /// A scratch file, unlinked as soon as it is made (nothing is left behind however the
+    /// process ends; its space returns when the file closes), and each zone's first value in it.
     File {
-        path: PathBuf,
-        writer: Option<BufWriter<File>>,
+        file: File,
         starts: Vec<u64>,
     },
 }
 
+/// Scratch files this process has made (their names stay unique when bakes run side by side).
+static SCRATCH_FILES: AtomicU32 = AtomicU32::new(0);
+
 impl ZoneRows {
-    /// Rows kept in memory, or (`spill`) in a new scratch file.
+    /// Rows kept in memory, or (`spill`) in a new scratch file under the temporary folder.
     pub fn new(spill: bool) -> Result<ZoneRows, String> {
         if !spill {
             return Ok(ZoneRows::Memory(Vec::new()));
         }
-        let path = std::env::temp_dir().join(format!("relume-light-cloud-{}.rows", std::process::id()));
-        let file = crate::outputs::create_scratch(&path).map_err(|e| scratch_error(&path, e))?;
-        Ok(ZoneRows::File { path, writer: Some(BufWriter::new(file)), starts: vec![0] })
+        let name = format!("relume-light-cloud-{}-{}.rows", std::process::id(), SCRATCH_FILES.fetch_add(1, Ordering::Relaxed));
+        let path = std::env::temp_dir().join(name);
+        let file = File::options().read(true).write(true).create_new(true).open(&path).map_err(|e| scratch_error(&path, e))?;
+        std::fs::remove_file(&path).map_err(|e| scratch_error(&path, e))?;
+        Ok(ZoneRows::File { file, starts: vec![0] })
     }
 
     pub fn push(&mut self, rows: Vec<f32>) -> Result<(), String> {
         match self {
             ZoneRows::Memory(zones) => zones.push(rows),
-            ZoneRows::File { path, writer, starts } => {
-                let writer = writer.as_mut().expect("rows are pushed before they are read");
-                let bytes: Vec<u8> = rows.iter().flat_map(|x| x.to_le_bytes()).collect();
-                writer.write_all(&bytes).map_err(|e| scratch_error(path, e))?;
-                starts.push(starts.last().unwrap() + rows.len() as u64);
+            ZoneRows::File { file, starts } => {
+                let at = *starts.last().unwrap();
+                file.write_all_at(bytemuck::cast_slice(&rows), at * 4).map_err(|e| scratch_error(&std::env::temp_dir(), e))?;
+                starts.push(at + rows.len() as u64);
             }
         }
         Ok(())
@@ -107,32 +112,18 @@ impl ZoneRows {
     pub fn take(&mut self, z: usize) -> Result<Vec<f32>, String> {
         match self {
             ZoneRows::Memory(zones) => Ok(std::mem::take(&mut zones[z])),
-            ZoneRows::File { path, writer, starts } => {
-                if let Some(w) = writer.take() {
-                    w.into_inner().map_err(|e| scratch_error(path, e.into_error()))?;
-                }
-                let mut file = File::open(&*path).map_err(|e| scratch_error(path, e))?;
-                use std::io::{Seek, SeekFrom};
-                file.seek(SeekFrom::Start(starts[z] * 4)).map_err(|e| scratch_error(path, e))?;
-                let mut bytes = vec![0u8; ((starts[z + 1] - starts[z]) * 4) as usize];
-                BufReader::new(file).read_exact(&mut bytes).map_err(|e| scratch_error(path, e))?;
-                Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+            ZoneRows::File { file, starts } => {
+                let mut rows = vec![0f32; (starts[z + 1] - starts[z]) as usize];
+                file.read_exact_at(bytemuck::cast_slice_mut(&mut rows), starts[z] * 4)
+                    .map_err(|e| scratch_error(&std::env::temp_dir(), e))?;
+                Ok(rows)
             }
         }
     }
 }
 
 fn scratch_error(path: &std::path::Path, e: std::io::Error) -> String {
-    format!("{}: the light cloud's scratch file: {e} (set TMPDIR to a folder with room)", path.display())
-}
-
-impl Drop for ZoneRows {
-    fn drop(&mut self) {
-        if let ZoneRows::File { path, writer, .. } = self {
-            writer.take();
-            crate::outputs::remove_scratch(path);
-        }
-    }
+    format!("{}: the light cloud's scratch file: {e} (set TMPDIR to a folder on a disk with room: the rows of every zone)", path.display())
 }
 
 /// How the gathered zones are reduced and kept.
@@ -160,13 +151,19 @@ pub struct Zoned {
     pub seconds: (f64, f64),
 }
 
-/// Gathers each of `zones` in turn into `store`: the paths a vertex took (the fewest of any zone,
-/// each zone taking at most as many as the one before) and the largest value gathered.
+/// Gathers each of `zones` in turn into `store`: the paths a vertex took and the largest value
+/// gathered. Under a time limit the first zone takes the passes its share of the vertices
+/// has time for, and every other zone as many, so every vertex takes the same paths.
 pub fn gather_zones(gatherer: &Gatherer, zones: &[Vec<u32>], samples: u32, store: &mut ZoneRows) -> Result<(u32, f32), String> {
     let mut progress = gatherer.progress(gatherer.vertices());
+    let work = gatherer.work();
+    let left = work.time_limit.map(|limit| limit.saturating_sub(work.started.map_or(Duration::ZERO, |s| s.elapsed())));
+    let share = |zone: &[u32]| zone.len() as f64 / gatherer.vertices().max(1) as f64;
     let (mut taken, mut scale) = (samples, 0f32);
-    for zone in zones {
-        let (rows, zone_taken) = gatherer.rows(zone, taken, &progress);
+    for (z, zone) in zones.iter().enumerate() {
+        let limit = left.filter(|_| z == 0).map(|left| left.mul_f64(share(zone)));
+        let zone_work = WorkOptions { time_limit: limit, started: None, ..*work };
+        let (rows, zone_taken) = gatherer.rows(zone, taken, &zone_work, &progress);
         taken = zone_taken;
         scale = rows.iter().fold(scale, |m, &x| m.max(x));
         store.push(rows)?;
@@ -217,19 +214,13 @@ pub fn reduce_zones(
         done.inc(members.len() as u64);
     }
     done.finish();
-    let ratio = |(error, total): (f64, f64)| if total > 0.0 { (error / total).sqrt() } else { 0.0 };
     Ok(Zoned {
         cloud: out.finish()?,
         cloud_lights: gathered.lights.len(),
-        clustering_error: ratio(merged),
-        error: ratio(compressed),
+        clustering_error: ratio(merged.0, merged.1),
+        error: ratio(compressed.0, compressed.1),
         variance: variance.map(VarianceSums::finish),
         raw_values: vertices * gathered.per_light() * gathered.lights.len(),
         seconds,
     })
-}
-
-/// Every vertex's normal, meshes in order.
-fn vertex_normals(scene: &Scene) -> Vec<Vec3> {
-    scene.meshes.iter().flat_map(|m| m.normals.iter().copied()).collect()
 }
