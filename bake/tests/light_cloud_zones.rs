@@ -1,4 +1,4 @@
-//! A cloud baked zone by zone (004 §4.1, one zone's gather in memory at a time): the same
+//! A cloud baked zone by zone (004 §4.2, one zone's gather in memory at a time): the same
 //! cloud as the whole gather reduced and compressed at once, whether the zones' rows wait in
 //! memory or in a scratch file.
 #![cfg(feature = "baking")]

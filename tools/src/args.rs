@@ -333,3 +333,37 @@ pub(crate) fn refuse_writing_over(outputs: &[PathBuf], inputs: &[&Path]) -> Resu
 pub(crate) fn scene_inputs(scene: &SceneArgs) -> Vec<&Path> {
     [Some(scene.scene.as_path()), scene.environment.as_deref(), scene.lights.as_deref()].into_iter().flatten().collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped(name: &str) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name);
+        load(&path, None, LoadOptions::default()).expect("a shipped scene loads")
+    }
+
+    /// A scene that declares no environment is lit by `--environment` at the block's defaults;
+    /// one that does keeps its intensity; a missing image is refused by name.
+    #[test]
+    fn an_environment_lights_a_scene_with_or_without_its_own() {
+        let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/envs/uniform.exr");
+        let mut cornell = shipped("cornell.gltf");
+        assert!(cornell.environment.is_none());
+        replace_environment(&mut cornell, Some(&sky)).unwrap();
+        assert!(cornell.environment.as_ref().is_some_and(|e| e.is_lit()), "cornell is lit by the uniform environment");
+        assert_eq!(cornell.environment.as_ref().unwrap().face, 32, "the block's default cube face");
+        let mut blobs = shipped("fiv-blobs.gltf");
+        let own = blobs.environment.as_ref().unwrap().source.clone();
+        replace_environment(&mut blobs, Some(&sky)).unwrap();
+        let replaced = blobs.environment.as_ref().unwrap();
+        assert!(
+            replaced.source != own && replaced.source.ends_with("uniform.exr"),
+            "fiv-blobs' environment is replaced: {}",
+            replaced.source.display()
+        );
+        let missing = sky.with_file_name("missing.exr");
+        let e = replace_environment(&mut shipped("cornell.gltf"), Some(&missing)).unwrap_err();
+        assert!(format!("{e:#}").contains("missing.exr"), "{e:#}");
+    }
+}

@@ -86,7 +86,7 @@ const ZONES: Param = Param::count(
     "zones of vertices, each with its own reduced cloud and clusters (004 §4.2: split at the median of the longest axis)",
     1,
     256,
-    Default::From("8, or one per 16,384 vertices where that is more (004 §4.1: a zone is gathered at a time)"),
+    Default::From("8, or one per 16,384 vertices where that is more (004 §4.2: the bake holds a zone's gather at a time)"),
 );
 const W1: Param = Param::number(
     "w1",
