@@ -84,8 +84,8 @@ impl LightCloudBaker {
 
     /// The bake's peak: the largest zone's transfer values from every cloud light and direction,
     /// every zone's gathered values when they are kept in memory (`spill`: in a scratch file),
-    /// and, compressed, a cluster's covariance over every cloud light (a zone that keeps them
-    /// all).
+    /// and, compressed, the matrix of a cluster's PCA as large as a zone that keeps every cloud
+    /// light allows.
     pub fn estimate(
         &self,
         scene: &Scene,
@@ -95,12 +95,14 @@ impl LightCloudBaker {
         let coefficients = if scene.materials.iter().any(|m| m.phong.is_some()) { crate::sh::COEFFICIENTS } else { 1 };
         let per_vertex = (lights * 3 * coefficients * settings.emission) as u64;
         let kept = if spill { 0 } else { vertex_count(scene) as u64 * per_vertex * KEPT_BYTES_PER_VALUE };
-        let covariance = if self.compression.is_some() { COVARIANCE_COPIES * 8 * per_vertex * per_vertex } else { 0 };
+        // A cluster's PCA solves the smaller of its covariance and its Gram matrix.
+        let side = per_vertex.min(largest_zone as u64);
+        let covariance = if self.compression.is_some() { COVARIANCE_COPIES * 8 * side * side } else { 0 };
         Estimate {
             fixed: scene_bytes(scene) + covariance,
             count: (largest_zone as u64 * per_vertex * ZONE_BYTES_PER_VALUE + kept) / KEPT_BYTES_PER_VALUE,
             bytes_per_unit: KEPT_BYTES_PER_VALUE,
-            unit: "4-byte transfer values (vertices x cloud lights x colours, emission functions, SH coefficients: the largest zone's x 4, every zone's when kept in memory)".into(),
+            unit: "4-byte transfer values (vertices x cloud lights x colours, emission functions, SH coefficients: the largest zone's x 3, every zone's when kept in memory)".into(),
             lever: "cloud lights (the grid's counts, extras.relume.light_cloud.grid, and --directions), or more --zones",
             value: lights as u64,
             power: 1.0,
