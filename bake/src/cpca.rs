@@ -205,7 +205,8 @@ pub struct ClusterPca {
     /// Every eigenvalue of the centred Gram matrix (n_c of them) or, for clusters of more
     /// members than values per row, of the covariance (P of them: the same non-zero ones),
     /// descending, clamped to >= 0: the squared residual of keeping D basis vectors is the sum
-    /// of those beyond D.
+    /// of those beyond D. A matrix wider than 2,048 gives its D + 8 largest alone
+    /// (`eigen::leading_eigenpairs`).
     pub eigenvalues: Vec<f64>,
     /// Always D unit P-vectors B^c_d by descending eigenvalue (the D asked of `cluster_pca`).
     /// Where the cluster's rank is below D (at most D points, or points on a flatter subspace)

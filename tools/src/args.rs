@@ -28,7 +28,8 @@ pub(crate) struct SceneArgs {
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub height: u32,
     /// Light the scene by this lat-long EXR instead of the one its extras.relume.environment
-    /// names (the scene must declare one; its intensity, rotation and cube face stay).
+    /// names (its intensity, rotation and cube face stay); a scene that declares none is lit
+    /// by it at intensity 1, no rotation, cube faces of 32 texels.
     #[arg(long)]
     pub environment: Option<PathBuf>,
     /// Let the scene read buffers, images and its environment outside its own folder (an
@@ -344,7 +345,7 @@ mod tests {
     }
 
     /// A scene that declares no environment is lit by `--environment` at the block's defaults;
-    /// one that does keeps its intensity; a missing image is refused by name.
+    /// one that does has its image replaced; a missing image is refused by name.
     #[test]
     fn an_environment_lights_a_scene_with_or_without_its_own() {
         let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/envs/uniform.exr");

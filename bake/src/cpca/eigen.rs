@@ -14,7 +14,8 @@ pub(super) fn eigen_decomposition(matrix: &DMatrix<f64>) -> (DVector<f64>, DMatr
 }
 
 /// Matrices of PCA wider than this are solved for their leading eigenpairs alone: the full
-/// decomposition is cubic in the side (a light cloud's zone at scale-10, 8,694 wide: 200 s).
+/// decomposition is cubic in the side (most of the 200 s that scale-10's first light-cloud zone,
+/// 8,748 wide, took to reduce).
 pub(super) const LEADING_ONLY_SIDE: usize = 2048;
 /// Vectors iterated beyond those asked, and the most rounds of the subspace iteration.
 const LEADING_OVERSAMPLING: usize = 8;
@@ -24,12 +25,18 @@ const LEADING_TOLERANCE: f64 = 1e-12;
 
 /// The `k` largest eigenpairs of a symmetric positive semi-definite matrix, by subspace
 /// iteration with Rayleigh-Ritz: `k` + 8 vectors, from a fixed start, multiplied by the matrix
-/// and orthonormalised until the `k` largest Ritz values settle. Only the leading eigenvalues
-/// are returned (`ClusterPca::eigenvalues` then holds those). Products are nalgebra's (one
+/// and orthonormalised until the `k` largest Ritz values settle. Returns the k + 8 Ritz pairs
+/// (`ClusterPca::eigenvalues` then holds those: the first k settled, the rest approximate; a
+/// variable allocation can give such a cluster at most k + 8 vectors); every pair when k + 8
+/// is over a quarter of the side. Products are nalgebra's (one
 /// thread), so the bytes do not depend on the thread count.
 pub(super) fn leading_eigenpairs(matrix: &DMatrix<f64>, k: usize) -> (DVector<f64>, DMatrix<f64>) {
     let n = matrix.nrows();
     let p = (k + LEADING_OVERSAMPLING).min(n);
+    if 4 * p > n {
+        // So many vectors that the iteration would cost more than the whole decomposition.
+        return eigen_decomposition(matrix);
+    }
     let start =
         DMatrix::from_fn(n, p, |i, j| crate::sampling::u32_to_unit(crate::sampling::hash_u32(17, i as u32, j as u32, 0)) as f64 - 0.5);
     let mut basis = orthonormal(start);
@@ -51,7 +58,7 @@ pub(super) fn leading_eigenpairs(matrix: &DMatrix<f64>, k: usize) -> (DVector<f6
     let ritz = eigen_decomposition(&(basis.transpose() * matrix * &basis));
     let order = descending(&ritz.0);
     let vectors = &basis * &ritz.1;
-    let kept: Vec<usize> = order.iter().take(k.min(p)).map(|o| o.1).collect();
+    let kept: Vec<usize> = order.iter().map(|o| o.1).collect();
     (DVector::from_iterator(kept.len(), kept.iter().map(|&i| ritz.0[i])), DMatrix::from_fn(n, kept.len(), |r, c| vectors[(r, kept[c])]))
 }
 
@@ -97,7 +104,7 @@ mod tests {
         let spectrum = DVector::from_fn(n, |i, _| 0.8f64.powi(i as i32));
         let matrix = &q * DMatrix::from_diagonal(&spectrum) * q.transpose();
         let (values, vectors) = leading_eigenpairs(&matrix, 8);
-        assert_eq!((values.len(), vectors.shape()), (8, (n, 8)));
+        assert_eq!((values.len(), vectors.shape()), (16, (n, 16)), "the asked pairs and eight more");
         for d in 0..8 {
             assert!((values[d] - spectrum[d]).abs() < 1e-9, "eigenvalue {d}: {} against {}", values[d], spectrum[d]);
             let alignment = vectors.column(d).dot(&q.column(d)).abs();

@@ -59,8 +59,9 @@ pub const ZONE_BYTES_PER_VALUE: u64 = 12;
 /// Bytes every zone's gathered value holds until the last zone is gathered, when kept in memory
 /// (and, uncompressed, in the cloud the bake returns).
 pub const KEPT_BYTES_PER_VALUE: u64 = 4;
-/// Copies of a cluster's covariance (P x P f64, P the values per vertex of its zone's lights)
-/// alive at once: the matrix, the eigensolver's copy and its eigenvectors.
+/// Copies of a cluster's PCA matrix (f64, as wide as the smaller of its members and the values
+/// a vertex has of its zone's lights) alive at once: the matrix, the eigensolver's copy and its
+/// eigenvectors (a matrix over 2,048 wide, solved for its leading pairs, holds fewer).
 const COVARIANCE_COPIES: u64 = 3;
 
 /// What the bake chose where nothing was given.
