@@ -17,9 +17,12 @@
 //! are independent serial sums: the same bytes whatever the thread count.
 
 use crate::work::Progress;
+use faer::linalg::matmul::matmul;
+use faer::{Mat, MatRef, Parallelism};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
+use std::ops::Range;
 
 mod eigen;
 use eigen::{eigen_decomposition, leading_eigenpairs, symmetric_eigenvalues, LEADING_ONLY_SIDE};
@@ -30,12 +33,10 @@ const LLOYD_ITERATIONS: usize = 100;
 const RANK_TOLERANCE: f64 = 1e-12;
 /// Columns per parallel task when a basis vector is built.
 const COLUMN_CHUNK: usize = 1024;
-/// Columns a side of a tile of the covariance.
-const COVARIANCE_TILE: usize = 32;
-/// Rows of a tile of the Gram matrix, and columns read at a time: two tiles' stretches
-/// (2 x 32 x 2,048 f32, 512 KiB) stay in a core's cache while their dot products run.
-const TILE_ROWS: usize = 32;
-const TILE_COLUMNS: usize = 2048;
+/// Vectors a side of a block of [`products`], and values of each read at a time: a block pair's
+/// two stretches (2 x 128 x 512 f64, 1 MiB) stay in a core's cache while they are multiplied.
+const BLOCK_VECTORS: usize = 128;
+const BLOCK_DEPTH: usize = 512;
 
 /// Row-major points of `cols` values each.
 #[derive(Clone, Copy)]
@@ -49,47 +50,15 @@ impl Rows<'_> {
         &self.values[e * self.cols..][..self.cols]
     }
 
-    /// G = X X^T of the rows `members` (cost n_c^2 P / 2 in all), by tiles of rows: a tile
-    /// pair's rows are read a stretch of columns at a time, so each value fetched from memory
-    /// serves a tile's worth of dot products (rows of light path maps are megabytes; row by row
-    /// the sums wait on memory). Each tile pair is its own serial sums in a fixed order, so
-    /// tiles run in parallel and the bytes do not depend on the thread count. A step of
+    /// G = X X^T of the rows `members` (cost n_c^2 P / 2 in all), by [`products`]. A step of
     /// `progress` per entry of the lower triangle.
     fn gram(&self, members: &[u32], progress: &Progress) -> DMatrix<f64> {
-        let n = members.len();
-        let tiles = n.div_ceil(TILE_ROWS);
-        let pairs: Vec<(usize, usize)> = (0..tiles).flat_map(|a| (0..=a).map(move |b| (a, b))).collect();
-        let sums: Vec<Vec<f64>> = pairs.par_iter().map(|&(a, b)| self.tile_pair(members, a, b, progress)).collect();
-        let mut gram = DMatrix::zeros(n, n);
-        for (&(a, b), tile) in pairs.iter().zip(&sums) {
-            for (k, &value) in tile.iter().enumerate() {
-                let (i, j) = (a * TILE_ROWS + k / TILE_ROWS, b * TILE_ROWS + k % TILE_ROWS);
-                if i < n && j <= i {
-                    gram[(i, j)] = value;
-                    gram[(j, i)] = value;
-                }
+        let fill = |vectors: Range<usize>, depth: Range<usize>, out: &mut [f64]| {
+            for (i, out) in vectors.zip(out.chunks_exact_mut(depth.len())) {
+                out.iter_mut().zip(&self.row(members[i] as usize)[depth.clone()]).for_each(|(o, &x)| *o = x as f64);
             }
-        }
-        gram
-    }
-
-    /// The dot products of tile `a`'s rows with tile `b`'s (b <= a; of a diagonal tile, its
-    /// lower triangle), a stretch of columns at a time.
-    fn tile_pair(&self, members: &[u32], a: usize, b: usize, progress: &Progress) -> Vec<f64> {
-        let rows = |t: usize| (t * TILE_ROWS..((t + 1) * TILE_ROWS).min(members.len())).map(|i| self.row(members[i] as usize));
-        let mut sums = vec![0.0f64; TILE_ROWS * TILE_ROWS];
-        for start in (0..self.cols).step_by(TILE_COLUMNS) {
-            let stretch = start..(start + TILE_COLUMNS).min(self.cols);
-            for (i, x) in rows(a).enumerate() {
-                let last = if a == b { i + 1 } else { TILE_ROWS };
-                for (j, y) in rows(b).take(last).enumerate() {
-                    sums[i * TILE_ROWS + j] += dot(&x[stretch.clone()], &y[stretch.clone()]);
-                }
-            }
-        }
-        let (height, width) = (rows(a).count() as u64, rows(b).count() as u64);
-        progress.inc(if a == b { height * (height + 1) / 2 } else { height * width });
-        sums
+        };
+        products(members.len(), self.cols, Layout::ByVector, fill, progress)
     }
 
     fn mean(&self, members: &[u32]) -> Vec<f64> {
@@ -244,67 +213,17 @@ impl<'a> Centred<'a> {
     }
 
     /// C = (X - m)^T (X - m) (P x P): the covariance route, for clusters of more members than
-    /// values per row (per-vertex transfer: thousands of vertices, hundreds of values). By
-    /// tiles of columns: each member's row is read once per tile pair and serves a tile's worth
-    /// of products (column by column, every dot product streamed both columns from memory: a
-    /// light cloud's zone of 16k vertices spent 75 s there). Each entry is summed as `dot` sums,
-    /// so the bytes are those of one dot product per entry, whatever the threads.
+    /// values per row (per-vertex transfer: thousands of vertices, hundreds of values), by
+    /// [`products`] of the centred columns.
     fn covariance(&self) -> DMatrix<f64> {
-        let cols = self.rows.cols;
-        let tiles = cols.div_ceil(COVARIANCE_TILE);
-        let pairs: Vec<(usize, usize)> = (0..tiles).flat_map(|a| (0..=a).map(move |b| (a, b))).collect();
-        let sums: Vec<Vec<f64>> = pairs.par_iter().map(|&(a, b)| self.covariance_tile(a, b)).collect();
-        let mut covariance = DMatrix::zeros(cols, cols);
-        for (&(a, b), tile) in pairs.iter().zip(&sums) {
-            for (k, &value) in tile.iter().enumerate() {
-                let (i, j) = (a * COVARIANCE_TILE + k / COVARIANCE_TILE, b * COVARIANCE_TILE + k % COVARIANCE_TILE);
-                if i < cols && j < cols {
-                    covariance[(i, j)] = value;
-                    covariance[(j, i)] = value;
-                }
-            }
-        }
-        covariance
-    }
-
-    /// The centred products of tile `a`'s columns with tile `b`'s, each entry in `dot`'s order:
-    /// four lanes by member index, then the members past the last whole four.
-    fn covariance_tile(&self, a: usize, b: usize) -> Vec<f64> {
-        const T: usize = COVARIANCE_TILE;
-        let cols = self.rows.cols;
-        let (first, second) = (a * T..((a + 1) * T).min(cols), b * T..((b + 1) * T).min(cols));
-        let centred = |e: usize, range: &std::ops::Range<usize>, out: &mut [f64; T]| {
-            let row = self.row(e);
-            for (o, k) in out.iter_mut().zip(range.clone()) {
-                *o = (row[k] - self.mean[k]) as f64;
+        let fill = |columns: Range<usize>, depth: Range<usize>, out: &mut [f64]| {
+            let mean = &self.mean[columns.clone()];
+            for (member, out) in depth.zip(out.chunks_exact_mut(columns.len())) {
+                let row = &self.row(member)[columns.clone()];
+                out.iter_mut().zip(row.iter().zip(mean)).for_each(|(o, (&x, &m))| *o = (x - m) as f64);
             }
         };
-        let n = self.members.len();
-        let whole = n - n % 4;
-        let mut lanes = vec![0.0f64; 4 * T * T];
-        let (mut x, mut y) = ([0.0f64; T], [0.0f64; T]);
-        for e in 0..whole {
-            centred(e, &first, &mut x);
-            centred(e, &second, &mut y);
-            let lane = &mut lanes[(e % 4) * T * T..][..T * T];
-            for (i, &xi) in x.iter().enumerate().take(first.len()) {
-                lane[i * T..][..T].iter_mut().zip(&y).for_each(|(sum, &yj)| *sum += xi * yj);
-            }
-        }
-        let tail: Vec<([f64; T], [f64; T])> = (whole..n)
-            .map(|e| {
-                centred(e, &first, &mut x);
-                centred(e, &second, &mut y);
-                (x, y)
-            })
-            .collect();
-        (0..T * T)
-            .map(|k| {
-                let (i, j) = (k / T, k % T);
-                let tail: f64 = tail.iter().map(|(x, y)| x[i] * y[j]).sum();
-                (0..4).map(|l| lanes[l * T * T + k]).sum::<f64>() + tail
-            })
-            .collect()
+        products(self.rows.cols, self.members.len(), Layout::ByDepth, fill, &Progress::new(0, "", false))
     }
 
     /// (X - m)^T v normalised, as X^T v - (sum v) m: an eigenvector v of G with eigenvalue
@@ -330,6 +249,80 @@ impl<'a> Centred<'a> {
     fn weight(&self, e: usize, b: &[f32], mean_dot: f64) -> f32 {
         (dot(self.row(e), b) - mean_dot) as f32
     }
+}
+
+/// How the `fill` of [`products`] lays its block out: a vector's stretch after another (rows of
+/// points: the Gram matrix) or, for each value of the stretch, the vectors' values in turn
+/// (columns of points: the covariance). Each fill then reads its points in their own order: a
+/// covariance filled a vector after another read each row a block's width at a time, and spent
+/// more than its products did.
+#[derive(Clone, Copy)]
+enum Layout {
+    ByVector,
+    ByDepth,
+}
+
+impl Layout {
+    /// A filled block as the depth x vectors matrix V of its stretch.
+    fn block(self, values: &[f64], depth: usize, vectors: usize) -> MatRef<'_, f64> {
+        match self {
+            Layout::ByVector => faer::mat::from_column_major_slice::<f64>(values, depth, vectors),
+            Layout::ByDepth => faer::mat::from_row_major_slice::<f64>(values, depth, vectors),
+        }
+    }
+}
+
+/// S = V V^T of `count` vectors of `depth` values each, where `fill(vectors, stretch, out)`
+/// writes the values `stretch` of each of `vectors` into `out`, laid out by `layout`. By
+/// blocks of vectors: each block pair (a, b <= a) multiplies its two blocks a stretch at a time,
+/// in f64 by faer's matrix product on one thread, ten times the rate of dot products a
+/// pair at a time (docs/BENCHMARKS.md, "Scale sweep"). Each block pair is its own sums in a
+/// fixed order, so pairs run in parallel and the bytes do not depend on the thread count. A
+/// step of `progress` per entry of the lower triangle.
+fn products<F>(count: usize, depth: usize, layout: Layout, fill: F, progress: &Progress) -> DMatrix<f64>
+where
+    F: Fn(Range<usize>, Range<usize>, &mut [f64]) + Sync,
+{
+    let span = |t: usize| t * BLOCK_VECTORS..((t + 1) * BLOCK_VECTORS).min(count);
+    let blocks = count.div_ceil(BLOCK_VECTORS);
+    let pairs: Vec<(usize, usize)> = (0..blocks).flat_map(|a| (0..=a).map(move |b| (a, b))).collect();
+    let sums: Vec<Mat<f64>> = pairs
+        .par_iter()
+        .map(|&(a, b)| {
+            let (first, second) = (span(a), span(b));
+            let mut sum = Mat::zeros(first.len(), second.len());
+            let (mut x, mut y) = (vec![], vec![]);
+            for start in (0..depth).step_by(BLOCK_DEPTH) {
+                let stretch = start..(start + BLOCK_DEPTH).min(depth);
+                let width = stretch.len();
+                x.resize(first.len() * width, 0.0);
+                fill(first.clone(), stretch.clone(), &mut x);
+                if a != b {
+                    y.resize(second.len() * width, 0.0);
+                    fill(second.clone(), stretch, &mut y);
+                }
+                let columns = layout.block(if a == b { &x } else { &y }, width, second.len());
+                matmul(sum.as_mut(), layout.block(&x, width, first.len()).transpose(), columns, Some(1.0), 1.0, Parallelism::None);
+            }
+            let (height, width) = (first.len() as u64, second.len() as u64);
+            progress.inc(if a == b { height * (height + 1) / 2 } else { height * width });
+            sum
+        })
+        .collect();
+    let mut product = DMatrix::zeros(count, count);
+    for (&(a, b), sum) in pairs.iter().zip(&sums) {
+        // A diagonal block's lower triangle, mirrored: the product is symmetric to the bit.
+        for j in 0..sum.ncols() {
+            for i in 0..sum.nrows() {
+                let (row, column) = (a * BLOCK_VECTORS + i, b * BLOCK_VECTORS + j);
+                if column <= row {
+                    product[(row, column)] = sum.read(i, j);
+                    product[(column, row)] = sum.read(i, j);
+                }
+            }
+        }
+    }
+    product
 }
 
 /// f64 dot product of f32 vectors in four fixed lanes: vectorisable, same bytes every run.

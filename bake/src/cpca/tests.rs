@@ -35,21 +35,40 @@ fn table(counts: &[usize], max_basis: usize) -> Vec<Candidate> {
     error_table(&data, P, &features, 3, counts, max_basis).unwrap()
 }
 
-/// The tiled covariance is, entry by entry and bit for bit, one `dot` of the two centred
-/// columns: at widths across a tile's edge and member counts off a multiple of four.
+/// The blocked products are the covariance's and the Gram matrix's entries (against one serial
+/// f64 sum each, to rounding), symmetric to the bit, and the same bits on one thread as on
+/// two: at sizes across a block's edges in both directions.
 #[test]
-fn the_tiled_covariance_is_each_entrys_dot_product() {
-    let (data, _) = grouped();
-    for (cols, members) in [(P, 199usize), (70, 57), (33, 4), (5, 3)] {
-        let rows = Rows { values: &data[..cols * members], cols };
+fn the_blocked_products_are_each_entrys_sum_at_any_thread_count() {
+    let values = |n: usize, cols: usize| -> Vec<f32> { (0..n * cols).map(|k| noise(k as u32, 9) + 0.25).collect() };
+    let close = |got: f64, sum: f64, scale: f64, what: &str| assert!((got - sum).abs() <= 1e-12 * scale, "{what}: {got} against {sum}");
+    for (members, cols) in [(700usize, 300usize), (57, 70), (4, 33), (300, 1100), (3, 5)] {
+        let data = values(members, cols);
+        let rows = Rows { values: &data, cols };
         let all: Vec<u32> = (0..members as u32).collect();
         let centred = Centred::new(rows, &all);
-        let covariance = centred.covariance();
-        let column = |k: usize| -> Vec<f32> { (0..members).map(|e| centred.row(e)[k] - centred.mean[k]).collect() };
+        let products = |threads| with_threads(Some(threads), || (centred.covariance(), rows.gram(&all, &Progress::new(0, "", false))));
+        let (covariance, gram) = products(1);
+        assert_eq!((covariance.clone(), gram.clone()), products(2), "{members} x {cols}: the thread count moved a bit");
+        let column: Vec<Vec<f64>> =
+            (0..cols).map(|k| (0..members).map(|e| (centred.row(e)[k] - centred.mean[k]) as f64).collect()).collect();
+        let wide: Vec<Vec<f64>> = (0..members).map(|e| rows.row(e).iter().map(|&v| v as f64).collect()).collect();
+        let sum = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(a, b)| a * b).sum() };
         for i in 0..cols {
             for j in 0..cols {
-                let expected = dot(&column(i), &column(j));
-                assert_eq!(covariance[(i, j)].to_bits(), expected.to_bits(), "{cols} columns, {members} members: ({i}, {j})");
+                assert_eq!(covariance[(i, j)].to_bits(), covariance[(j, i)].to_bits());
+                close(
+                    covariance[(i, j)],
+                    sum(&column[i], &column[j]),
+                    members as f64,
+                    &format!("{members} x {cols} covariance ({i}, {j})"),
+                );
+            }
+        }
+        for i in 0..members {
+            for j in 0..members {
+                assert_eq!(gram[(i, j)].to_bits(), gram[(j, i)].to_bits());
+                close(gram[(i, j)], sum(&wide[i], &wide[j]), cols as f64, &format!("{members} x {cols} Gram ({i}, {j})"));
             }
         }
     }
