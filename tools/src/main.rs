@@ -75,6 +75,10 @@ enum Command {
         /// triangles and about 15,000 covered lightmap texels a bay), instead of the committed scenes.
         #[arg(long, value_name = "K")]
         scale: Option<u32>,
+        /// With --scale: the hall without its ceiling under the sky (`scale-K-sky`, and
+        /// envs/sky.exr), for FIV, which models environment light.
+        #[arg(long, requires = "scale")]
+        sky: bool,
     },
 }
 
@@ -138,9 +142,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Scenes { out, scale } => {
+        Command::Scenes { out, scale, sky } => {
             let written = match scale {
-                Some(bays) => relume_tools::scenegen::write_scale(&out, bays)?,
+                Some(bays) => relume_tools::scenegen::write_scale(&out, bays, sky)?,
                 None => relume_tools::scenegen::write_all(&out)?,
             };
             for path in written {

@@ -63,7 +63,12 @@ impl Baker for FivBaker {
             ),
         };
         if declared.derived {
-            let how = format!("{} (the closed meshes under 80 % of the scene's footprint)", declared.occluders.join(", "));
+            // A hall of furniture derives thousands: the warning names the first few.
+            const NAMED: usize = 12;
+            let more = declared.occluders.len().saturating_sub(NAMED);
+            let rest = if more > 0 { format!(" and {more} more") } else { String::new() };
+            let names = declared.occluders[..declared.occluders.len().min(NAMED)].join(", ");
+            let how = format!("{names}{rest} (the closed meshes under 80 % of the scene's footprint)");
             baked.derived("occluders", json!(declared.occluders), &how, "extras.relume.fiv.occluders");
         }
         Ok(baked)

@@ -122,7 +122,7 @@ pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<
         let mesh = &scene.meshes[index];
         if let Some(edges) = open_edges(mesh) {
             return Err(format!(
-                "occluder \"{name}\" is not a closed mesh ({edges} edges do not join exactly two triangles); close it or leave it out of extras.relume.fiv.occluders"
+                "occluder \"{name}\" is not a closed mesh ({edges} edges join an odd number of triangles); close it or leave it out of extras.relume.fiv.occluders"
             ));
         }
         match types.iter_mut().find(|t| same_shape(&scene.meshes[t.meshes[0]], mesh)) {
@@ -149,8 +149,9 @@ fn same_shape(a: &Mesh, b: &Mesh) -> bool {
         && a.positions.iter().zip(&b.positions).all(|(p, q)| ((*p - ca) - (*q - cb)).abs().max_element() <= tolerance)
 }
 
-/// The number of edges not shared by exactly two triangles (vertices welded by position), or
-/// None for a closed mesh.
+/// The number of edges shared by an odd number of triangles (vertices welded by position), or
+/// None for a closed mesh: one whose every edge joins two triangles, or four where closed parts
+/// touch along it (a chair's seat and back), so that it has an inside however it is cut.
 fn open_edges(mesh: &Mesh) -> Option<usize> {
     let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
     let mut edges = std::collections::BTreeMap::new();
@@ -160,6 +161,47 @@ fn open_edges(mesh: &Mesh) -> Option<usize> {
             *edges.entry(if ka < kb { (ka, kb) } else { (kb, ka) }).or_insert(0u32) += 1;
         }
     }
-    let open = edges.values().filter(|&&n| n != 2).count();
+    let open = edges.values().filter(|&&n| n % 2 == 1).count();
     (open > 0).then_some(open)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Boxes as one mesh, each face its own two triangles on its own four vertices (welded by
+    /// position only, as a scene's faces are), leaving out the faces `missing` (box, face).
+    fn boxes(corners: &[(Vec3, Vec3)], missing: &[(usize, usize)]) -> Mesh {
+        let (mut positions, mut indices) = (vec![], vec![]);
+        for (k, &(lo, hi)) in corners.iter().enumerate() {
+            let c = |x: bool, y: bool, z: bool| {
+                Vec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z })
+            };
+            let faces = [
+                [c(false, false, false), c(true, false, false), c(true, false, true), c(false, false, true)],
+                [c(false, true, false), c(false, true, true), c(true, true, true), c(true, true, false)],
+                [c(false, false, false), c(false, true, false), c(true, true, false), c(true, false, false)],
+                [c(false, false, true), c(true, false, true), c(true, true, true), c(false, true, true)],
+                [c(false, false, false), c(false, false, true), c(false, true, true), c(false, true, false)],
+                [c(true, false, false), c(true, true, false), c(true, true, true), c(true, false, true)],
+            ];
+            for (_, quad) in faces.iter().enumerate().filter(|(f, _)| !missing.contains(&(k, *f))) {
+                let first = positions.len() as u32;
+                positions.extend(quad);
+                indices.extend([0, 1, 2, 0, 2, 3].map(|i| first + i));
+            }
+        }
+        Mesh { name: "boxes".into(), normals: vec![Vec3::Y; positions.len()], positions, uv0: None, uv1: None, indices, material: 0 }
+    }
+
+    /// A chair's seat and back touch along an edge, which four triangles then share: the mesh
+    /// still has an inside. A box without its lid has none.
+    #[test]
+    fn boxes_that_touch_along_an_edge_are_closed_and_a_box_without_a_lid_is_not() {
+        let (seat, back) = ((Vec3::ZERO, Vec3::new(1.0, 0.1, 1.0)), (Vec3::new(0.0, 0.1, 0.9), Vec3::new(1.0, 1.0, 1.0)));
+        let touching = boxes(&[seat, (Vec3::new(1.0, 0.1, 0.0), Vec3::new(2.0, 1.0, 1.0))], &[]);
+        assert_eq!(open_edges(&boxes(&[seat], &[])), None);
+        assert_eq!(open_edges(&touching), None, "boxes sharing an edge (four triangles on it)");
+        assert_eq!(open_edges(&boxes(&[seat, back], &[(1, 1)])), Some(4), "the back without its lid");
+    }
 }

@@ -51,7 +51,8 @@
 //! - `sunroom`: a room lit by the sun alone, straight down through a skylight (a directional
 //!   light), a table half in the sun patch; every face a welded grid.
 //! - `scale-K` (not shipped; `relume scenes --scale K`): a hall of K x K bays, each with
-//!   sixteen instanced desk and chair pairs and a spot or point light, for the scale sweep.
+//!   sixteen instanced desk and chair pairs and a spot or point light, for the scale sweep;
+//!   `scale-K-sky` (`--sky`) the same without its ceiling, under the sky, for FIV.
 //!
 //! Every scene states its relume settings (ambient, beta, texel density, obscurance tau and
 //! L_max) in `scenes[0].extras.relume`, the block `relume_bake::settings` reads, so a bake
@@ -143,20 +144,24 @@ fn environment(name: &str) -> Option<Image> {
     Some(image)
 }
 
-/// Writes the scale scene of `bays` x `bays` bays (`scale-K`, 1..=32; not a committed scene:
-/// see `scale`) into `out_dir` (created if missing); returns the files written.
-pub fn write_scale(out_dir: &Path, bays: u32) -> anyhow::Result<Vec<PathBuf>> {
-    let name = format!("scale-{bays}");
+/// Writes the scale scene of `bays` x `bays` bays (`scale-K`, 1..=32; with `sky`, the open hall
+/// `scale-K-sky` and the `sky` environment it reads, into `envs/`; not a committed scene: see
+/// `scale`) into `out_dir` (created if missing); returns the files written.
+pub fn write_scale(out_dir: &Path, bays: u32, sky: bool) -> anyhow::Result<Vec<PathBuf>> {
+    let name = if sky { format!("scale-{bays}-sky") } else { format!("scale-{bays}") };
     let (gltf, bin) = generate(&name).with_context(|| format!("--scale {bays}: give 1..={} bays a side", scale::MAX_BAYS))?;
     std::fs::create_dir_all(out_dir).with_context(|| format!("{}: cannot create the folder", out_dir.display()))?;
     let mut outputs = Outputs::new();
-    let written = [(format!("{name}.gltf"), gltf.into_bytes()), (format!("{name}.bin"), bin)]
+    let mut written = [(format!("{name}.gltf"), gltf.into_bytes()), (format!("{name}.bin"), bin)]
         .into_iter()
         .map(|(file, bytes)| {
             let path = out_dir.join(file);
             outputs.bytes(&path, &bytes).map(|()| path)
         })
         .collect::<Result<Vec<_>, _>>()?;
+    if sky {
+        written.push(write_environment(&mut outputs, out_dir, "sky")?);
+    }
     outputs.commit()?;
     Ok(written)
 }
@@ -175,16 +180,21 @@ pub fn write_all(out_dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             written.push(path);
         }
     }
-    let envs = out_dir.join("envs");
-    std::fs::create_dir_all(&envs).with_context(|| format!("{}: cannot create the folder", envs.display()))?;
     for name in ENVIRONMENT_NAMES {
-        let image = environment(name).with_context(|| format!("no generator for environment {name}"))?;
-        let path = envs.join(format!("{name}.exr"));
-        write_exr_layers(&mut outputs, &path, &[("rgb", &image)])?;
-        written.push(path);
+        written.push(write_environment(&mut outputs, out_dir, name)?);
     }
     outputs.commit()?;
     Ok(written)
+}
+
+/// Stages the named environment as `out_dir/envs/NAME.exr` (the folder created if missing).
+fn write_environment(outputs: &mut Outputs, out_dir: &Path, name: &str) -> anyhow::Result<PathBuf> {
+    let envs = out_dir.join("envs");
+    std::fs::create_dir_all(&envs).with_context(|| format!("{}: cannot create the folder", envs.display()))?;
+    let image = environment(name).with_context(|| format!("no generator for environment {name}"))?;
+    let path = envs.join(format!("{name}.exr"));
+    write_exr_layers(outputs, &path, &[("rgb", &image)])?;
+    Ok(path)
 }
 
 /// The `.gltf` text and `.bin` bytes of one named scene.
@@ -214,7 +224,11 @@ fn generate(name: &str) -> Option<(String, Vec<u8>)> {
         "sunroom" => sunroom::sunroom(),
         crowd if crowd.starts_with("fiv-crowd-") => fiv_crowd(crowd.trim_start_matches("fiv-crowd-").parse().ok()?),
         bays if bays.starts_with("scale-") => {
-            scale::scale(bays.trim_start_matches("scale-").parse().ok().filter(|k| (1..=scale::MAX_BAYS).contains(k))?)
+            let (bays, sky) = match bays.strip_suffix("-sky") {
+                Some(open) => (open, true),
+                None => (bays, false),
+            };
+            scale::scale(bays.trim_start_matches("scale-").parse().ok().filter(|k| (1..=scale::MAX_BAYS).contains(k))?, sky)
         }
         _ => return None,
     };

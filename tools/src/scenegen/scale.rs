@@ -9,8 +9,12 @@
 //! declares no method's block: the light cloud's region, MRT's blocks and the light path maps'
 //! test points (the lights where they stand) are derived, as a user's scene's would be.
 //!
+//! `scale-K-sky` is the same hall without its ceiling, under the `sky` environment: FIV models
+//! an environment's light, which the closed hall has none of, and its occluders are then the
+//! desk and chair pairs (derived: closed meshes apart from the shell).
+//!
 //! Not one of the committed scenes (its bakes take minutes to hours); `relume scenes --scale K`
-//! writes it.
+//! (with `--sky`, the open hall) writes it.
 
 use super::gltf_writer::Builder;
 use super::scenes::{exposure_one_intensity, panel_chair, panel_desk, Part};
@@ -26,7 +30,8 @@ const SHELL_CELLS_A_METRE: f64 = 1.0;
 /// The bays a side of the largest scale scene `relume scenes --scale` writes.
 pub const MAX_BAYS: u32 = 32;
 
-pub(super) fn scale(bays: u32) -> Builder {
+/// The hall of `bays` x `bays` bays; with `sky`, without its ceiling and under the sky.
+pub(super) fn scale(bays: u32, sky: bool) -> Builder {
     let mut b = Builder::new(SCALE_SETTINGS);
     let floor = b.material("floor", [0.45, 0.42, 0.38]);
     let wall = b.material("wall", [0.75, 0.73, 0.68]);
@@ -34,7 +39,10 @@ pub(super) fn scale(bays: u32) -> Builder {
     let furniture = b.material("furniture", [0.6, 0.45, 0.3]);
     let side = BAY * bays as f64;
     let (lo, hi) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(side, HEIGHT, side));
-    shell(&mut b, lo, hi, [floor, wall, ceiling]);
+    shell(&mut b, lo, hi, [floor, wall, ceiling], sky);
+    if sky {
+        b.environment("envs/sky.exr", 1.0);
+    }
     let pair = pair_mesh(&mut b, furniture);
     for (row, column) in (0..bays).flat_map(|r| (0..bays).map(move |c| (r, c))) {
         let centre = DVec3::new((column as f64 + 0.5) * BAY, 0.0, (row as f64 + 0.5) * BAY);
@@ -61,12 +69,14 @@ pub(super) fn scale(bays: u32) -> Builder {
     b
 }
 
-/// The floor, ceiling and four walls, each a welded grid of about a metre a cell, facing in.
-fn shell(b: &mut Builder, lo: DVec3, hi: DVec3, [floor, wall, ceiling]: [usize; 3]) {
+/// The floor, ceiling (not when `open`) and four walls, each a welded grid of about a metre a
+/// cell, facing in.
+fn shell(b: &mut Builder, lo: DVec3, hi: DVec3, [floor, wall, ceiling]: [usize; 3], open: bool) {
     let centre = (lo + hi) * 0.5;
     let names = ["Floor", "Ceiling", "BackWall", "FrontWall", "LeftWall", "RightWall"];
     let materials = [floor, ceiling, wall, wall, wall, wall];
-    for ((quad, _), (name, material)) in box_faces(lo, hi).into_iter().zip(names.into_iter().zip(materials)) {
+    let faces = box_faces(lo, hi).into_iter().zip(names.into_iter().zip(materials));
+    for ((quad, _), (name, material)) in faces.filter(|(_, (name, _))| !(open && *name == "Ceiling")) {
         let length = quad[0].distance(quad[1]);
         let cells = (length * SHELL_CELLS_A_METRE).round().max(1.0) as u32;
         let mesh = b.grid_mesh(name, &[quad], cells, |p| centre - p, material);

@@ -386,7 +386,7 @@ fn the_scale_scene_grows_by_bays_of_instanced_furniture_and_lights() {
     let dir = temp_dir("scale");
     let mut furniture = Vec::new();
     for bays in [1u32, 2] {
-        write_scale(&dir, bays).unwrap();
+        write_scale(&dir, bays, false).unwrap();
         let scene = load(&dir, &format!("scale-{bays}"));
         let pairs: Vec<_> = scene.meshes.iter().filter(|m| m.name.starts_with("Pair")).collect();
         assert_eq!(pairs.len() as u32, 16 * bays * bays);
@@ -410,5 +410,23 @@ fn the_scale_scene_grows_by_bays_of_instanced_furniture_and_lights() {
     }
     assert_eq!(furniture, [16 * 648, 64 * 648]);
     std::fs::remove_dir_all(&dir).ok();
-    assert!(write_scale(&temp_dir("scale-refused"), 0).unwrap_err().to_string().contains("--scale 0: give 1..=32"));
+    assert!(write_scale(&temp_dir("scale-refused"), 0, false).unwrap_err().to_string().contains("--scale 0: give 1..=32"));
+}
+
+/// The open hall is the hall less its ceiling, under the sky, and FIV finds its occluders in it
+/// alone: every desk and chair pair (closed, though a chair's seat and back share an edge), of
+/// one shape, so one table.
+#[test]
+fn the_open_scale_scene_is_the_hall_under_the_sky_with_the_pairs_as_occluders() {
+    let dir = temp_dir("scale-sky");
+    let written = write_scale(&dir, 2, true).unwrap();
+    assert!(written.iter().any(|p| p.ends_with("envs/sky.exr")), "{written:?}");
+    let scene = load(&dir, "scale-2-sky");
+    assert!(scene.environment.is_some());
+    assert!(scene.meshes.iter().all(|m| m.name != "Ceiling"));
+    assert_eq!(scene.meshes.len(), 5 + 64);
+    let fiv = relume_bake::fiv::FivSceneSettings::of(&scene).unwrap();
+    assert!(fiv.derived && fiv.occluders.len() == 64 && fiv.occluders.iter().all(|name| name.starts_with("Pair")), "{:?}", fiv.occluders);
+    assert_eq!(relume_bake::fiv::occluder_types(&scene, &fiv).unwrap().len(), 1);
+    std::fs::remove_dir_all(&dir).ok();
 }
