@@ -328,9 +328,10 @@ figure_bake_memory() {
 # --scale K`), under --memory-limit 16G: its stats.json (stages' seconds, peak memory) or its
 # refusal; then `relume scaling` charts them. Light path maps at 384 entry points (4,096 would
 # not fit the largest in 16 GiB); MRT's dictionary made once, before the sweep; light clouds
-# at every K with 8 gather paths a vertex (K = 10 about 50 minutes; at the default 64 its gather
-# alone would take hours) and at the defaults at K = 1 and 2 (K = 2 takes 10 minutes, so it runs
-# last); the path tracer's paths per second on the smallest and largest.
+# at every K with 8 gather paths a vertex (K = 10 about an hour; at the default 64 its gather
+# alone would take hours) and at the defaults at K = 1 and 2 (K = 2 takes 10 minutes); FIV on
+# the open hall (`--scale K --sky`: no ceiling, under the sky, so its triangles are the hall's
+# less the ceiling's); the path tracer's paths per second on the smallest and largest.
 figure_scale_sweep() {
     local limit=(--memory-limit 16G --threads 2)
     for k in 1 2 5 10; do
@@ -350,6 +351,11 @@ figure_scale_sweep() {
     done
     for k in 1 2; do
         "$RELUME" bake "$DIR/scenes/scale-$k.gltf" --method light-cloud "${limit[@]}" --out "$DIR/light-cloud-$k" || true
+    done
+    # FIV models environment light: the hall without its ceiling, under the sky.
+    for k in 1 2 5 10; do
+        "$RELUME" scenes --scale $k --sky --out "$DIR/scenes"
+        "$RELUME" bake "$DIR/scenes/scale-$k-sky.gltf" --method fiv "${limit[@]}" --out "$DIR/fiv-$k" || true
     done
     for k in 1 10; do
         "$RELUME" reference "$DIR/scenes/scale-$k.gltf" --width 128 --height 96 --spp 32 --threads 2 --out "$DIR/reference-$k.exr"

@@ -272,13 +272,14 @@ impl Layout {
     }
 }
 
-/// S = V V^T of `count` vectors of `depth` values each, where `fill(vectors, stretch, out)`
-/// writes the values `stretch` of each of `vectors` into `out`, laid out by `layout`. By
-/// blocks of vectors: each block pair (a, b <= a) multiplies its two blocks a stretch at a time,
-/// in f64 by faer's matrix product on one thread, ten times the rate of dot products a
-/// pair at a time (docs/BENCHMARKS.md, "Scale sweep"). Each block pair is its own sums in a
-/// fixed order, so pairs run in parallel and the bytes do not depend on the thread count. A
-/// step of `progress` per entry of the lower triangle.
+/// S = V^T V, V the depth x count matrix of `count` vectors of `depth` values each, where
+/// `fill(vectors, stretch, out)` writes the values `stretch` of each of `vectors` into `out`,
+/// laid out by `layout`. By blocks of vectors: each block pair (a, b <= a) multiplies its two
+/// blocks a stretch at a time, in f64 by faer's matrix product on one thread (dot products a
+/// pair at a time left the core waiting on one sum: docs/BENCHMARKS.md, "Clustered PCA's
+/// blocked products"). Each block pair is its own sums in a fixed order, so pairs run in
+/// parallel and the bytes do not depend on the thread count. A step of `progress` per entry
+/// of the lower triangle.
 fn products<F>(count: usize, depth: usize, layout: Layout, fill: F, progress: &Progress) -> DMatrix<f64>
 where
     F: Fn(Range<usize>, Range<usize>, &mut [f64]) + Sync,
@@ -294,15 +295,15 @@ where
             let (mut x, mut y) = (vec![], vec![]);
             for start in (0..depth).step_by(BLOCK_DEPTH) {
                 let stretch = start..(start + BLOCK_DEPTH).min(depth);
-                let width = stretch.len();
-                x.resize(first.len() * width, 0.0);
+                let values = stretch.len();
+                x.resize(first.len() * values, 0.0);
                 fill(first.clone(), stretch.clone(), &mut x);
                 if a != b {
-                    y.resize(second.len() * width, 0.0);
+                    y.resize(second.len() * values, 0.0);
                     fill(second.clone(), stretch, &mut y);
                 }
-                let columns = layout.block(if a == b { &x } else { &y }, width, second.len());
-                matmul(sum.as_mut(), layout.block(&x, width, first.len()).transpose(), columns, Some(1.0), 1.0, Parallelism::None);
+                let right = layout.block(if a == b { &x } else { &y }, values, second.len());
+                matmul(sum.as_mut(), layout.block(&x, values, first.len()).transpose(), right, Some(1.0), 1.0, Parallelism::None);
             }
             let (height, width) = (first.len() as u64, second.len() as u64);
             progress.inc(if a == b { height * (height + 1) / 2 } else { height * width });
@@ -425,9 +426,9 @@ pub fn fit(data: &[f32], cols: usize, features: &[f32], feature_dims: usize, clu
 }
 
 /// `cluster_pca` of each group, the clusters side by side on the worker threads: each one's
-/// eigen-decomposition runs on one thread, and it is most of a fit's time (light clouds on the
-/// scale scene: docs/BENCHMARKS.md, "Scale sweep"). Each is computed alone, so the bytes do
-/// not depend on the thread count.
+/// eigen-decomposition runs on one thread (light clouds on the scale scene refit clusters of
+/// a thousand vertices twenty times a zone). Each is computed alone, so the bytes do not depend
+/// on the thread count.
 fn cluster_pcas(data: &[f32], cols: usize, groups: &[Vec<u32>], basis: usize) -> Vec<ClusterPca> {
     groups.par_iter().map(|m| cluster_pca(data, cols, m, basis)).collect()
 }

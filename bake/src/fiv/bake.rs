@@ -1,7 +1,7 @@
 //! FIV's whole bake behind the bake contract: the environment's terms and a table per occluder
 //! type (003 §4), with the facts the manifest and stats.json keep.
 
-use super::{bake_types, occluders, sections, FivBakeSettings, FivSceneSettings};
+use super::{bake_types, first_names, occluders, sections, FivBakeSettings, FivSceneSettings};
 use crate::contract::{scene_bytes, Baked, Baker, Estimate, Stages};
 use crate::scene::Scene;
 use crate::work::WorkOptions;
@@ -63,12 +63,7 @@ impl Baker for FivBaker {
             ),
         };
         if declared.derived {
-            // A hall of furniture derives thousands: the warning names the first few.
-            const NAMED: usize = 12;
-            let more = declared.occluders.len().saturating_sub(NAMED);
-            let rest = if more > 0 { format!(" and {more} more") } else { String::new() };
-            let names = declared.occluders[..declared.occluders.len().min(NAMED)].join(", ");
-            let how = format!("{names}{rest} (the closed meshes under 80 % of the scene's footprint)");
+            let how = format!("{} (the closed meshes under 80 % of the scene's footprint)", first_names(&declared.occluders));
             baked.derived("occluders", json!(declared.occluders), &how, "extras.relume.fiv.occluders");
         }
         Ok(baked)

@@ -58,7 +58,7 @@ fn derive(scene: &Scene) -> Result<FivSceneSettings, String> {
     let mut occluders: Vec<String> = Vec::new();
     for mesh in &scene.meshes {
         let apart = footprint(crate::scene::bounds_of(&mesh.positions)) < 0.8 * whole;
-        if apart && open_edges(mesh).is_none() && !occluders.contains(&mesh.name) {
+        if apart && not_closed(mesh).is_none() && !occluders.contains(&mesh.name) {
             occluders.push(mesh.name.clone());
         }
     }
@@ -81,6 +81,16 @@ fn from_block(block: &Value) -> Result<FivSceneSettings, String> {
         .map(|n| n.as_str().map(str::to_string).ok_or("extras.relume.fiv.occluders must hold mesh names (strings)"))
         .collect::<Result<_, _>>()?;
     Ok(FivSceneSettings { occluders, derived: false })
+}
+
+/// The first dozen of `names` and how many more: a hall of furniture has thousands.
+fn first_names<S: AsRef<str>>(names: &[S]) -> String {
+    const NAMED: usize = 12;
+    let first: Vec<&str> = names.iter().take(NAMED).map(AsRef::as_ref).collect();
+    match names.len().saturating_sub(NAMED) {
+        0 => first.join(", "),
+        more => format!("{} and {more} more", first.join(", ")),
+    }
 }
 
 /// Occluders of one shape (equal up to a translation) share a type and its table (003 §4:
@@ -112,17 +122,16 @@ pub fn occluder_types(scene: &Scene, settings: &FivSceneSettings) -> Result<Vec<
             return Err(format!("extras.relume.fiv.occluders names \"{name}\" twice"));
         }
         let Some(index) = scene.meshes.iter().position(|m| &m.name == name) else {
-            let names: Vec<&str> = scene.meshes.iter().take(12).map(|m| m.name.as_str()).collect();
-            let more = if scene.meshes.len() > names.len() { ", ..." } else { "" };
+            let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
             return Err(format!(
-                "extras.relume.fiv.occluders names \"{name}\", which is no mesh of the scene (its meshes: {}{more}; a node of several primitives loads as \"<node> primitive <k>\")",
-                names.join(", ")
+                "extras.relume.fiv.occluders names \"{name}\", which is no mesh of the scene (its meshes: {}; a node of several primitives loads as \"<node> primitive <k>\")",
+                first_names(&names)
             ));
         };
         let mesh = &scene.meshes[index];
-        if let Some(edges) = open_edges(mesh) {
+        if let Some(why) = not_closed(mesh) {
             return Err(format!(
-                "occluder \"{name}\" is not a closed mesh ({edges} edges join an odd number of triangles); close it or leave it out of extras.relume.fiv.occluders"
+                "occluder \"{name}\" is not a closed mesh ({why}); close it or leave it out of extras.relume.fiv.occluders"
             ));
         }
         match types.iter_mut().find(|t| same_shape(&scene.meshes[t.meshes[0]], mesh)) {
@@ -149,10 +158,12 @@ fn same_shape(a: &Mesh, b: &Mesh) -> bool {
         && a.positions.iter().zip(&b.positions).all(|(p, q)| ((*p - ca) - (*q - cb)).abs().max_element() <= tolerance)
 }
 
-/// The number of edges shared by an odd number of triangles (vertices welded by position), or
-/// None for a closed mesh: one whose every edge joins two triangles, or four where closed parts
-/// touch along it (a chair's seat and back), so that it has an inside however it is cut.
-fn open_edges(mesh: &Mesh) -> Option<usize> {
+/// Why `mesh` has no inside, or None for a closed mesh: every edge (vertices welded by position)
+/// joins an even number of triangles (two on a plain surface, four where closed parts touch
+/// along an edge, as a chair's seat and front panel do), and the triangles enclose a volume
+/// facing out (a double-sided sheet has even edges and none; FIV's inside test reads the
+/// first face a ray meets, which an inside-out mesh turns round).
+fn not_closed(mesh: &Mesh) -> Option<String> {
     let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
     let mut edges = std::collections::BTreeMap::new();
     for t in mesh.indices.chunks_exact(3) {
@@ -162,8 +173,21 @@ fn open_edges(mesh: &Mesh) -> Option<usize> {
         }
     }
     let open = edges.values().filter(|&&n| n % 2 == 1).count();
-    (open > 0).then_some(open)
+    if open > 0 {
+        return Some(format!("{open} edges join an odd number of triangles"));
+    }
+    let corner = |t: &[u32], k: usize| mesh.positions[t[k] as usize].as_dvec3();
+    let volume: f64 = mesh.indices.chunks_exact(3).map(|t| corner(t, 0).dot(corner(t, 1).cross(corner(t, 2))) / 6.0).sum();
+    let (lo, hi) = crate::scene::bounds_of(&mesh.positions);
+    let bounds = (hi - lo).as_dvec3().element_product();
+    // Volumes far below their bounds' are rounding of a shape that encloses none.
+    (volume <= ENCLOSED_SHARE * bounds).then(|| {
+        format!("its triangles enclose {volume:.3e} m^3 facing out in bounds of {bounds:.3e} m^3: a double-sided sheet, or faces turned in")
+    })
 }
+
+/// The least share of its bounds' volume a closed mesh encloses.
+const ENCLOSED_SHARE: f64 = 1e-4;
 
 #[cfg(test)]
 mod tests {
@@ -194,14 +218,23 @@ mod tests {
         Mesh { name: "boxes".into(), normals: vec![Vec3::Y; positions.len()], positions, uv0: None, uv1: None, indices, material: 0 }
     }
 
-    /// A chair's seat and back touch along an edge, which four triangles then share: the mesh
-    /// still has an inside. A box without its lid has none.
+    /// A chair's seat and front panel touch along an edge, which four triangles then share:
+    /// the mesh still has an inside. A box without its lid has none, nor has a double-sided
+    /// sheet (every edge even) or a box turned inside out.
     #[test]
-    fn boxes_that_touch_along_an_edge_are_closed_and_a_box_without_a_lid_is_not() {
+    fn boxes_that_touch_along_an_edge_are_closed_and_sheets_lidless_or_inverted_boxes_are_not() {
         let (seat, back) = ((Vec3::ZERO, Vec3::new(1.0, 0.1, 1.0)), (Vec3::new(0.0, 0.1, 0.9), Vec3::new(1.0, 1.0, 1.0)));
         let touching = boxes(&[seat, (Vec3::new(1.0, 0.1, 0.0), Vec3::new(2.0, 1.0, 1.0))], &[]);
-        assert_eq!(open_edges(&boxes(&[seat], &[])), None);
-        assert_eq!(open_edges(&touching), None, "boxes sharing an edge (four triangles on it)");
-        assert_eq!(open_edges(&boxes(&[seat, back], &[(1, 1)])), Some(4), "the back without its lid");
+        assert_eq!(not_closed(&boxes(&[seat], &[])), None);
+        assert_eq!(not_closed(&touching), None, "boxes sharing an edge (four triangles on it)");
+        let lidless = not_closed(&boxes(&[seat, back], &[(1, 1)])).unwrap();
+        assert!(lidless.starts_with("4 edges join an odd number"), "{lidless}");
+        let mut sheet = boxes(&[seat], &[(0, 1), (0, 2), (0, 3), (0, 4), (0, 5)]);
+        let turned: Vec<u32> = sheet.indices.chunks_exact(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
+        sheet.indices.extend(turned);
+        assert!(not_closed(&sheet).unwrap().contains("double-sided sheet"), "{:?}", not_closed(&sheet));
+        let mut inverted = boxes(&[seat], &[]);
+        inverted.indices = inverted.indices.chunks_exact(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
+        assert!(not_closed(&inverted).unwrap().contains("faces turned in"), "{:?}", not_closed(&inverted));
     }
 }

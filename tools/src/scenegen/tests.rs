@@ -414,7 +414,7 @@ fn the_scale_scene_grows_by_bays_of_instanced_furniture_and_lights() {
 }
 
 /// The open hall is the hall less its ceiling, under the sky, and FIV finds its occluders in it
-/// alone: every desk and chair pair (closed, though a chair's seat and back share an edge), of
+/// alone: every desk and chair pair (closed, though a chair's seat and front panel share an edge), of
 /// one shape, so one table.
 #[test]
 fn the_open_scale_scene_is_the_hall_under_the_sky_with_the_pairs_as_occluders() {
