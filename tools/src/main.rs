@@ -76,7 +76,7 @@ enum Command {
         #[arg(long, value_name = "K")]
         scale: Option<u32>,
         /// With --scale: the hall without its ceiling under the sky (`scale-K-sky`, and
-        /// envs/sky.exr), for FIV, which models environment light.
+        /// envs/sky.exr), for the methods of environment light.
         #[arg(long, requires = "scale")]
         sky: bool,
     },

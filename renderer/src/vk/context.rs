@@ -334,10 +334,11 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_copy_buffer_to_image(self.cmd, buffer, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]) };
     }
 
-    /// Writes each update's data into its device-local buffer inside the command stream
-    /// (vkCmdUpdateBuffer: at most 65536 bytes, a multiple of 4), between two barriers for all
-    /// of them: earlier shader reads of the buffers finish first, and the vertex, fragment and
-    /// compute stages that follow see the new data.
+    /// Writes each update's data into its device-local buffer inside the command stream, between
+    /// two barriers for all of them: earlier shader reads of the buffers finish first, and the
+    /// vertex, fragment and compute stages that follow see the new data. Data longer than one
+    /// vkCmdUpdateBuffer carries (65536 bytes) goes in pieces of that size; each is a multiple
+    /// of 4 bytes where the data is.
     pub fn update_buffers<const N: usize>(&self, updates: [(vk::Buffer, &[u8]); N]) {
         let shader_stages =
             vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -360,7 +361,9 @@ impl<'a> CommandRecorder<'a> {
         unsafe {
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&before));
             for (buffer, data) in updates {
-                self.device.cmd_update_buffer(self.cmd, buffer, 0, data);
+                for (k, piece) in data.chunks(UPDATE_BYTES).enumerate() {
+                    self.device.cmd_update_buffer(self.cmd, buffer, (k * UPDATE_BYTES) as vk::DeviceSize, piece);
+                }
             }
             self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&after));
         }
@@ -400,3 +403,6 @@ impl<'a> CommandRecorder<'a> {
         unsafe { self.device.cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().memory_barriers(&barrier)) };
     }
 }
+
+/// The most bytes one vkCmdUpdateBuffer writes.
+const UPDATE_BYTES: usize = 65536;

@@ -168,12 +168,12 @@ impl Technique for LightCloudTechnique {
 impl MakeTechnique for LightCloudData<'_> {
     /// Uploads the transfer in one submission that is waited for and weighs the scene's
     /// lights. Refused, by name: a cloud that fails `validate` or is for another vertex count,
-    /// directional lights when the cloud has no directions, an m out of range, a transfer larger than one storage
-    /// buffer, and more weights than one in-stream update holds (64 KiB, 4,096 weights).
+    /// directional lights when the cloud has no directions, an m out of range, and a transfer
+    /// (or its weights) larger than one storage buffer.
     fn make_blocking(&self, shared: &Shared) -> VkResult<Box<dyn Technique>> {
         let ctx = shared.ctx;
         let cloud = self.cloud;
-        check(ctx, cloud, shared.gpu_scene.vertex_count(), (self.nearest.max(self.nearest_directions), shared.scene.lights.len()))?;
+        check(ctx, cloud, shared.gpu_scene.vertex_count())?;
         refuse_lights(&shared.scene.lights, cloud.directions).map_err(|e| VkError::Invalid(format!("light cloud: {e}")))?;
         let weigher = Weigher::zoned(cloud.zone_lights.clone(), self.nearest)
             .and_then(|w| w.with_emission(cloud.emission))
@@ -240,7 +240,7 @@ impl MakeTechnique for LightCloudData<'_> {
 }
 
 /// `nearest`: m; `scene_lights`: the user lights (their count never changes).
-fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene_lights): (usize, usize)) -> VkResult<()> {
+fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()> {
     let refuse = |why: String| Err(VkError::Invalid(format!("light cloud: {why}")));
     if let Err(why) = cloud.validate() {
         return refuse(why);
@@ -259,6 +259,7 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene
         (cloud.vertex_count() * cloud.coefficients) as u64 * 16,
         terms * 16,
         cloud.cluster_count() as u64 * 16,
+        weight_capacity(cloud) as u64 * 16,
     ];
     let limit = ctx.info.max_storage_buffer_range;
     if bytes.iter().any(|&b| b > limit) || cloud.terms.len() as u64 > u32::MAX as u64 {
@@ -275,27 +276,16 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize, (nearest, scene
             cloud.vertex_count()
         ));
     }
-    let most = cloud.zone_count() * nearest * scene_lights * cloud.emission;
-    if columns(cloud).min(most) > MAX_WEIGHTS {
-        return refuse(format!(
-            "{scene_lights} lights standing on up to {nearest} cloud lights of {} emission functions in each of {} zones make up to {most} weights; at most {MAX_WEIGHTS} fit one in-stream update: use fewer lights, zones, emission bands or --nearest",
-            cloud.emission,
-            cloud.zone_count()
-        ));
-    }
     Ok(())
 }
-
-/// The most non-zero weights a frame uploads: 64 KiB, one in-stream update.
-const MAX_WEIGHTS: usize = 4096;
 
 /// Every column of the cloud: its lights times their emission functions.
 fn columns(cloud: &LightCloud) -> usize {
     cloud.lights.len() * cloud.emission
 }
 
-/// Room for every weight a frame can have: one per column, at most MAX_WEIGHTS (`check`
-/// refused more).
+/// Room for every weight a frame can have: one per column (a scale hall's cloud has tens of
+/// thousands; the frame uploads the non-zero ones).
 fn weight_capacity(cloud: &LightCloud) -> usize {
-    columns(cloud).min(MAX_WEIGHTS)
+    columns(cloud)
 }
