@@ -92,17 +92,17 @@ fn a_spot_light_on_emission_bands_equals_the_cpu_sum_as_it_moves() {
     gpu_equals_cpu(&scene, &cloud, visibility);
 }
 
-/// Two dozen spot lights on four zones' clouds of 16 emission functions: more weights than one
+/// 32 spot lights on four zones' clouds of 16 emission functions: more weights than one
 /// vkCmdUpdateBuffer carries (65,536 bytes: 4,096 weights, refused before), uploaded in pieces,
 /// reach the CPU's sums (a scale hall's cloud has tens of thousands of columns).
 #[test]
 fn more_weights_than_one_update_carries_reach_the_cpu_sum() {
     let (mut scene, cloud, visibility) = baked_with(16);
     let zoned = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, lc::Reduction { zones: 4, weights: None }).unwrap().cloud;
-    scene.lights = (0..24)
+    scene.lights = (0..32)
         .map(|k| {
             // The first light, which the check moves 0.15 to +x, starts at the -x side.
-            let turn = std::f32::consts::PI + k as f32 * std::f32::consts::TAU / 24.0;
+            let turn = std::f32::consts::PI + k as f32 * std::f32::consts::TAU / 32.0;
             let position = Vec3::new(0.2 * turn.cos(), 0.42 + 0.03 * (k % 3) as f32, -0.28 + 0.2 * turn.sin());
             spot_light(position, Vec3::new(-turn.cos(), -0.5, -turn.sin()).normalize(), Vec3::splat(0.02), 0.3, 0.6)
         })

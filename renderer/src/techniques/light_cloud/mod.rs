@@ -239,7 +239,7 @@ impl MakeTechnique for LightCloudData<'_> {
     }
 }
 
-/// `nearest`: m; `scene_lights`: the user lights (their count never changes).
+/// What the GPU cannot hold or run, refused by name (`make_blocking` lists it).
 fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()> {
     let refuse = |why: String| Err(VkError::Invalid(format!("light cloud: {why}")));
     if let Err(why) = cloud.validate() {
