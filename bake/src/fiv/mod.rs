@@ -192,30 +192,18 @@ const ENCLOSED_SHARE: f64 = 1e-4;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{closed_box, square, Facing};
 
-    /// Boxes as one mesh, each face its own two triangles on its own four vertices (welded by
-    /// position only, as a scene's faces are), leaving out the faces `missing` (box, face).
-    fn boxes(corners: &[(Vec3, Vec3)], missing: &[(usize, usize)]) -> Mesh {
-        let (mut positions, mut indices) = (vec![], vec![]);
-        for (k, &(lo, hi)) in corners.iter().enumerate() {
-            let c = |x: bool, y: bool, z: bool| {
-                Vec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z })
-            };
-            let faces = [
-                [c(false, false, false), c(true, false, false), c(true, false, true), c(false, false, true)],
-                [c(false, true, false), c(false, true, true), c(true, true, true), c(true, true, false)],
-                [c(false, false, false), c(false, true, false), c(true, true, false), c(true, false, false)],
-                [c(false, false, true), c(true, false, true), c(true, true, true), c(false, true, true)],
-                [c(false, false, false), c(false, false, true), c(false, true, true), c(false, true, false)],
-                [c(true, false, false), c(true, true, false), c(true, true, true), c(true, false, true)],
-            ];
-            for (_, quad) in faces.iter().enumerate().filter(|(f, _)| !missing.contains(&(k, *f))) {
-                let first = positions.len() as u32;
-                positions.extend(quad);
-                indices.extend([0, 1, 2, 0, 2, 3].map(|i| first + i));
-            }
+    /// `meshes` as one (welded by position only, as a scene's faces are).
+    fn joined(meshes: &[Mesh]) -> Mesh {
+        let mut out = meshes[0].clone();
+        for mesh in &meshes[1..] {
+            let first = out.positions.len() as u32;
+            out.positions.extend(&mesh.positions);
+            out.normals.extend(&mesh.normals);
+            out.indices.extend(mesh.indices.iter().map(|i| first + i));
         }
-        Mesh { name: "boxes".into(), normals: vec![Vec3::Y; positions.len()], positions, uv0: None, uv1: None, indices, material: 0 }
+        out
     }
 
     /// A chair's seat and front panel touch along an edge, which four triangles then share:
@@ -223,18 +211,21 @@ mod tests {
     /// sheet (every edge even) or a box turned inside out.
     #[test]
     fn boxes_that_touch_along_an_edge_are_closed_and_sheets_lidless_or_inverted_boxes_are_not() {
-        let (seat, back) = ((Vec3::ZERO, Vec3::new(1.0, 0.1, 1.0)), (Vec3::new(0.0, 0.1, 0.9), Vec3::new(1.0, 1.0, 1.0)));
-        let touching = boxes(&[seat, (Vec3::new(1.0, 0.1, 0.0), Vec3::new(2.0, 1.0, 1.0))], &[]);
-        assert_eq!(not_closed(&boxes(&[seat], &[])), None);
-        assert_eq!(not_closed(&touching), None, "boxes sharing an edge (four triangles on it)");
-        let lidless = not_closed(&boxes(&[seat, back], &[(1, 1)])).unwrap();
-        assert!(lidless.starts_with("4 edges join an odd number"), "{lidless}");
-        let mut sheet = boxes(&[seat], &[(0, 1), (0, 2), (0, 3), (0, 4), (0, 5)]);
+        // Corners of halves and quarters: the shared edge's positions are equal to the bit.
+        let seat = closed_box(Vec3::ZERO, Vec3::new(1.0, 0.5, 1.0), 1, Facing::Outward, 0);
+        let panel = closed_box(Vec3::new(1.0, 0.5, 0.0), Vec3::new(2.0, 1.0, 1.0), 1, Facing::Outward, 0);
+        assert_eq!(not_closed(&seat), None);
+        assert_eq!(not_closed(&joined(&[seat.clone(), panel])), None, "boxes sharing an edge (four triangles on it)");
+        let mut lidless = seat.clone();
+        let lid = |t: &[u32]| t.iter().all(|&i| lidless.normals[i as usize] == Vec3::Y);
+        lidless.indices = lidless.indices.chunks_exact(3).filter(|t| !lid(t)).flatten().copied().collect();
+        let why = not_closed(&lidless).unwrap();
+        assert!(why.starts_with("4 edges join an odd number"), "{why}");
+        let mut sheet = square(Vec3::ZERO, Vec3::X, Vec3::Z, 1, 0);
         let turned: Vec<u32> = sheet.indices.chunks_exact(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
         sheet.indices.extend(turned);
         assert!(not_closed(&sheet).unwrap().contains("double-sided sheet"), "{:?}", not_closed(&sheet));
-        let mut inverted = boxes(&[seat], &[]);
-        inverted.indices = inverted.indices.chunks_exact(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
+        let inverted = closed_box(Vec3::ZERO, Vec3::new(1.0, 0.5, 1.0), 1, Facing::Inward, 0);
         assert!(not_closed(&inverted).unwrap().contains("faces turned in"), "{:?}", not_closed(&inverted));
     }
 }
