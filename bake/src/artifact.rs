@@ -126,7 +126,7 @@ pub fn checksum(bytes: &[u8]) -> String {
 }
 
 /// The checksum of the file at `path`, read in pieces (no file is held whole to check it).
-fn file_checksum(path: &Path) -> std::io::Result<String> {
+pub fn file_checksum(path: &Path) -> std::io::Result<String> {
     let mut file = std::fs::File::open(path)?;
     let (mut hash, mut buffer) = (Fnv::new(), vec![0u8; 1 << 16]);
     loop {

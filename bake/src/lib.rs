@@ -46,4 +46,6 @@ pub mod reference;
 #[cfg(feature = "baking")]
 pub mod sampling;
 #[cfg(feature = "baking")]
+pub mod shards;
+#[cfg(feature = "baking")]
 pub mod work;

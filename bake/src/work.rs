@@ -3,6 +3,7 @@
 
 use crate::bvh::RayBackend;
 use crate::contract::{mib, Estimate};
+use crate::shards::{self, Items, Role};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
 use std::ops::Range;
@@ -30,6 +31,8 @@ pub struct WorkOptions {
     pub started: Option<Instant>,
     /// Which library casts the job's rays.
     pub ray_backend: RayBackend,
+    /// The bake's part in a sharded one (`shards`); None: a whole bake.
+    pub shard: Option<&'static Role>,
 }
 
 impl WorkOptions {
@@ -64,6 +67,19 @@ impl WorkOptions {
             estimate.describe(),
             mib(limit)
         ))
+    }
+
+    /// Makes the rows of a bake's long work, `items`: `make` makes the rows of a range of items
+    /// within one of their chunks, each row a function of its item and the seed alone; `take`
+    /// takes each chunk's rows in order. In a sharded bake (`shard`) the rows are sampled (a
+    /// plan), made for a range only (a shard), or read from the shards' parts (the merge).
+    pub fn gather<T: bytemuck::Pod>(
+        &self,
+        items: &Items,
+        make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+        take: impl FnMut(Vec<T>) -> Result<(), String>,
+    ) -> Result<(), String> {
+        shards::gather(self.shard, items, make, take)
     }
 
     /// Runs `pass` on the worker threads over 0..total (rays, walks) in ranges of `step`,

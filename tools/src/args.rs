@@ -109,6 +109,20 @@ pub(crate) struct WorkArgs {
 }
 
 impl WorkArgs {
+    /// The command line that gives these arguments.
+    pub fn argv(&self) -> Vec<String> {
+        let mut argv = vec!["--seed".to_string(), self.seed.to_string(), "--ray-backend".into(), self.ray_backend.name().into()];
+        let optional = [
+            ("--threads", self.threads.map(|n| n.to_string())),
+            ("--time-limit", self.time_limit.map(|t| t.as_secs_f64().to_string())),
+            ("--memory-limit", self.memory_limit.map(|b| b.to_string())),
+        ];
+        for (name, value) in optional {
+            argv.extend(value.map(|v| [name.to_string(), v]).into_iter().flatten());
+        }
+        argv
+    }
+
     /// The options, refused by name when impossible; a progress bar on a terminal.
     pub fn options(&self) -> Result<WorkOptions> {
         let options = WorkOptions {
@@ -119,6 +133,7 @@ impl WorkArgs {
             memory_limit: self.memory_limit.or_else(relume_bake::work::machine_memory_bytes),
             started: None,
             ray_backend: self.ray_backend,
+            shard: None,
         };
         options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
         Ok(options)

@@ -5,7 +5,7 @@
 use crate::args::{load, replace_environment, WorkArgs};
 use crate::methods::params::{BakeParams, Stage};
 use crate::methods::{self, Method};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use relume_bake::artifact::BakeOutput;
 use relume_bake::contract::Stages;
@@ -15,10 +15,21 @@ use relume_bake::work::{with_threads, WorkOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
+/// `relume bake`: a whole bake, or (`plan`, `shard`, `merge`, `status`) one split into shards.
 #[derive(Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub(crate) struct BakeCommand {
+    #[command(subcommand)]
+    sharded: Option<crate::shards::Sharded>,
+    #[command(flatten)]
+    bake: BakeArgs,
+}
+
+#[derive(Args, Clone)]
 pub(crate) struct BakeArgs {
     /// A glTF 2.0 scene (.gltf or .glb).
-    scene: PathBuf,
+    #[arg(required = true)]
+    pub scene: Option<PathBuf>,
     /// The method to bake: one of the registry's with a bake (`relume methods` lists them).
     #[arg(long, required_unless_present = "recommended", value_parser = |name: &str| baking_method(name).map(|m| m.name().to_string()).map_err(|e| e.to_string()))]
     method: Option<String>,
@@ -28,10 +39,10 @@ pub(crate) struct BakeArgs {
     #[arg(long, conflicts_with = "method")]
     recommended: Option<PathBuf>,
     #[command(flatten)]
-    work: WorkArgs,
-    /// The artifact folder (default: out/<scene>/<method>).
+    pub work: WorkArgs,
+    /// The artifact folder (default: out/<scene>/<method>); for `bake plan`, the plan's folder.
     #[arg(long, short)]
-    out: Option<PathBuf>,
+    pub out: Option<PathBuf>,
     /// Bake for the scene lit by this lat-long EXR instead of its own environment (as
     /// `render --environment`; a bake keyed to the environment is read only with the same).
     #[arg(long)]
@@ -84,26 +95,79 @@ fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, Vec<(Str
     Ok((method, pairs.into_iter().filter(|(key, _)| baked.contains(&key.as_str())).collect()))
 }
 
-pub(crate) fn bake_command(args: &BakeArgs) -> Result<()> {
-    let (method, pairs) = match (&args.recommended, &args.method) {
-        (Some(file), _) => {
-            let (method, mut pairs) = recommended(file, &scene_name(&args.scene))?;
-            pairs.retain(|(key, _)| !args.params.pairs.iter().any(|(given, _)| given == key));
-            pairs.extend(args.params.pairs.iter().cloned());
-            (method, pairs)
-        }
-        (None, Some(name)) => (baking_method(name)?, args.params.pairs.clone()),
-        (None, None) => bail!("give --method or --recommended"),
-    };
-    let values = methods::parse_values(method, &pairs, Some(Stage::Bake))?;
-    let work = args.work.options()?;
-    let options =
-        LoadOptions { outside_files: args.allow_outside_files, max_texture_pixels: Some(args.max_texture_pixels), ..Default::default() };
-    let mut scene = load(&args.scene, args.lights.as_deref(), options)?;
-    replace_environment(&mut scene, args.environment.as_deref())?;
-    let out = args.out.clone().unwrap_or_else(|| default_bake_dir(&args.scene, method.name()));
-    print!("{}", bake_scene(&scene, method, &values, work, &out)?);
+pub(crate) fn bake_command(command: &BakeCommand) -> Result<()> {
+    if let Some(sharded) = &command.sharded {
+        return crate::shards::command(sharded);
+    }
+    let bake = Prepared::new(&command.bake)?;
+    print!("{}", bake_scene(&bake.scene, bake.method, &bake.values, bake.work, &bake.out)?);
     Ok(())
+}
+
+/// A bake's command line resolved: its scene loaded, its method and values, its work options
+/// and its artifact folder.
+pub(crate) struct Prepared {
+    pub scene: Scene,
+    pub method: &'static dyn Method,
+    pub values: methods::params::Values,
+    pub work: WorkOptions,
+    pub out: PathBuf,
+}
+
+impl Prepared {
+    pub(crate) fn new(args: &BakeArgs) -> Result<Prepared> {
+        let scene_path = args.scene.as_deref().ok_or_else(|| anyhow::anyhow!("give the scene to bake"))?;
+        let (method, pairs) = match (&args.recommended, &args.method) {
+            (Some(file), _) => {
+                let (method, mut pairs) = recommended(file, &scene_name(scene_path))?;
+                pairs.retain(|(key, _)| !args.params.pairs.iter().any(|(given, _)| given == key));
+                pairs.extend(args.params.pairs.iter().cloned());
+                (method, pairs)
+            }
+            (None, Some(name)) => (baking_method(name)?, args.params.pairs.clone()),
+            (None, None) => bail!("give --method or --recommended"),
+        };
+        let values = methods::parse_values(method, &pairs, Some(Stage::Bake))?;
+        let work = args.work.options()?;
+        let options = LoadOptions {
+            outside_files: args.allow_outside_files,
+            max_texture_pixels: Some(args.max_texture_pixels),
+            ..Default::default()
+        };
+        let mut scene = load(scene_path, args.lights.as_deref(), options)?;
+        replace_environment(&mut scene, args.environment.as_deref())?;
+        let out = args.out.clone().unwrap_or_else(|| default_bake_dir(scene_path, method.name()));
+        Ok(Prepared { scene, method, values, work, out })
+    }
+}
+
+impl BakeArgs {
+    /// The command line that gives these arguments (without --out), its paths absolute: what
+    /// a plan keeps for its shards and merge to bake the same.
+    pub(crate) fn argv(&self) -> Result<Vec<String>> {
+        let absolute = |p: &Path| std::path::absolute(p).map(|p| p.display().to_string()).with_context(|| format!("{}", p.display()));
+        let mut argv = Vec::new();
+        let mut push = |name: &str, value: Option<String>| {
+            argv.push(format!("--{name}"));
+            argv.extend(value);
+        };
+        if let Some(method) = &self.method {
+            push("method", Some(method.clone()));
+        }
+        for (name, path) in [("recommended", &self.recommended), ("environment", &self.environment), ("lights", &self.lights)] {
+            if let Some(path) = path {
+                push(name, Some(absolute(path)?));
+            }
+        }
+        if self.allow_outside_files {
+            push("allow-outside-files", None);
+        }
+        push("max-texture-pixels", Some(self.max_texture_pixels.to_string()));
+        argv.extend(self.work.argv());
+        argv.extend(self.params.argv());
+        argv.push(absolute(self.scene.as_deref().ok_or_else(|| anyhow::anyhow!("give the scene to bake"))?)?);
+        Ok(argv)
+    }
 }
 
 /// Bakes `scene` with `method` and `values` into the artifact folder `out`; returns a summary

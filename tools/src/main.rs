@@ -22,6 +22,8 @@ mod rays;
 mod reference;
 mod render;
 mod report;
+mod shards;
+mod slurm;
 mod view;
 
 #[derive(Parser)]
@@ -34,7 +36,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Precompute a method's data for a scene into a bake artifact folder.
-    Bake(bake::BakeArgs),
+    Bake(bake::BakeCommand),
     /// Render a scene with the Vulkan renderer (headless) to EXR and PNG.
     Render(render::RenderArgs),
     /// Render the ground truth with the CPU path tracer to a layered EXR (direct, indirect, combined).

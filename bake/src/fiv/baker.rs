@@ -8,9 +8,11 @@ use crate::bvh::SceneBvh;
 use crate::environment::{face_point, lat_long_direction, Environment};
 use crate::scene::{Camera, Mesh, Scene};
 use crate::settings::SceneSettings;
+use crate::shards::Items;
 use crate::work::{with_threads, Progress, WorkOptions};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// The bake's parameters (spec fiv.md C6).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,9 +72,8 @@ pub fn bake_types(scene: &Scene, types: &[OccluderType], settings: &FivBakeSetti
     let environment = checked(scene, settings)?;
     with_threads(work.threads, || {
         let terms = environment_terms(environment, settings.difmap_width);
-        let tables =
-            types.iter().map(|t| occluder_table(&scene.meshes[t.meshes[0]], environment, settings, work)).collect::<Result<_, _>>()?;
-        Ok(FivBake { environment: terms, tables })
+        let shapes = types.iter().map(|t| Shape::new(&scene.meshes[t.meshes[0]], settings, work)).collect::<Result<Vec<_>, _>>()?;
+        Ok(FivBake { environment: terms, tables: tables(shapes, environment, settings, work)? })
     })
 }
 
@@ -96,63 +97,117 @@ pub fn environment_terms(environment: &Environment, difmap_width: u32) -> Enviro
     EnvironmentTerms { difmap_width, difmap, fiv }
 }
 
-/// The table of the type whose shape `mesh` has.
-pub fn occluder_table(
-    mesh: &Mesh,
+/// An occluder type's shape alone, its bounding-sphere centre at the origin, and its table
+/// before its samples.
+struct Shape {
+    bvh: SceneBvh,
+    table: OccluderTable,
+}
+
+impl Shape {
+    fn new(mesh: &Mesh, settings: &FivBakeSettings, work: &WorkOptions) -> Result<Shape, String> {
+        let (centre, radius) = bounding_sphere(&mesh.positions);
+        let bvh = SceneBvh::build(&alone(mesh, centre), work.ray_backend)?;
+        let table = OccluderTable {
+            grid: settings.grid,
+            radius,
+            distance_min: settings.distance_min * radius,
+            distance_max: settings.distance_max * radius,
+            fiv: Vec::new(),
+            valid: Vec::new(),
+            surface: Vec::new(),
+            surface_valid: Vec::new(),
+        };
+        Ok(Shape { bvh, table })
+    }
+
+    /// Samples of its free table and of its surface table.
+    fn samples(&self) -> [u64; 2] {
+        let g = self.table.grid;
+        [g.samples() as u64, (self.table.surface_shells() * g.azimuths * g.polar) as u64]
+    }
+
+    /// Sample `s` of its free table (`surface` false) or its surface table: the masked sum and
+    /// whether the sample is valid.
+    fn sample(&self, environment: &Environment, settings: &FivBakeSettings, surface: bool, s: u32) -> ([Vec3; 3], bool) {
+        let (g, table, radius) = (self.table.grid, &self.table, self.table.radius);
+        let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
+        let v = table.distance(k) * g.direction(i, j);
+        match surface {
+            false if inside(&self.bvh, -v) => ([Vec3::ZERO; 3], false),
+            false => (masked_sum(&self.bvh, environment, v, radius, settings.mask_supersample, Vec3::ZERO), true),
+            true => match surface_point(&self.bvh, -v) {
+                Some((point, normal)) => (masked_sum(&self.bvh, environment, -point, radius, settings.mask_supersample, normal), true),
+                None => ([Vec3::ZERO; 3], false),
+            },
+        }
+    }
+}
+
+/// Values of a table sample as the gather keeps it: its three sums, then 1 where it is valid.
+const SAMPLE_VALUES: usize = 10;
+
+/// Every type's free and surface tables: their samples are the bake's work items, a table
+/// a chunk.
+fn tables(
+    shapes: Vec<Shape>,
     environment: &Environment,
     settings: &FivBakeSettings,
     work: &WorkOptions,
-) -> Result<OccluderTable, String> {
-    let (centre, radius) = bounding_sphere(&mesh.positions);
-    let bvh = SceneBvh::build(&alone(mesh, centre), work.ray_backend)?;
-    let table = OccluderTable {
-        grid: settings.grid,
-        radius,
-        distance_min: settings.distance_min * radius,
-        distance_max: settings.distance_max * radius,
-        fiv: Vec::new(),
-        valid: Vec::new(),
-        surface: Vec::new(),
-        surface_valid: Vec::new(),
+) -> Result<Vec<OccluderTable>, String> {
+    let ends: Vec<u64> = shapes
+        .iter()
+        .flat_map(Shape::samples)
+        .scan(0, |end, n| {
+            *end += n;
+            Some(*end)
+        })
+        .collect();
+    let items = Items::chunked::<f32>(SAMPLE_VALUES, ends.clone());
+    let mut progress = Progress::new(items.count, "fiv tables", work.progress);
+    let mut tables: Vec<OccluderTable> = shapes.iter().map(|s| s.table.clone()).collect();
+    let make = |range: Range<u64>| {
+        let chunk = ends.partition_point(|&end| end <= range.start);
+        let start = if chunk == 0 { 0 } else { ends[chunk - 1] };
+        let shape = &shapes[chunk / 2];
+        let samples = (range.start - start) as u32..(range.end - start) as u32;
+        let sums = every_sample(work, samples, &progress, |s| shape.sample(environment, settings, chunk % 2 == 1, s))?;
+        Ok(sums.iter().flat_map(|(sum, valid)| sum.iter().flat_map(|v| v.to_array()).chain([*valid as u32 as f32])).collect())
     };
-    let g = settings.grid;
-    let surface_samples = table.surface_shells() * g.azimuths * g.polar;
-    let mut progress = Progress::new(g.samples() as u64 + surface_samples as u64, &format!("fiv table of {}", mesh.name), work.progress);
-    let (fiv, valid) = every_sample(work, g.samples() as u32, &progress, |s| {
-        let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
-        let v = table.distance(k) * g.direction(i, j);
-        match inside(&bvh, -v) {
-            true => ([Vec3::ZERO; 3], false),
-            false => (masked_sum(&bvh, environment, v, radius, settings.mask_supersample, Vec3::ZERO), true),
+    let mut taken = 0;
+    let take = |rows: Vec<f32>| {
+        let (sums, valid) =
+            rows.chunks_exact(SAMPLE_VALUES).map(|r| ([0, 3, 6].map(|c| Vec3::from_slice(&r[c..c + 3])), r[9] != 0.0)).unzip();
+        let table = &mut tables[taken / 2];
+        match taken % 2 {
+            0 => (table.fiv, table.valid) = (sums, valid),
+            _ => (table.surface, table.surface_valid) = (sums, valid),
         }
-    })?;
-    let (surface, surface_valid) = every_sample(work, surface_samples, &progress, |s| {
-        let (i, j, k) = (s % g.azimuths, (s / g.azimuths) % g.polar, s / (g.azimuths * g.polar));
-        match surface_point(&bvh, -table.distance(k) * g.direction(i, j)) {
-            Some((point, normal)) => (masked_sum(&bvh, environment, -point, radius, settings.mask_supersample, normal), true),
-            None => ([Vec3::ZERO; 3], false),
-        }
-    })?;
+        taken += 1;
+        Ok(())
+    };
+    work.gather(&items, make, take)?;
     progress.finish();
-    Ok(OccluderTable { fiv, valid, surface, surface_valid, ..table })
+    Ok(tables)
 }
 
 /// Table samples a pass takes before the time limit is looked at.
 const SAMPLES_PER_PASS: u32 = 1024;
 
-/// `sample(s)` for every s in 0..total, in passes that the time limit stops: a table needs
+/// `sample(s)` for every s of `samples`, in passes that the time limit stops: a table needs
 /// every sample, so a cut one is refused.
 fn every_sample(
     work: &WorkOptions,
-    total: u32,
+    samples: Range<u32>,
     progress: &Progress,
     sample: impl Fn(u32) -> ([Vec3; 3], bool) + Sync,
-) -> Result<(Vec<[Vec3; 3]>, Vec<bool>), String> {
+) -> Result<Vec<([Vec3; 3], bool)>, String> {
+    let total = samples.len() as u32;
     let mut values = Vec::with_capacity(total as usize);
     let taken = work.in_passes(total, SAMPLES_PER_PASS, |range| {
         values.par_extend(range.into_par_iter().map(|s| {
             progress.inc(1);
-            sample(s)
+            sample(samples.start + s)
         }));
     });
     if taken < total {
@@ -160,7 +215,7 @@ fn every_sample(
             "--time-limit ran out after {taken} of {total} samples of an occluder table, which needs every one: give a coarser --grid or a longer --time-limit"
         ));
     }
-    Ok(values.into_iter().unzip())
+    Ok(values)
 }
 
 /// The surface point nearest `point` along its radial line (towards the centre or away

@@ -11,9 +11,11 @@ use super::variance::{ExplainedVariance, VarianceSums};
 use super::{compress_zone, error_sums, ratio, vertex_normals, vertex_positions, zone_share, Gatherer, LightCloud, Vectors};
 use crate::bvh::SceneBvh;
 use crate::scene::Scene;
+use crate::shards::Items;
 use crate::work::{Progress, WorkOptions};
 use glam::Vec3;
 use std::fs::File;
+use std::ops::Range;
 use std::os::unix::fs::FileExt;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
@@ -160,14 +162,28 @@ pub fn gather_zones(gatherer: &Gatherer, zones: &[Vec<u32>], samples: u32, store
     let left = work.time_limit.map(|limit| limit.saturating_sub(work.started.map_or(Duration::ZERO, |s| s.elapsed())));
     let share = |zone: &[u32]| zone.len() as f64 / gatherer.vertices().max(1) as f64;
     let (mut taken, mut scale) = (samples, 0f32);
-    for (z, zone) in zones.iter().enumerate() {
-        let limit = left.filter(|_| z == 0).map(|left| left.mul_f64(share(zone)));
+    let members = zones.concat();
+    let ends: Vec<u64> = zones
+        .iter()
+        .scan(0u64, |end, zone| {
+            *end += zone.len() as u64;
+            Some(*end)
+        })
+        .collect();
+    let items = Items::chunked::<f32>(gatherer.row_values(), ends.clone());
+    let make = |range: Range<u64>| {
+        let z = ends.partition_point(|&end| end <= range.start);
+        let limit = left.filter(|_| z == 0).map(|left| left.mul_f64(share(&zones[z])));
         let zone_work = WorkOptions { time_limit: limit, started: None, ..*work };
-        let (rows, zone_taken) = gatherer.rows(zone, taken, &zone_work, &progress);
+        let (rows, zone_taken) = gatherer.rows(&members[range.start as usize..range.end as usize], taken, &zone_work, &progress);
         taken = zone_taken;
+        Ok(rows)
+    };
+    let take = |rows: Vec<f32>| {
         scale = rows.iter().fold(scale, |m, &x| m.max(x));
-        store.push(rows)?;
-    }
+        store.push(rows)
+    };
+    work.gather(&items, make, take)?;
     progress.finish();
     Ok((taken, scale))
 }

@@ -14,9 +14,11 @@ use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
 use crate::settings::first_failed_check;
+use crate::shards::Items;
 use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -167,22 +169,31 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
     settings.validate()?;
     let estimator = Estimator { scene, bvh, settings, average_albedo: average_albedo(scene) };
     let covered: Vec<u32> = (0..atlas.texels.len() as u32).filter(|&t| atlas.texels[t as usize].coverage > 0.0).collect();
-    let mut sums = vec![Vec3::ZERO; covered.len()];
     let mut progress = Progress::new(covered.len() as u64 * settings.rays_per_texel as u64, "obscurance", settings.work.progress);
     let start = Instant::now();
-    let taken = settings.work.in_passes(settings.rays_per_texel, RAYS_PER_PASS, |rays| {
-        sums.par_chunks_mut(256).zip(covered.par_chunks(256)).for_each(|(sums, texels)| {
-            for (sum, &texel) in sums.iter_mut().zip(texels) {
-                *sum += texel_rays(&estimator, atlas, texel, rays.clone());
-            }
-            progress.inc(texels.len() as u64 * rays.len() as u64);
-        });
-    });
-    progress.finish();
+    let mut taken = settings.rays_per_texel;
     let mut values = vec![Vec3::ZERO; atlas.texels.len()];
-    for (&texel, sum) in covered.iter().zip(&sums) {
-        values[texel as usize] = *sum / taken as f32;
-    }
+    let make = |range: Range<u64>| {
+        let texels = &covered[range.start as usize..range.end as usize];
+        let mut sums = vec![Vec3::ZERO; texels.len()];
+        taken = settings.work.in_passes(settings.rays_per_texel, RAYS_PER_PASS, |rays| {
+            sums.par_chunks_mut(256).zip(texels.par_chunks(256)).for_each(|(sums, texels)| {
+                for (sum, &texel) in sums.iter_mut().zip(texels) {
+                    *sum += texel_rays(&estimator, atlas, texel, rays.clone());
+                }
+                progress.inc(texels.len() as u64 * rays.len() as u64);
+            });
+        });
+        Ok(sums.iter().flat_map(|sum| (*sum / taken as f32).to_array()).collect())
+    };
+    let take = |rows: Vec<f32>| {
+        for (&texel, value) in covered.iter().zip(rows.chunks_exact(3)) {
+            values[texel as usize] = Vec3::from_slice(value);
+        }
+        Ok(())
+    };
+    settings.work.gather(&Items::whole::<f32>(covered.len() as u64, 3), make, take)?;
+    progress.finish();
     Ok(ObscuranceMap {
         values,
         rays_per_texel: taken,

@@ -305,6 +305,18 @@ impl<const BAKE: bool> ParamArgs<BAKE> {
         let stage = if BAKE { Stage::Bake } else { Stage::Render };
         all_params(&super::METHODS).into_iter().filter(|p| p.stage == stage).collect()
     }
+
+    /// The parameters as the command line that gives them (a flag without its value).
+    pub fn argv(&self) -> Vec<String> {
+        let flag = |name: &str| Self::params().iter().any(|p| p.name == name && matches!(p.kind, Kind::Flag));
+        self.pairs
+            .iter()
+            .flat_map(|(name, value)| match flag(name) {
+                true => vec![format!("--{name}")],
+                false => vec![format!("--{name}"), value.clone()],
+            })
+            .collect()
+    }
 }
 
 impl<const BAKE: bool> clap::FromArgMatches for ParamArgs<BAKE> {

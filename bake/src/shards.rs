@@ -1,0 +1,473 @@
+//! A bake split into shards (docs/CLUSTER.md): every method's bake makes its long work's rows
+//! through [`WorkOptions::gather`](crate::work::WorkOptions::gather), one row of fixed width per
+//! work item (a texel, a vertex), each row a function of its item and the seed alone. A plan
+//! runs the bake up to its gather, records the items and their sampled costs and stops; a
+//! shard runs it again and makes the rows of its range of items into a part; the merge runs it
+//! once more, reading every row from the parts instead of making it, and reduces. The rows are
+//! the same bytes whoever made them, so the merged artifact is the one-process bake's.
+
+use crate::artifact::{checksum, file_checksum};
+use crate::outputs::Outputs;
+use bytemuck::Pod;
+use serde_json::{json, Value};
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// What a bake's gather makes: `count` items of `width` values each (f32 or f64, as the bake
+/// keeps them), made and taken in the pieces `chunks` ends (ascending, the last `count`): a
+/// light cloud's zones, FIV's tables, or one piece.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Items {
+    pub count: u64,
+    pub width: usize,
+    /// Bytes a value takes (4 or 8).
+    pub value_bytes: usize,
+    pub chunks: Vec<u64>,
+}
+
+impl Items {
+    /// Items in one piece, of `width` values of `T`.
+    pub fn whole<T>(count: u64, width: usize) -> Items {
+        Items::chunked::<T>(width, vec![count])
+    }
+
+    /// Items in the pieces `chunks` ends, of `width` values of `T`.
+    pub fn chunked<T>(width: usize, chunks: Vec<u64>) -> Items {
+        Items { count: chunks.last().copied().unwrap_or(0), width, value_bytes: std::mem::size_of::<T>(), chunks }
+    }
+
+    /// Bytes of the rows of `items` items.
+    fn bytes(&self, items: u64) -> u64 {
+        items * (self.width * self.value_bytes) as u64
+    }
+
+    /// The parts of `range` each within one chunk, in order.
+    fn pieces(&self, range: Range<u64>) -> Vec<Range<u64>> {
+        let mut start = range.start;
+        let mut pieces = Vec::new();
+        for &end in &self.chunks {
+            if start >= range.end {
+                break;
+            }
+            if end > start {
+                pieces.push(start..end.min(range.end));
+                start = end.min(range.end);
+            }
+        }
+        pieces
+    }
+
+    /// Every chunk's range, empty ones too.
+    fn chunk_ranges(&self) -> Vec<Range<u64>> {
+        let starts = std::iter::once(0).chain(self.chunks.iter().copied());
+        starts.zip(&self.chunks).map(|(start, &end)| start..end).collect()
+    }
+
+    fn json(&self) -> Value {
+        json!({ "count": self.count, "width": self.width, "value_bytes": self.value_bytes, "chunks": self.chunks })
+    }
+}
+
+/// The error a plan's or a shard's bake ends with once its gather is done: the caller takes it
+/// as success (`stopped`).
+pub const STOPPED: &str = "the bake stopped after its gather, as a plan or a shard does";
+
+/// Whether a bake's error is the stop a plan or a shard asks for.
+pub fn stopped(error: &str) -> bool {
+    error.contains(STOPPED)
+}
+
+/// What the gather does in a bake that is part of a sharded one.
+pub enum Role {
+    /// Records the items and their costs, sampled on `strata` stretches, then stops.
+    Plan { strata: u64, found: Mutex<Option<Planned>> },
+    /// Makes the rows of `range` into the part `rows`, then stops.
+    Shard { range: Range<u64>, rows: PathBuf, made: Mutex<Option<Made>> },
+    /// Reads every row from `parts` (their rows files, in range order) instead of making it.
+    Merge { parts: Vec<PathBuf> },
+}
+
+impl std::fmt::Debug for Role {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Role::Plan { .. } => "plan",
+            Role::Shard { .. } => "shard",
+            Role::Merge { .. } => "merge",
+        })
+    }
+}
+
+/// The one role a process has: compared by identity.
+impl PartialEq for Role {
+    fn eq(&self, other: &Role) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+/// What a plan's gather found.
+#[derive(Clone, Debug)]
+pub struct Planned {
+    pub items: Items,
+    /// Seconds per item of each stratum, sampled: (stratum, seconds per item).
+    pub costs: Vec<(Range<u64>, f64)>,
+}
+
+/// What a shard's gather wrote.
+#[derive(Clone, Debug)]
+pub struct Made {
+    pub items: Items,
+    pub bytes: u64,
+    pub checksum: String,
+}
+
+/// Items a plan times in each stratum: one in this many (at least one).
+const SAMPLED_SHARE: u64 = 64;
+
+/// Runs a gather in `role` (None: the whole bake): `make` makes the rows of a range of items
+/// within one chunk, `take` takes every chunk's rows in order.
+pub fn gather<T: Pod>(
+    role: Option<&Role>,
+    items: &Items,
+    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+    mut take: impl FnMut(Vec<T>) -> Result<(), String>,
+) -> Result<(), String> {
+    if items.value_bytes != std::mem::size_of::<T>() {
+        return Err(format!("the gather's items hold {}-byte values, its rows {}-byte ones", items.value_bytes, std::mem::size_of::<T>()));
+    }
+    let mut checked = |range: Range<u64>| {
+        let rows = make(range.clone())?;
+        match rows.len() as u64 == (range.end - range.start) * items.width as u64 {
+            true => Ok(rows),
+            false => Err(format!("the gather made {} values for items {range:?} of width {}", rows.len(), items.width)),
+        }
+    };
+    match role {
+        None => items.chunk_ranges().into_iter().try_for_each(|chunk| take(checked(chunk)?)),
+        Some(Role::Plan { strata, found }) => {
+            *found.lock().unwrap_or_else(|e| e.into_inner()) =
+                Some(Planned { items: items.clone(), costs: sample(items, *strata, checked)? });
+            Err(STOPPED.into())
+        }
+        Some(Role::Shard { range, rows, made }) => {
+            if range.end > items.count {
+                return Err(format!("the shard's items {range:?} lie beyond the bake's {}: the plan is not this bake's", items.count));
+            }
+            let (bytes, checksum) = write_rows(rows, items, range.clone(), checked)?;
+            *made.lock().unwrap_or_else(|e| e.into_inner()) = Some(Made { items: items.clone(), bytes, checksum });
+            Err(STOPPED.into())
+        }
+        Some(Role::Merge { parts }) => {
+            let mut reader = PartsReader { parts: parts.iter(), current: None };
+            items.chunk_ranges().into_iter().try_for_each(|chunk| take(reader.read((chunk.end - chunk.start) as usize * items.width)?))?;
+            reader.finish()
+        }
+    }
+}
+
+/// The seconds per item of `strata` equal stretches of the items, each timed on its first
+/// items (one in [`SAMPLED_SHARE`]).
+fn sample<T>(
+    items: &Items,
+    strata: u64,
+    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+) -> Result<Vec<(Range<u64>, f64)>, String> {
+    let strata = strata.clamp(1, items.count.max(1));
+    let mut costs = Vec::new();
+    for s in 0..strata {
+        let stratum = items.count * s / strata..items.count * (s + 1) / strata;
+        let taken = ((stratum.end - stratum.start) / SAMPLED_SHARE).max(1).min(stratum.end - stratum.start);
+        let start = Instant::now();
+        for piece in items.pieces(stratum.start..stratum.start + taken) {
+            make(piece)?;
+        }
+        costs.push((stratum, start.elapsed().as_secs_f64() / taken.max(1) as f64));
+    }
+    Ok(costs)
+}
+
+/// Writes the rows of `range` into `path` (staged, moved in place whole); returns its size
+/// and checksum.
+fn write_rows<T: Pod>(
+    path: &Path,
+    items: &Items,
+    range: Range<u64>,
+    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+) -> Result<(u64, String), String> {
+    let mut outputs = Outputs::new();
+    outputs
+        .file(path, |file| {
+            let mut writer = BufWriter::new(file);
+            for piece in items.pieces(range) {
+                let rows = make(piece)?;
+                writer.write_all(bytemuck::cast_slice(&rows)).map_err(|e| e.to_string())?;
+            }
+            writer.flush().map_err(|e| e.to_string())
+        })
+        .map_err(|e| e.to_string())?;
+    outputs.commit().map_err(|e| e.to_string())?;
+    let bytes = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?.len();
+    Ok((bytes, file_checksum(path).map_err(|e| format!("{}: {e}", path.display()))?))
+}
+
+/// The parts' rows read in order, as one stream.
+struct PartsReader<'p> {
+    parts: std::slice::Iter<'p, PathBuf>,
+    current: Option<(PathBuf, BufReader<File>)>,
+}
+
+impl PartsReader<'_> {
+    fn read<T: Pod>(&mut self, values: usize) -> Result<Vec<T>, String> {
+        let mut rows = vec![T::zeroed(); values];
+        let mut bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut rows);
+        while !bytes.is_empty() {
+            let Some((path, reader)) = &mut self.current else {
+                let path = self.parts.next().ok_or("the parts hold fewer rows than the bake's items: the plan is not this bake's")?;
+                let file = File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+                self.current = Some((path.clone(), BufReader::with_capacity(1 << 20, file)));
+                continue;
+            };
+            match reader.read(bytes).map_err(|e| format!("{}: {e}", path.display()))? {
+                0 => self.current = None,
+                n => bytes = &mut bytes[n..],
+            }
+        }
+        Ok(rows)
+    }
+
+    /// Refuses rows left over once every item is read.
+    fn finish(mut self) -> Result<(), String> {
+        let left = |(path, reader): &mut (PathBuf, BufReader<File>)| {
+            reader.read(&mut [0u8]).map(|n| n > 0).map_err(|e| format!("{}: {e}", path.display()))
+        };
+        if let Some(current) = &mut self.current {
+            if left(current)? {
+                return Err(format!("{}: holds more rows than its range: the plan is not this bake's", current.0.display()));
+            }
+        }
+        match self.parts.next() {
+            Some(path) => Err(format!("{}: holds rows beyond the bake's items: the plan is not this bake's", path.display())),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `shards` ranges over the items, each of about the same sampled cost; refused with more
+/// shards than items.
+pub fn balanced(planned: &Planned, shards: u64) -> Result<Vec<Range<u64>>, String> {
+    let count = planned.items.count;
+    if shards == 0 || shards > count {
+        return Err(format!("{shards} shards of {count} work items: give 1 to {count} shards"));
+    }
+    // A stratum that timed at zero still counts: every item costs something.
+    let floor = planned.costs.iter().map(|c| c.1).fold(0.0, f64::max).max(1e-12) * 1e-3;
+    let cost = |r: &Range<u64>, c: f64| (r.end - r.start) as f64 * c.max(floor);
+    let total: f64 = planned.costs.iter().map(|(r, c)| cost(r, *c)).sum();
+    let mut ends = Vec::new();
+    let mut before = 0.0;
+    for (stratum, c) in &planned.costs {
+        let here = cost(stratum, *c);
+        while (ends.len() as u64) < shards - 1 {
+            let goal = total * (ends.len() + 1) as f64 / shards as f64;
+            if goal > before + here {
+                break;
+            }
+            let into = ((goal - before) / c.max(floor)).round() as u64;
+            ends.push((stratum.start + into).min(stratum.end));
+        }
+        before += here;
+    }
+    ends.push(count);
+    // Every shard keeps at least one item.
+    let mut ranges = Vec::new();
+    let mut start = 0;
+    for (k, &end) in ends.iter().enumerate() {
+        let end = end.max(start + 1).min(count - (shards - 1 - k as u64));
+        ranges.push(start..end);
+        start = end;
+    }
+    Ok(ranges)
+}
+
+/// The plan file's name in a plan folder.
+pub const PLAN_FILE: &str = "plan.json";
+
+/// A plan as its file holds it.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub folder: PathBuf,
+    pub json: Value,
+    /// The checksum of the plan file's bytes: what each part names.
+    pub checksum: String,
+    pub ranges: Vec<Range<u64>>,
+}
+
+/// Which build of relume made a plan or part: its version and its program's checksum.
+pub fn build() -> Result<Value, String> {
+    let program = std::env::current_exe().map_err(|e| format!("cannot find relume's own program: {e}"))?;
+    let sum = file_checksum(&program).map_err(|e| format!("{}: {e}", program.display()))?;
+    Ok(json!({ "version": env!("CARGO_PKG_VERSION"), "program": sum }))
+}
+
+impl Plan {
+    /// The plan file's contents for `planned` split into `ranges`, with `facts` (the bake's
+    /// arguments, scene, settings) beside them.
+    pub fn contents(facts: Value, planned: &Planned, ranges: &[Range<u64>]) -> Result<Value, String> {
+        let costs: Vec<Value> = planned.costs.iter().map(|(r, c)| json!({ "items": [r.start, r.end], "seconds_per_item": c })).collect();
+        let seconds: f64 = planned.costs.iter().map(|(r, c)| (r.end - r.start) as f64 * c).sum();
+        Ok(json!({
+            "format": "relume bake plan",
+            "build": build()?,
+            "bake": facts,
+            "items": planned.items.json(),
+            "sampled_costs": costs,
+            "estimated_seconds": seconds,
+            "shards": ranges.iter().map(|r| json!([r.start, r.end])).collect::<Vec<_>>(),
+        }))
+    }
+
+    /// Reads the plan in `folder`, refusing one made by another build of relume.
+    pub fn read(folder: &Path) -> Result<Plan, String> {
+        let path = folder.join(PLAN_FILE);
+        let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e} (make the plan with `relume bake plan`)", path.display()))?;
+        let json: Value = serde_json::from_slice(&bytes)
+            .map_err(|e| format!("{}: not a plan ({e}): make it again with `relume bake plan`", path.display()))?;
+        if json["format"] != "relume bake plan" {
+            return Err(format!("{}: not a relume bake plan: make one with `relume bake plan`", path.display()));
+        }
+        if json["build"] != build()? {
+            return Err(format!(
+                "{}: made by relume {} (program {}); this is {}: run every shard and the merge with the program that made the plan, or plan again",
+                path.display(),
+                json["build"]["version"],
+                json["build"]["program"],
+                build()?
+            ));
+        }
+        let ranges = json["shards"]
+            .as_array()
+            .and_then(|shards| shards.iter().map(|r| Some(r[0].as_u64()?..r[1].as_u64()?)).collect::<Option<Vec<_>>>())
+            .ok_or_else(|| format!("{}: its shards are not ranges of items: plan again", path.display()))?;
+        Ok(Plan { folder: folder.to_path_buf(), json, checksum: checksum(&bytes), ranges })
+    }
+
+    /// The range of shard `index`, or a refusal naming the plan's shards.
+    pub fn range(&self, index: usize) -> Result<Range<u64>, String> {
+        self.ranges
+            .get(index)
+            .cloned()
+            .ok_or_else(|| format!("--index {index}: the plan {} has shards 0 to {}", self.folder.display(), self.ranges.len() - 1))
+    }
+
+    pub fn items(&self) -> Items {
+        let items = &self.json["items"];
+        let chunks = items["chunks"].as_array().map(|c| c.iter().filter_map(Value::as_u64).collect()).unwrap_or_default();
+        let number = |key: &str| items[key].as_u64().unwrap_or(0);
+        Items { count: number("count"), width: number("width") as usize, value_bytes: number("value_bytes") as usize, chunks }
+    }
+
+    /// Shard `index`'s rows file and manifest.
+    pub fn part_paths(&self, index: usize) -> (PathBuf, PathBuf) {
+        let parts = self.folder.join("parts");
+        (parts.join(format!("part-{index}.rows")), parts.join(format!("part-{index}.json")))
+    }
+
+    /// The manifest of shard `index`'s part, once its rows are written.
+    pub fn part_manifest(&self, index: usize, made: &Made) -> Value {
+        let range = &self.ranges[index];
+        json!({ "plan": self.checksum, "index": index, "items": [range.start, range.end], "rows": { "bytes": made.bytes, "checksum": made.checksum } })
+    }
+
+    /// Checks shard `index`'s part against this plan: its manifest names this plan and its
+    /// range, and its rows have the size and checksum the manifest records; refusals name the
+    /// part and the fix.
+    pub fn check_part(&self, index: usize) -> Result<(), String> {
+        let (rows, manifest) = self.part_paths(index);
+        let rerun = format!("run `relume bake shard {} --index {index}` again", self.folder.display());
+        let bytes = std::fs::read(&manifest).map_err(|e| format!("{}: part {index} is missing ({e}): {rerun}", manifest.display()))?;
+        let part: Value = serde_json::from_slice(&bytes)
+            .map_err(|e| format!("{}: not a part manifest ({e}): remove it and {rerun}", manifest.display()))?;
+        if part["plan"] != self.checksum.as_str() {
+            return Err(format!(
+                "{}: part {index} belongs to another plan ({}, this plan is {}): remove it and {rerun}",
+                manifest.display(),
+                part["plan"],
+                self.checksum
+            ));
+        }
+        let range = &self.ranges[index];
+        let bytes = self.items().bytes(range.end - range.start);
+        if part["index"] != index || part["items"] != json!([range.start, range.end]) || part["rows"]["bytes"] != bytes {
+            return Err(format!("{}: part {index}'s range or size is not the plan's: remove it and {rerun}", manifest.display()));
+        }
+        let size =
+            std::fs::metadata(&rows).map_err(|e| format!("{}: part {index}'s rows are missing ({e}): {rerun}", rows.display()))?.len();
+        let sum = file_checksum(&rows).map_err(|e| format!("{}: {e}", rows.display()))?;
+        if size != bytes || part["rows"]["checksum"] != sum.as_str() {
+            return Err(format!(
+                "{}: part {index}'s rows do not match its manifest ({size} bytes, checksum {sum}; the manifest says {} and {}): the part is damaged; remove it and {rerun}",
+                rows.display(),
+                part["rows"]["bytes"],
+                part["rows"]["checksum"]
+            ));
+        }
+        Ok(())
+    }
+
+    /// The shards whose parts are missing or do not check, each with why.
+    pub fn unfinished(&self) -> Vec<(usize, String)> {
+        (0..self.ranges.len()).filter_map(|i| self.check_part(i).err().map(|e| (i, e))).collect()
+    }
+
+    /// Refuses a plan whose shards do not cover its items once, in order.
+    pub fn check_cover(&self) -> Result<(), String> {
+        let count = self.items().count;
+        let mut next = 0;
+        for (i, r) in self.ranges.iter().enumerate() {
+            if r.start != next || r.end <= r.start {
+                return Err(format!(
+                    "{}: shard {i}'s items {r:?} do not follow on from {next}: plan again",
+                    self.folder.join(PLAN_FILE).display()
+                ));
+            }
+            next = r.end;
+        }
+        match next == count {
+            true => Ok(()),
+            false => Err(format!("{}: the shards cover {next} of {count} items: plan again", self.folder.join(PLAN_FILE).display())),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pieces_keep_within_chunks_and_cover_the_range() {
+        let items = Items::chunked::<f32>(1, vec![3, 3, 7, 10]);
+        assert_eq!(items.pieces(0..10), [0..3, 3..7, 7..10]);
+        assert_eq!(items.pieces(2..8), [2..3, 3..7, 7..8]);
+        assert_eq!(items.pieces(4..5), [4..5]);
+    }
+
+    /// Balanced ranges cover every item once, each shard at least one, and give a shard of
+    /// cheap items more of them than a shard of dear ones.
+    #[test]
+    fn balanced_ranges_cover_every_item_and_follow_the_costs() {
+        let items = Items::whole::<f32>(100, 3);
+        let planned = Planned { items: items.clone(), costs: vec![(0..50, 1.0), (50..100, 3.0)] };
+        let ranges = balanced(&planned, 4).unwrap();
+        assert_eq!(ranges.first().unwrap().start, 0);
+        assert_eq!(ranges.last().unwrap().end, 100);
+        assert!(ranges.windows(2).all(|w| w[0].end == w[1].start && w[0].end > w[0].start), "{ranges:?}");
+        assert!(ranges[0].end - ranges[0].start > ranges[3].end - ranges[3].start, "{ranges:?}");
+        assert_eq!(ranges[1].end, 67, "half the cost lies before item 50 + 50/3: {ranges:?}");
+        let few = Planned { items: Items::whole::<f32>(7, 1), costs: vec![(0..7, 0.0)] };
+        assert_eq!(balanced(&few, 7).unwrap(), (0..7).map(|i| i..i + 1).collect::<Vec<_>>());
+        assert!(balanced(&few, 8).unwrap_err().contains("8 shards of 7 work items"));
+    }
+}
