@@ -17,9 +17,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// What a bake's gather makes: `count` items of `width` values each (f32 or f64, as the bake
-/// keeps them), made and taken in the pieces `chunks` ends (ascending, the last `count`): a
-/// light cloud's zones, FIV's tables, or one piece.
+/// What one gather of a bake makes: `count` items of `width` values each (f32 or f64, as the
+/// bake keeps them), made and taken in the pieces `chunks` ends (ascending, the last `count`):
+/// a light cloud's zones, FIV's tables, or one piece. A bake may gather more than once (the
+/// light path maps: their obscurance, then their transfers): a gather `followed` by another
+/// is one whose rows nothing reads before that next gather.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Items {
     pub count: u64,
@@ -27,6 +29,7 @@ pub struct Items {
     /// Bytes a value takes (4 or 8).
     pub value_bytes: usize,
     pub chunks: Vec<u64>,
+    pub followed: bool,
 }
 
 impl Items {
@@ -37,7 +40,12 @@ impl Items {
 
     /// Items in the pieces `chunks` ends, of `width` values of `T`.
     pub fn chunked<T>(width: usize, chunks: Vec<u64>) -> Items {
-        Items { count: chunks.last().copied().unwrap_or(0), width, value_bytes: std::mem::size_of::<T>(), chunks }
+        Items { count: chunks.last().copied().unwrap_or(0), width, value_bytes: std::mem::size_of::<T>(), chunks, followed: false }
+    }
+
+    /// The same items, followed by another gather (`followed` true) or not.
+    pub fn followed(self, followed: bool) -> Items {
+        Items { followed, ..self }
     }
 
     /// Bytes of the rows of `items` items.
@@ -68,12 +76,31 @@ impl Items {
     }
 
     fn json(&self) -> Value {
-        json!({ "count": self.count, "width": self.width, "value_bytes": self.value_bytes, "chunks": self.chunks })
+        json!({ "count": self.count, "width": self.width, "value_bytes": self.value_bytes, "chunks": self.chunks, "followed": self.followed })
+    }
+
+    fn from_json(items: &Value) -> Option<Items> {
+        let number = |key: &str| items[key].as_u64();
+        let chunks = items["chunks"].as_array()?.iter().map(Value::as_u64).collect::<Option<Vec<u64>>>()?;
+        Some(Items {
+            count: number("count")?,
+            width: number("width")? as usize,
+            value_bytes: number("value_bytes")? as usize,
+            chunks,
+            followed: items["followed"].as_bool()?,
+        })
     }
 }
 
-/// The error a plan's or a shard's bake ends with once its gather is done: the caller takes it
-/// as success (`stopped`).
+/// The part of the bake's items `range` (numbered over every gather in turn) that falls in a
+/// gather of `count` items starting at `offset`, numbered within the gather.
+fn within(range: &Range<u64>, offset: u64, count: u64) -> Range<u64> {
+    let start = range.start.clamp(offset, offset + count);
+    start - offset..range.end.clamp(start, offset + count) - offset
+}
+
+/// The error a plan's or a shard's bake ends with once its last gather is done: the caller
+/// takes it as success (`stopped`).
 pub const STOPPED: &str = "the bake stopped after its gather, as a plan or a shard does";
 
 /// Whether a bake's error is the stop a plan or a shard asks for.
@@ -81,14 +108,14 @@ pub fn stopped(error: &str) -> bool {
     error.contains(STOPPED)
 }
 
-/// What the gather does in a bake that is part of a sharded one.
+/// What the gathers do in a bake that is part of a sharded one.
 pub enum Role {
-    /// Records the items and their costs, sampled on `strata` stretches, then stops.
-    Plan { strata: u64, found: Mutex<Option<Planned>> },
-    /// Makes the rows of `range` into the part `rows`, then stops.
-    Shard { range: Range<u64>, rows: PathBuf, made: Mutex<Option<Made>> },
-    /// Reads every row from `parts` (their rows files, in range order) instead of making it.
-    Merge { parts: Vec<PathBuf> },
+    /// Records each gather's items and their costs, sampled on `strata` stretches of each.
+    Plan { strata: u64, found: Mutex<Planned> },
+    /// Makes the rows of the items `range` into the part `index` in `folder`.
+    Shard { range: Range<u64>, folder: PathBuf, index: usize, made: Mutex<Vec<Made>> },
+    /// Reads every row from the parts instead of making it: `rows[gather][part]`.
+    Merge { rows: Vec<Vec<PathBuf>>, taken: Mutex<usize> },
 }
 
 impl std::fmt::Debug for Role {
@@ -108,15 +135,22 @@ impl PartialEq for Role {
     }
 }
 
-/// What a plan's gather found.
-#[derive(Clone, Debug)]
+/// What a plan's gathers found.
+#[derive(Clone, Debug, Default)]
 pub struct Planned {
-    pub items: Items,
-    /// Seconds per item of each stratum, sampled: (stratum, seconds per item).
+    pub gathers: Vec<Items>,
+    /// Seconds per item of each stratum, sampled, numbered over every gather in turn.
     pub costs: Vec<(Range<u64>, f64)>,
 }
 
-/// What a shard's gather wrote.
+impl Planned {
+    /// Items over every gather.
+    pub fn count(&self) -> u64 {
+        self.gathers.iter().map(|g| g.count).sum()
+    }
+}
+
+/// What one gather of a shard wrote.
 #[derive(Clone, Debug)]
 pub struct Made {
     pub items: Items,
@@ -126,6 +160,10 @@ pub struct Made {
 
 /// Items a plan times in each stratum: one in this many (at least one).
 const SAMPLED_SHARE: u64 = 64;
+
+fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 /// Runs a gather in `role` (None: the whole bake): `make` makes the rows of a range of items
 /// within one chunk, `take` takes every chunk's rows in order.
@@ -148,24 +186,50 @@ pub fn gather<T: Pod>(
     match role {
         None => items.chunk_ranges().into_iter().try_for_each(|chunk| take(checked(chunk)?)),
         Some(Role::Plan { strata, found }) => {
-            *found.lock().unwrap_or_else(|e| e.into_inner()) =
-                Some(Planned { items: items.clone(), costs: sample(items, *strata, checked)? });
-            Err(STOPPED.into())
+            let offset = locked(found).count();
+            let costs = sample(items, *strata, checked)?;
+            let mut found = locked(found);
+            found.costs.extend(costs.into_iter().map(|(r, c)| (r.start + offset..r.end + offset, c)));
+            found.gathers.push(items.clone());
+            drop(found);
+            go_on(items, take)
         }
-        Some(Role::Shard { range, rows, made }) => {
-            if range.end > items.count {
-                return Err(format!("the shard's items {range:?} lie beyond the bake's {}: the plan is not this bake's", items.count));
-            }
-            let (bytes, checksum) = write_rows(rows, items, range.clone(), checked)?;
-            *made.lock().unwrap_or_else(|e| e.into_inner()) = Some(Made { items: items.clone(), bytes, checksum });
-            Err(STOPPED.into())
+        Some(Role::Shard { range, folder, index, made }) => {
+            let gather = locked(made).len();
+            let offset: u64 = locked(made).iter().map(|m| m.items.count).sum();
+            let path = part_rows(folder, *index, gather);
+            let (bytes, checksum) = write_rows(&path, items, within(range, offset, items.count), checked)?;
+            locked(made).push(Made { items: items.clone(), bytes, checksum });
+            go_on(items, take)
         }
-        Some(Role::Merge { parts }) => {
+        Some(Role::Merge { rows, taken }) => {
+            let gather = {
+                let mut taken = locked(taken);
+                *taken += 1;
+                *taken - 1
+            };
+            let parts = rows.get(gather).ok_or("the bake gathers more often than its plan: the plan is not this bake's")?;
             let mut reader = PartsReader { parts: parts.iter(), current: None };
             items.chunk_ranges().into_iter().try_for_each(|chunk| take(reader.read((chunk.end - chunk.start) as usize * items.width)?))?;
             reader.finish()
         }
     }
+}
+
+/// After a plan's or a shard's gather: on to the next gather with rows nothing reads, or the
+/// stop after the last.
+fn go_on<T: Pod>(items: &Items, mut take: impl FnMut(Vec<T>) -> Result<(), String>) -> Result<(), String> {
+    match items.followed {
+        true => {
+            items.chunk_ranges().into_iter().try_for_each(|chunk| take(vec![T::zeroed(); (chunk.end - chunk.start) as usize * items.width]))
+        }
+        false => Err(STOPPED.into()),
+    }
+}
+
+/// The rows file of gather `gather` of part `index` in the parts' `folder`.
+pub fn part_rows(folder: &Path, index: usize, gather: usize) -> PathBuf {
+    folder.join(format!("part-{index}-{gather}.rows"))
 }
 
 /// The seconds per item of `strata` equal stretches of the items, each timed on its first
@@ -238,27 +302,25 @@ impl PartsReader<'_> {
         Ok(rows)
     }
 
-    /// Refuses rows left over once every item is read.
-    fn finish(mut self) -> Result<(), String> {
-        let left = |(path, reader): &mut (PathBuf, BufReader<File>)| {
-            reader.read(&mut [0u8]).map(|n| n > 0).map_err(|e| format!("{}: {e}", path.display()))
-        };
-        if let Some(current) = &mut self.current {
-            if left(current)? {
-                return Err(format!("{}: holds more rows than its range: the plan is not this bake's", current.0.display()));
+    /// Refuses rows left over once every item is read (a part whose range lies past this
+    /// gather holds none of its rows).
+    fn finish(self) -> Result<(), String> {
+        let opened =
+            |path: &PathBuf| File::open(path).map(|f| (path.clone(), BufReader::new(f))).map_err(|e| format!("{}: {e}", path.display()));
+        let rest = self.parts.map(opened).collect::<Result<Vec<_>, _>>()?;
+        for (path, mut reader) in self.current.into_iter().chain(rest) {
+            if reader.read(&mut [0u8]).map_err(|e| format!("{}: {e}", path.display()))? > 0 {
+                return Err(format!("{}: holds more rows than its range: the plan is not this bake's", path.display()));
             }
         }
-        match self.parts.next() {
-            Some(path) => Err(format!("{}: holds rows beyond the bake's items: the plan is not this bake's", path.display())),
-            None => Ok(()),
-        }
+        Ok(())
     }
 }
 
 /// `shards` ranges over the items, each of about the same sampled cost; refused with more
 /// shards than items.
 pub fn balanced(planned: &Planned, shards: u64) -> Result<Vec<Range<u64>>, String> {
-    let count = planned.items.count;
+    let count = planned.count();
     if shards == 0 || shards > count {
         return Err(format!("{shards} shards of {count} work items: give 1 to {count} shards"));
     }
@@ -303,6 +365,7 @@ pub struct Plan {
     /// The checksum of the plan file's bytes: what each part names.
     pub checksum: String,
     pub ranges: Vec<Range<u64>>,
+    pub gathers: Vec<Items>,
 }
 
 /// Which build of relume made a plan or part: its version and its program's checksum.
@@ -322,36 +385,60 @@ impl Plan {
             "format": "relume bake plan",
             "build": build()?,
             "bake": facts,
-            "items": planned.items.json(),
+            "gathers": planned.gathers.iter().map(Items::json).collect::<Vec<_>>(),
             "sampled_costs": costs,
             "estimated_seconds": seconds,
             "shards": ranges.iter().map(|r| json!([r.start, r.end])).collect::<Vec<_>>(),
         }))
     }
 
-    /// Reads the plan in `folder`, refusing one made by another build of relume.
+    /// Reads the plan in `folder`, refusing one made by another build of relume or whose
+    /// shards do not cover its items once, in order.
     pub fn read(folder: &Path) -> Result<Plan, String> {
         let path = folder.join(PLAN_FILE);
         let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e} (make the plan with `relume bake plan`)", path.display()))?;
-        let json: Value = serde_json::from_slice(&bytes)
-            .map_err(|e| format!("{}: not a plan ({e}): make it again with `relume bake plan`", path.display()))?;
+        let again = |what: &str| format!("{}: {what}: make the plan again with `relume bake plan`", path.display());
+        let json: Value = serde_json::from_slice(&bytes).map_err(|e| again(&format!("not a plan ({e})")))?;
         if json["format"] != "relume bake plan" {
-            return Err(format!("{}: not a relume bake plan: make one with `relume bake plan`", path.display()));
+            return Err(again("not a relume bake plan"));
         }
-        if json["build"] != build()? {
+        let build = build()?;
+        if json["build"] != build {
             return Err(format!(
-                "{}: made by relume {} (program {}); this is {}: run every shard and the merge with the program that made the plan, or plan again",
+                "{}: made by relume {} (program {}), not by this one ({}, program {}): run every shard and the merge with the program that made the plan, or plan again",
                 path.display(),
                 json["build"]["version"],
                 json["build"]["program"],
-                build()?
+                build["version"],
+                build["program"]
             ));
         }
         let ranges = json["shards"]
             .as_array()
             .and_then(|shards| shards.iter().map(|r| Some(r[0].as_u64()?..r[1].as_u64()?)).collect::<Option<Vec<_>>>())
-            .ok_or_else(|| format!("{}: its shards are not ranges of items: plan again", path.display()))?;
-        Ok(Plan { folder: folder.to_path_buf(), json, checksum: checksum(&bytes), ranges })
+            .ok_or_else(|| again("its shards are not ranges of items"))?;
+        let gathers = json["gathers"]
+            .as_array()
+            .and_then(|g| g.iter().map(Items::from_json).collect::<Option<Vec<_>>>())
+            .ok_or_else(|| again("its gathers do not read"))?;
+        let plan = Plan { folder: folder.to_path_buf(), json, checksum: checksum(&bytes), ranges, gathers };
+        plan.check_cover().map_err(|e| again(&e))?;
+        Ok(plan)
+    }
+
+    fn check_cover(&self) -> Result<(), String> {
+        let count: u64 = self.gathers.iter().map(|g| g.count).sum();
+        let mut next = 0;
+        for (i, r) in self.ranges.iter().enumerate() {
+            if r.start != next || r.end <= r.start {
+                return Err(format!("shard {i}'s items {r:?} do not follow on from {next}"));
+            }
+            next = r.end;
+        }
+        match (next == count, self.ranges.is_empty()) {
+            (true, false) => Ok(()),
+            _ => Err(format!("its shards cover {next} of {count} items")),
+        }
     }
 
     /// The range of shard `index`, or a refusal naming the plan's shards.
@@ -362,57 +449,80 @@ impl Plan {
             .ok_or_else(|| format!("--index {index}: the plan {} has shards 0 to {}", self.folder.display(), self.ranges.len() - 1))
     }
 
-    pub fn items(&self) -> Items {
-        let items = &self.json["items"];
-        let chunks = items["chunks"].as_array().map(|c| c.iter().filter_map(Value::as_u64).collect()).unwrap_or_default();
-        let number = |key: &str| items[key].as_u64().unwrap_or(0);
-        Items { count: number("count"), width: number("width") as usize, value_bytes: number("value_bytes") as usize, chunks }
+    /// The folder of the shards' parts.
+    pub fn parts(&self) -> PathBuf {
+        self.folder.join("parts")
     }
 
-    /// Shard `index`'s rows file and manifest.
-    pub fn part_paths(&self, index: usize) -> (PathBuf, PathBuf) {
-        let parts = self.folder.join("parts");
-        (parts.join(format!("part-{index}.rows")), parts.join(format!("part-{index}.json")))
+    /// Shard `index`'s manifest.
+    pub fn part_manifest_path(&self, index: usize) -> PathBuf {
+        self.parts().join(format!("part-{index}.json"))
     }
 
-    /// The manifest of shard `index`'s part, once its rows are written.
-    pub fn part_manifest(&self, index: usize, made: &Made) -> Value {
+    /// Each gather's part of shard `index`'s items, numbered within the gather.
+    fn local_ranges(&self, index: usize) -> Vec<Range<u64>> {
+        let mut offset = 0;
+        self.gathers
+            .iter()
+            .map(|g| {
+                offset += g.count;
+                within(&self.ranges[index], offset - g.count, g.count)
+            })
+            .collect()
+    }
+
+    /// The manifest of shard `index`'s part, once its rows are written; refused when the bake
+    /// gathered other items than the plan's.
+    pub fn part_manifest(&self, index: usize, made: &[Made]) -> Result<Value, String> {
+        let items: Vec<Items> = made.iter().map(|m| m.items.clone()).collect();
+        if items != self.gathers {
+            return Err(format!(
+                "the bake's work items are not the plan's {} ({items:?} against {:?}): plan again",
+                self.folder.display(),
+                self.gathers
+            ));
+        }
         let range = &self.ranges[index];
-        json!({ "plan": self.checksum, "index": index, "items": [range.start, range.end], "rows": { "bytes": made.bytes, "checksum": made.checksum } })
+        let gathers: Vec<Value> = made.iter().map(|m| json!({ "bytes": m.bytes, "checksum": m.checksum })).collect();
+        Ok(json!({ "plan": self.checksum, "index": index, "items": [range.start, range.end], "gathers": gathers }))
     }
 
     /// Checks shard `index`'s part against this plan: its manifest names this plan and its
-    /// range, and its rows have the size and checksum the manifest records; refusals name the
-    /// part and the fix.
+    /// range, and each gather's rows have the size and checksum the manifest records;
+    /// refusals name the part and the fix.
     pub fn check_part(&self, index: usize) -> Result<(), String> {
-        let (rows, manifest) = self.part_paths(index);
+        let manifest = self.part_manifest_path(index);
         let rerun = format!("run `relume bake shard {} --index {index}` again", self.folder.display());
         let bytes = std::fs::read(&manifest).map_err(|e| format!("{}: part {index} is missing ({e}): {rerun}", manifest.display()))?;
         let part: Value = serde_json::from_slice(&bytes)
-            .map_err(|e| format!("{}: not a part manifest ({e}): remove it and {rerun}", manifest.display()))?;
+            .map_err(|e| format!("{}: not a part's manifest ({e}): remove it and {rerun}", manifest.display()))?;
         if part["plan"] != self.checksum.as_str() {
             return Err(format!(
-                "{}: part {index} belongs to another plan ({}, this plan is {}): remove it and {rerun}",
+                "{}: part {index} belongs to another plan ({}; this plan is {}): remove it and {rerun}",
                 manifest.display(),
                 part["plan"],
                 self.checksum
             ));
         }
         let range = &self.ranges[index];
-        let bytes = self.items().bytes(range.end - range.start);
-        if part["index"] != index || part["items"] != json!([range.start, range.end]) || part["rows"]["bytes"] != bytes {
-            return Err(format!("{}: part {index}'s range or size is not the plan's: remove it and {rerun}", manifest.display()));
+        let sizes: Vec<u64> = self.local_ranges(index).iter().zip(&self.gathers).map(|(r, g)| g.bytes(r.end - r.start)).collect();
+        let recorded: Vec<Value> = sizes.iter().map(|&b| json!(b)).collect();
+        let listed: Vec<Value> = part["gathers"].as_array().into_iter().flatten().map(|g| g["bytes"].clone()).collect();
+        if part["index"] != index || part["items"] != json!([range.start, range.end]) || listed != recorded {
+            return Err(format!("{}: part {index}'s range or sizes are not the plan's: remove it and {rerun}", manifest.display()));
         }
-        let size =
-            std::fs::metadata(&rows).map_err(|e| format!("{}: part {index}'s rows are missing ({e}): {rerun}", rows.display()))?.len();
-        let sum = file_checksum(&rows).map_err(|e| format!("{}: {e}", rows.display()))?;
-        if size != bytes || part["rows"]["checksum"] != sum.as_str() {
-            return Err(format!(
-                "{}: part {index}'s rows do not match its manifest ({size} bytes, checksum {sum}; the manifest says {} and {}): the part is damaged; remove it and {rerun}",
-                rows.display(),
-                part["rows"]["bytes"],
-                part["rows"]["checksum"]
-            ));
+        for (gather, &expected) in sizes.iter().enumerate() {
+            let rows = part_rows(&self.parts(), index, gather);
+            let size =
+                std::fs::metadata(&rows).map_err(|e| format!("{}: part {index}'s rows are missing ({e}): {rerun}", rows.display()))?.len();
+            let sum = file_checksum(&rows).map_err(|e| format!("{}: {e}", rows.display()))?;
+            let wanted = &part["gathers"][gather]["checksum"];
+            if size != expected || wanted != sum.as_str() {
+                return Err(format!(
+                    "{}: part {index}'s rows do not match its manifest ({size} bytes, checksum {sum}; the manifest says {expected} bytes, {wanted}): the part is damaged; remove it and {rerun}",
+                    rows.display()
+                ));
+            }
         }
         Ok(())
     }
@@ -422,23 +532,15 @@ impl Plan {
         (0..self.ranges.len()).filter_map(|i| self.check_part(i).err().map(|e| (i, e))).collect()
     }
 
-    /// Refuses a plan whose shards do not cover its items once, in order.
-    pub fn check_cover(&self) -> Result<(), String> {
-        let count = self.items().count;
-        let mut next = 0;
-        for (i, r) in self.ranges.iter().enumerate() {
-            if r.start != next || r.end <= r.start {
-                return Err(format!(
-                    "{}: shard {i}'s items {r:?} do not follow on from {next}: plan again",
-                    self.folder.join(PLAN_FILE).display()
-                ));
-            }
-            next = r.end;
-        }
-        match next == count {
-            true => Ok(()),
-            false => Err(format!("{}: the shards cover {next} of {count} items: plan again", self.folder.join(PLAN_FILE).display())),
-        }
+    /// What the merge reads: every gather's rows files, part by part.
+    pub fn merge_role(&self) -> Role {
+        let rows = (0..self.gathers.len()).map(|g| (0..self.ranges.len()).map(|i| part_rows(&self.parts(), i, g)).collect()).collect();
+        Role::Merge { rows, taken: Mutex::new(0) }
+    }
+
+    /// What shard `index` does.
+    pub fn shard_role(&self, index: usize) -> Role {
+        Role::Shard { range: self.ranges[index].clone(), folder: self.parts(), index, made: Mutex::new(Vec::new()) }
     }
 }
 
@@ -459,14 +561,14 @@ mod tests {
     #[test]
     fn balanced_ranges_cover_every_item_and_follow_the_costs() {
         let items = Items::whole::<f32>(100, 3);
-        let planned = Planned { items: items.clone(), costs: vec![(0..50, 1.0), (50..100, 3.0)] };
+        let planned = Planned { gathers: vec![items], costs: vec![(0..50, 1.0), (50..100, 3.0)] };
         let ranges = balanced(&planned, 4).unwrap();
         assert_eq!(ranges.first().unwrap().start, 0);
         assert_eq!(ranges.last().unwrap().end, 100);
         assert!(ranges.windows(2).all(|w| w[0].end == w[1].start && w[0].end > w[0].start), "{ranges:?}");
         assert!(ranges[0].end - ranges[0].start > ranges[3].end - ranges[3].start, "{ranges:?}");
         assert_eq!(ranges[1].end, 67, "half the cost lies before item 50 + 50/3: {ranges:?}");
-        let few = Planned { items: Items::whole::<f32>(7, 1), costs: vec![(0..7, 0.0)] };
+        let few = Planned { gathers: vec![Items::whole::<f32>(7, 1)], costs: vec![(0..7, 0.0)] };
         assert_eq!(balanced(&few, 7).unwrap(), (0..7).map(|i| i..i + 1).collect::<Vec<_>>());
         assert!(balanced(&few, 8).unwrap_err().contains("8 shards of 7 work items"));
     }

@@ -102,12 +102,11 @@ fn plan(args: &PlanArgs) -> Result<()> {
     }
     refuse_foreign(&folder)?;
     let bake = Prepared::new(&args.bake)?;
-    let role = leak(Role::Plan { strata: STRATA, found: Mutex::new(None) });
+    let role = leak(Role::Plan { strata: STRATA, found: Mutex::new(Planned::default()) });
     eprintln!("plan: preparing the bake, then timing a sample of its work items ...");
     run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
-    let Role::Plan { found, .. } = role else { unreachable!() };
-    let planned: Planned =
-        found.lock().unwrap_or_else(|e| e.into_inner()).take().ok_or_else(|| anyhow!("the bake's gather did not run"))?;
+    let Role::Plan { found, .. } = role else { unreachable!("the plan's role") };
+    let planned: Planned = std::mem::take(&mut *found.lock().unwrap_or_else(|e| e.into_inner()));
     let ranges = shards::balanced(&planned, args.shards).map_err(|e| anyhow!("--shards: {e}"))?;
     let scene_file = args.bake.scene.as_deref().unwrap_or(Path::new(""));
     let artifact = args.artifact.clone().unwrap_or_else(|| default_bake_dir(scene_file, bake.method.name()));
@@ -136,7 +135,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     println!(
         "planned {} shards of {} work items (about {:.0} s of work on one thread, sampled) in {}{}",
         ranges.len(),
-        planned.items.count,
+        planned.count(),
         contents["estimated_seconds"].as_f64().unwrap_or(0.0),
         folder.display(),
         if args.slurm { format!("; submit with: bash {}", folder.join("slurm/submit.sh").display()) } else { String::new() }
@@ -183,7 +182,6 @@ fn run_to_gather(bake: &Prepared, work: WorkOptions) -> Result<()> {
 /// scene checked against the one planned.
 fn planned_bake(folder: &Path, threads: Option<usize>) -> Result<(Plan, Prepared)> {
     let plan = Plan::read(folder).map_err(|e| anyhow!(e))?;
-    plan.check_cover().map_err(|e| anyhow!(e))?;
     #[derive(Parser)]
     struct Kept {
         #[command(flatten)]
@@ -209,21 +207,14 @@ fn shard(args: &ShardArgs) -> Result<()> {
         println!("shard {}: its part is complete, kept", args.index);
         return Ok(());
     }
-    let (rows, manifest) = plan.part_paths(args.index);
-    let role = leak(Role::Shard { range: range.clone(), rows, made: Mutex::new(None) });
+    let role = leak(plan.shard_role(args.index));
     run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
-    let Role::Shard { made, .. } = role else { unreachable!() };
-    let made: Made = made.lock().unwrap_or_else(|e| e.into_inner()).take().ok_or_else(|| anyhow!("the bake's gather did not run"))?;
-    if made.items != plan.items() {
-        bail!(
-            "{}: the bake's work items are not the plan's ({:?} against {:?}): plan again",
-            args.plan.display(),
-            made.items,
-            plan.items()
-        );
-    }
+    let Role::Shard { made, .. } = role else { unreachable!("the shard's role") };
+    let made: Vec<Made> = std::mem::take(&mut *made.lock().unwrap_or_else(|e| e.into_inner()));
+    let manifest = plan.part_manifest_path(args.index);
+    let contents = plan.part_manifest(args.index, &made).map_err(|e| anyhow!(e))?;
     let mut outputs = Outputs::new();
-    outputs.bytes(&manifest, serde_json::to_string_pretty(&plan.part_manifest(args.index, &made))?.as_bytes())?;
+    outputs.bytes(&manifest, serde_json::to_string_pretty(&contents)?.as_bytes())?;
     outputs.commit()?;
     println!("shard {}: items {range:?} written to {}", args.index, manifest.display());
     Ok(())
@@ -236,8 +227,7 @@ fn merge(args: &MergeArgs) -> Result<()> {
         let why: Vec<String> = unfinished.iter().map(|(_, e)| e.clone()).collect();
         bail!("{} of {} parts are not complete:\n{}", unfinished.len(), plan.ranges.len(), why.join("\n"));
     }
-    let parts = (0..plan.ranges.len()).map(|i| plan.part_paths(i).0).collect();
-    let role = leak(Role::Merge { parts });
+    let role = leak(plan.merge_role());
     print!("{}", bake_scene(&bake.scene, bake.method, &bake.values, WorkOptions { shard: Some(role), ..bake.work }, &args.out)?);
     Ok(())
 }

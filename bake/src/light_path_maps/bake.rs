@@ -96,7 +96,7 @@ impl Baker for LightPathMapsBaker {
         let settings = LightPathMapSettings { threshold, work: *work, ..self.settings.clone() };
         settings.validate().map_err(|e| format!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
         let region = self.region(scene)?;
-        let (mut baked, atlas, bvh) = self.obscurance.bake_on_atlas(scene, work, stages)?;
+        let (mut baked, atlas, bvh) = self.obscurance.bake_on_atlas(scene, work, stages, true)?;
         let entries = stages.timed("entry_points", || {
             let tests = test_points(scene, region.region.as_ref(), work.seed)?;
             entry_points(scene, &bvh, tests, settings.entry_points, work.seed)

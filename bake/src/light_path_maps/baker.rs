@@ -17,10 +17,12 @@ use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, Scene};
 use crate::settings::first_failed_check;
+use crate::shards::Items;
 use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
+use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -367,21 +369,34 @@ pub fn bake_transfers(
         bounce_area: scene_area(scene) / entries.len().max(1) as f32,
     };
     let n = covered.len();
-    let mut values = vec![Vec3::ZERO; entries.len() * n];
+    let mut values = Vec::new();
     let (lights_made, rays) = (AtomicU64::new(0), AtomicU64::new(0));
     let mut progress = Progress::new(entries.len() as u64 * settings.walks as u64, "light path maps", settings.work.progress);
     let start = Instant::now();
-    let walks = settings.work.in_passes(settings.walks, 1, |walk| {
-        values.par_chunks_mut(n).zip(entries.par_iter()).enumerate().for_each_init(Vec::new, |lights, (e, (row, entry))| {
-            walker.walk(e as u32, entry, walk.start, lights);
-            lights_made.fetch_add(lights.len() as u64, Ordering::Relaxed);
-            rays.fetch_add(walker.connect(lights, row), Ordering::Relaxed);
-            progress.inc(1);
+    let mut walks = settings.walks;
+    // An entry point's transfers are its row; its walks are seeded by its index.
+    let make = |range: Range<u64>| {
+        let first = range.start as usize;
+        let mut rows = vec![Vec3::ZERO; (range.end - range.start) as usize * n];
+        walks = settings.work.in_passes(settings.walks, 1, |walk| {
+            let mine = &entries[first..range.end as usize];
+            rows.par_chunks_mut(n).zip(mine.par_iter()).enumerate().for_each_init(Vec::new, |lights, (k, (row, entry))| {
+                walker.walk((first + k) as u32, entry, walk.start, lights);
+                lights_made.fetch_add(lights.len() as u64, Ordering::Relaxed);
+                rays.fetch_add(walker.connect(lights, row), Ordering::Relaxed);
+                progress.inc(1);
+            });
         });
-    });
+        let scale = 1.0 / walks as f32;
+        rows.iter_mut().for_each(|v| *v *= scale);
+        Ok(rows)
+    };
+    let take = |rows: Vec<Vec3>| {
+        values = rows;
+        Ok(())
+    };
+    settings.work.gather(&Items::whole::<Vec3>(entries.len() as u64, n), make, take)?;
     progress.finish();
-    let scale = 1.0 / walks as f32;
-    values.iter_mut().for_each(|v| *v *= scale);
     Ok(Transfers {
         texels: covered,
         values,

@@ -2,7 +2,8 @@
 //! obscurance on the atlas (001 §4). The light path maps' bake begins with it too (their small
 //! scale is the spectral obscurance, 000 §3.3).
 
-use super::{bake_obscurance, section, ObscuranceMap, ObscuranceSettings};
+use super::baker::gather_obscurance;
+use super::{section, ObscuranceMap, ObscuranceSettings};
 use crate::atlas::stage::{self, short, AtlasStage};
 use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
@@ -23,14 +24,21 @@ pub const BYTES_PER_TEXEL: u64 = 180;
 
 impl ObscuranceBaker {
     /// The atlas, the BVH and the obscurance on the atlas, each a timed stage; returns the
-    /// bake with the atlas and BVH for the stages that follow.
-    pub fn bake_on_atlas(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<(Baked, Atlas, SceneBvh), String> {
+    /// bake with the atlas and BVH for the stages that follow (`followed`: they gather again,
+    /// and read nothing of the obscurance before).
+    pub fn bake_on_atlas(
+        &self,
+        scene: &Scene,
+        work: &WorkOptions,
+        stages: &mut Stages,
+        followed: bool,
+    ) -> Result<(Baked, Atlas, SceneBvh), String> {
         let settings = ObscuranceSettings { work: *work, ..self.obscurance.clone() };
         settings.validate()?;
         let atlas = self.atlas.build(scene, stages)?;
         work.admit("obscurance", &self.estimate(scene, &atlas))?;
         let bvh = stages.timed("bvh", || SceneBvh::build(scene, work.ray_backend))?;
-        let map = stages.timed("obscurance", || bake_obscurance(scene, &bvh, &atlas, &settings))?;
+        let map = stages.timed("obscurance", || gather_obscurance(scene, &bvh, &atlas, &settings, followed))?;
         let facts = json!({ "variant": settings.variant.name(), "rays_per_texel": map.rays_per_texel });
         let obscurance = section(&map.values, atlas.layout(), facts)?;
         let mut parameters = parameters(&settings);
@@ -61,7 +69,7 @@ impl ObscuranceBaker {
 
 impl Baker for ObscuranceBaker {
     fn bake(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String> {
-        Ok(self.bake_on_atlas(scene, work, stages)?.0)
+        Ok(self.bake_on_atlas(scene, work, stages, false)?.0)
     }
 }
 

@@ -166,6 +166,18 @@ const RAYS_PER_PASS: u32 = 32;
 /// Bakes every covered texel of `atlas` (built from `scene`, whose BVH is `bvh`).
 /// The same inputs and seed give the same values whatever the thread count.
 pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &ObscuranceSettings) -> Result<ObscuranceMap, String> {
+    gather_obscurance(scene, bvh, atlas, settings, false)
+}
+
+/// As [`bake_obscurance`], its texels one gather of the bake (`followed` by another in a bake
+/// that gathers again: `shards::Items`).
+pub(crate) fn gather_obscurance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    atlas: &Atlas,
+    settings: &ObscuranceSettings,
+    followed: bool,
+) -> Result<ObscuranceMap, String> {
     settings.validate()?;
     let estimator = Estimator { scene, bvh, settings, average_albedo: average_albedo(scene) };
     let covered: Vec<u32> = (0..atlas.texels.len() as u32).filter(|&t| atlas.texels[t as usize].coverage > 0.0).collect();
@@ -192,7 +204,7 @@ pub fn bake_obscurance(scene: &Scene, bvh: &SceneBvh, atlas: &Atlas, settings: &
         }
         Ok(())
     };
-    settings.work.gather(&Items::whole::<f32>(covered.len() as u64, 3), make, take)?;
+    settings.work.gather(&Items::whole::<f32>(covered.len() as u64, 3).followed(followed), make, take)?;
     progress.finish();
     Ok(ObscuranceMap {
         values,
