@@ -118,6 +118,24 @@ pub enum Role {
     Merge { rows: Vec<Vec<PathBuf>>, taken: Mutex<usize> },
 }
 
+impl Role {
+    /// What a plan's gathers found (nothing for another role).
+    pub fn planned(&self) -> Planned {
+        match self {
+            Role::Plan { found, .. } => std::mem::take(&mut *locked(found)),
+            _ => Planned::default(),
+        }
+    }
+
+    /// What a shard's gathers wrote (nothing for another role).
+    pub fn made(&self) -> Vec<Made> {
+        match self {
+            Role::Shard { made, .. } => std::mem::take(&mut *locked(made)),
+            _ => Vec::new(),
+        }
+    }
+}
+
 impl std::fmt::Debug for Role {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.write_str(match self {

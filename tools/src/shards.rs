@@ -9,7 +9,7 @@ use clap::{Args, Parser, Subcommand};
 use relume_bake::artifact::{file_checksum, scene_checksum};
 use relume_bake::contract::Stages;
 use relume_bake::outputs::Outputs;
-use relume_bake::shards::{self, Made, Plan, Planned, Role};
+use relume_bake::shards::{self, Plan, Planned, Role};
 use relume_bake::work::{with_threads, WorkOptions};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -105,8 +105,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let role = leak(Role::Plan { strata: STRATA, found: Mutex::new(Planned::default()) });
     eprintln!("plan: preparing the bake, then timing a sample of its work items ...");
     run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
-    let Role::Plan { found, .. } = role else { unreachable!("the plan's role") };
-    let planned: Planned = std::mem::take(&mut *found.lock().unwrap_or_else(|e| e.into_inner()));
+    let planned = role.planned();
     let ranges = shards::balanced(&planned, args.shards).map_err(|e| anyhow!("--shards: {e}"))?;
     let scene_file = args.bake.scene.as_deref().unwrap_or(Path::new(""));
     let artifact = args.artifact.clone().unwrap_or_else(|| default_bake_dir(scene_file, bake.method.name()));
@@ -124,6 +123,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     if args.slurm {
         let settings = crate::slurm::Settings {
             plan: std::path::absolute(&folder)?,
+            folder: std::env::current_dir().context("cannot read the current folder")?,
             artifact: std::path::absolute(&artifact)?,
             shards: ranges.len(),
             max_parallel: args.max_parallel,
@@ -172,7 +172,7 @@ fn run_to_gather(bake: &Prepared, work: WorkOptions) -> Result<()> {
         Err(e) if shards::stopped(&e) => Ok(()),
         Err(e) => bail!("{}: {e}", bake.scene.source.display()),
         Ok(_) => bail!(
-            "--method {}: its bake has no gather to split yet, so it cannot be sharded; bake it whole with `relume bake`",
+            "--method {}: this bake has no long work to split (all its work is what a merge would do); bake it whole with `relume bake`",
             bake.method.name()
         ),
     }
@@ -209,8 +209,7 @@ fn shard(args: &ShardArgs) -> Result<()> {
     }
     let role = leak(plan.shard_role(args.index));
     run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
-    let Role::Shard { made, .. } = role else { unreachable!("the shard's role") };
-    let made: Vec<Made> = std::mem::take(&mut *made.lock().unwrap_or_else(|e| e.into_inner()));
+    let made = role.made();
     let manifest = plan.part_manifest_path(args.index);
     let contents = plan.part_manifest(args.index, &made).map_err(|e| anyhow!(e))?;
     let mut outputs = Outputs::new();

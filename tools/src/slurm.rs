@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 /// What the scripts need: absolute paths, since a task runs wherever Slurm puts it.
 pub(crate) struct Settings {
     pub plan: PathBuf,
+    /// Where relative paths among the bake's parameters (--dictionary-cache) resolve: the
+    /// folder the plan was made in.
+    pub folder: PathBuf,
     pub artifact: PathBuf,
     pub shards: usize,
     pub max_parallel: Option<u32>,
@@ -26,11 +29,13 @@ pub(crate) fn write_scripts(staged: &Path, settings: &Settings) -> Result<()> {
     let plan = quoted(&settings.plan);
     let logs = settings.plan.join("slurm/logs");
     let cpus = settings.cpus_per_task;
+    let chdir = settings.folder.display();
     let shards = format!(
         "#!/bin/bash\n\
          # One shard of the plan per task of the array (written by `relume bake plan --slurm`;\n\
          # submit.sh submits it). RELUME overrides the program's path.\n\
          #SBATCH --job-name=relume-shard\n\
+         #SBATCH --chdir={chdir}\n\
          #SBATCH --cpus-per-task={cpus}\n\
          #SBATCH --output={}/shard-%a.log\n\
          set -euo pipefail\n\
@@ -42,6 +47,7 @@ pub(crate) fn write_scripts(staged: &Path, settings: &Settings) -> Result<()> {
         "#!/bin/bash\n\
          # The merge of the plan's parts into the artifact (written by `relume bake plan --slurm`).\n\
          #SBATCH --job-name=relume-merge\n\
+         #SBATCH --chdir={chdir}\n\
          #SBATCH --cpus-per-task={cpus}\n\
          #SBATCH --output={}/merge.log\n\
          set -euo pipefail\n\

@@ -11,10 +11,12 @@ use super::dictionary::BlockData;
 use super::svd::{self, Svd};
 use super::{BlockSettings, Face, Samples, Shape};
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
+use crate::shards::{self, Items, Role};
 use crate::work::with_threads;
 use glam::{Vec2, Vec3};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// One block's operators (n samples, k modes); matrices are nalgebra's, column-major.
 pub struct BlockOperators {
@@ -74,8 +76,13 @@ pub fn transfer_error(ops: &BlockOperators, f: &DMatrix<f64>, lights: &[Vec3], r
 pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
     let samples = Samples::new(shape, settings.samples_per_face);
     let f = with_threads(settings.threads, || gather(shape, &samples, settings.gather_rays, settings.seed));
+    reduced(shape, samples, &f, settings)
+}
+
+/// A shape's operators from its gathered F.
+pub fn reduced(shape: Shape, samples: Samples, f: &DMatrix<f64>, settings: &BlockSettings) -> BlockOperators {
     let l_d = prior(shape, &samples, settings.prior_grid, settings.light_radius);
-    let mut ops = reduce(shape, samples, &f, &l_d, settings);
+    let mut ops = reduce(shape, samples, f, &l_d, settings);
     ops.u_bvol = with_threads(settings.threads, || super::volume::own(&ops));
     ops
 }
@@ -84,14 +91,37 @@ pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
 /// weights of the samples around where the ray leaves the block (none through an open face).
 pub fn gather(shape: Shape, samples: &Samples, rays: u32, seed: u64) -> DMatrix<f64> {
     let n = samples.len();
-    let rows = gather_rows(samples, rays, seed, n, |face, point, _, row| {
+    DMatrix::from_row_slice(n, n, &f_rows(shape, samples, 0..n, rays, seed))
+}
+
+/// Rows `range` of F, one after another.
+fn f_rows(shape: Shape, samples: &Samples, range: Range<usize>, rays: u32, seed: u64) -> Vec<f64> {
+    let rows = gather_rows(samples, range, rays, seed, samples.len(), |face, point, _, row| {
         if let Some(slot) = samples.faces.iter().position(|f| *f == face).filter(|_| !shape.is_open(face)) {
             for (j, w) in samples.bilinear(slot, face.uv(point)) {
                 row[j] += w as f64;
             }
         }
     });
-    DMatrix::from_fn(n, n, |i, j| rows[i][j])
+    rows.concat()
+}
+
+/// Every shape's F, on `settings`' threads: each shape's rows are a gather of the bake
+/// (`shard`: its part in a sharded one, `shards`), none read before the last is made.
+pub fn gather_shapes(shapes: &[(Shape, Samples)], settings: &BlockSettings, shard: Option<&Role>) -> Result<Vec<DMatrix<f64>>, String> {
+    let mut operators = Vec::new();
+    for (k, (shape, samples)) in shapes.iter().enumerate() {
+        let n = samples.len();
+        let items = Items::whole::<f64>(n as u64, n).followed(k + 1 < shapes.len());
+        let make =
+            |range: Range<u64>| Ok(f_rows(*shape, samples, range.start as usize..range.end as usize, settings.gather_rays, settings.seed));
+        let take = |rows: Vec<f64>| {
+            operators.push(DMatrix::from_row_slice(n, n, &rows));
+            Ok(())
+        };
+        with_threads(settings.threads, || shards::gather(shard, &items, make, take))?;
+    }
+    Ok(operators)
 }
 
 /// For each sample (in parallel; each row on its own, so the result does not depend on the
@@ -100,12 +130,13 @@ pub fn gather(shape: Shape, samples: &Samples, rays: u32, seed: u64) -> DMatrix<
 /// of `width` values; the rows are then averaged over the rays.
 pub(super) fn gather_rows(
     samples: &Samples,
+    range: Range<usize>,
     rays: u32,
     seed: u64,
     width: usize,
     visit: impl Fn(Face, Vec3, Vec3, &mut [f64]) + Sync,
 ) -> Vec<Vec<f64>> {
-    (0..samples.len())
+    range
         .into_par_iter()
         .map(|i| {
             let mut row = vec![0.0f64; width];

@@ -248,6 +248,7 @@ mod built {
     use crate::mrt::block::{self, BlockOperators};
     use crate::mrt::interface::{self, Interfaces};
     use crate::mrt::level::Turn;
+    use crate::shards::Role;
     use nalgebra::DMatrix;
 
     fn f32s(m: &DMatrix<f64>) -> Vec<f32> {
@@ -264,13 +265,28 @@ mod built {
         pub fn build(
             settings: &BlockSettings,
             interface: &InterfaceSettings,
+            stage: impl FnMut(&str) -> Result<(), String>,
+        ) -> Result<Dictionary, String> {
+            Dictionary::build_in(settings, interface, None, stage)
+        }
+
+        /// As [`Dictionary::build`], in a bake that is `shard`'s part of a sharded one: the
+        /// six shapes' F are its gathers.
+        pub fn build_in(
+            settings: &BlockSettings,
+            interface: &InterfaceSettings,
+            shard: Option<&Role>,
             mut stage: impl FnMut(&str) -> Result<(), String>,
         ) -> Result<Dictionary, String> {
-            let shapes = Shape::dictionary();
-            let operators: Vec<BlockOperators> = (shapes.iter().enumerate())
-                .map(|(i, &s)| {
-                    stage(&format!("block shape {} of {}", i + 1, shapes.len()))?;
-                    Ok(block::build(s, settings))
+            let shapes: Vec<(Shape, Samples)> =
+                Shape::dictionary().iter().map(|&s| (s, Samples::new(s, settings.samples_per_face))).collect();
+            stage("the six block shapes' one-bounce operators F")?;
+            let gathered = block::gather_shapes(&shapes, settings, shard)?;
+            let count = shapes.len();
+            let operators: Vec<BlockOperators> = (shapes.into_iter().zip(&gathered).enumerate())
+                .map(|(i, ((shape, samples), f))| {
+                    stage(&format!("block shape {} of {count}", i + 1))?;
+                    Ok(block::reduced(shape, samples, f, settings))
                 })
                 .collect::<Result<_, String>>()?;
             stage("interfaces")?;

@@ -235,12 +235,13 @@ fn propagate(h: &DMatrix<f64>, cells: Cells, turn: Turn, supersamples: usize) ->
 /// lightfield entering through its opening (pi times the mean radiance over cosine rays).
 fn respond(receiver: &Samples, h_rlf: &DMatrix<f64>, cells: Cells, settings: &InterfaceSettings) -> DMatrix<f64> {
     let entry = Frame::new(ENTRY, ENTRY.inward());
-    let rows = gather_rows(receiver, settings.gather_rays, settings.seed, h_rlf.ncols(), |face, point, direction, row| {
-        if face == ENTRY {
-            let source = cells.row(entry.local_point(point), entry.local_direction(-direction));
-            row.iter_mut().zip(h_rlf.row(source).iter()).for_each(|(v, x)| *v += x * std::f64::consts::PI);
-        }
-    });
+    let rows =
+        gather_rows(receiver, 0..receiver.len(), settings.gather_rays, settings.seed, h_rlf.ncols(), |face, point, direction, row| {
+            if face == ENTRY {
+                let source = cells.row(entry.local_point(point), entry.local_direction(-direction));
+                row.iter_mut().zip(h_rlf.row(source).iter()).for_each(|(v, x)| *v += x * std::f64::consts::PI);
+            }
+        });
     DMatrix::from_fn(receiver.len(), h_rlf.ncols(), |r, c| rows[r][c])
 }
 
