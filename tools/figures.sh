@@ -21,7 +21,7 @@ FIGURES=(
     obscurance-passes obscurance-vs-reference lightmap-seams lpm-bake lpm-passes
     lpm-vs-reference bench-four-methods bench-stability fiv light-clouds viewer mrt-blocks
     mrt-levels every-method cross-method ray-casting atlas-utilization bake-memory scale-sweep
-    correctness-tests
+    shards correctness-tests
 )
 
 bench() { "$RELUME" bench "$1" --out "$DIR/$2" --cache "$OUT/reference-cache" "${@:3}"; }
@@ -333,6 +333,28 @@ figure_bake_memory() {
 # alone would take hours) and at the defaults at K = 1 and 2 (K = 2 takes 10 minutes); FIV on
 # the open hall (`--scale K --sky`: no ceiling, under the sky, so its triangles are the hall's
 # less the ceiling's); the path tracer's paths per second on the smallest and largest.
+# The split's overhead: scale-1's light cloud whole on 2 threads against planned, baked in 4
+# shards of 1 CPU on the local cluster's 2 and merged (farm-bench alternates them); then the
+# plan of scale-10's light cloud in 32 shards, whose sampled costs the projection reads.
+figure_shards() {
+    for k in 1 10; do
+        "$RELUME" scenes --scale $k --out "$DIR/scenes"
+    done
+    local bake=("$DIR/scenes/scale-1.gltf" --method light-cloud --samples 128 --memory-limit 16G)
+    bash tools/slurm-local.sh start "$DIR/slurm"
+    trap 'bash tools/slurm-local.sh stop "$DIR/slurm"' RETURN
+    source "$DIR/slurm/env"
+    printf '%s\n' 'set -euo pipefail' "rm -rf '$DIR/plan' '$DIR/sharded'" \
+        "'$RELUME' bake plan ${bake[*]} --threads 2 --shards 4 --out '$DIR/plan' --slurm --artifact '$DIR/sharded'" \
+        "bash '$DIR/plan/slurm/submit.sh' --wait" "test -f '$DIR/sharded/manifest.json'" > "$DIR/sharded.sh"
+    farm-bench -n 3 --timeout 1800 --vs "$RELUME bake ${bake[*]} --threads 2 --out $DIR/whole" -- bash "$DIR/sharded.sh"
+    for f in "$DIR"/whole/*; do
+        [ "${f##*/}" = stats.json ] || cmp "$f" "$DIR/sharded/${f##*/}"
+    done
+    echo "the sharded artifact is the whole bake's bytes"
+    "$RELUME" bake plan "$DIR/scenes/scale-10.gltf" --method light-cloud --memory-limit 16G --threads 2 --shards 32 --out "$DIR/plan-10"
+}
+
 figure_scale_sweep() {
     local limit=(--memory-limit 16G --threads 2)
     for k in 1 2 5 10; do

@@ -133,7 +133,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     }
     outputs.commit()?;
     println!(
-        "planned {} shards of {} work items (about {:.0} s of work on one thread, sampled) in {}{}",
+        "planned {} shards of {} work items (about {:.0} s of work at the plan's threads, sampled) in {}{}",
         ranges.len(),
         planned.count(),
         contents["estimated_seconds"].as_f64().unwrap_or(0.0),

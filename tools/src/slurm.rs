@@ -43,16 +43,17 @@ pub(crate) fn write_scripts(staged: &Path, settings: &Settings) -> Result<()> {
          exec \"$relume\" bake shard {plan} --index \"$SLURM_ARRAY_TASK_ID\" --threads \"${{SLURM_CPUS_PER_TASK:-{cpus}}}\"\n",
         logs.display()
     );
+    // The merge's reduction runs on one node: it takes the whole node and all its cores.
     let merge = format!(
         "#!/bin/bash\n\
          # The merge of the plan's parts into the artifact (written by `relume bake plan --slurm`).\n\
          #SBATCH --job-name=relume-merge\n\
          #SBATCH --chdir={chdir}\n\
-         #SBATCH --cpus-per-task={cpus}\n\
+         #SBATCH --exclusive\n\
          #SBATCH --output={}/merge.log\n\
          set -euo pipefail\n\
          {program}\n\
-         exec \"$relume\" bake merge {plan} --out {} --threads \"${{SLURM_CPUS_PER_TASK:-{cpus}}}\"\n",
+         exec \"$relume\" bake merge {plan} --out {}\n",
         logs.display(),
         quoted(&settings.artifact)
     );
