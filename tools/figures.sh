@@ -342,8 +342,9 @@ figure_shards() {
     done
     local bake=("$DIR/scenes/scale-1.gltf" --method light-cloud --samples 128 --memory-limit 16G)
     bash tools/slurm-local.sh start "$DIR/slurm"
-    trap 'bash tools/slurm-local.sh stop "$DIR/slurm"' RETURN
     source "$DIR/slurm/env"
+    # Set after `source`, whose own return would run it.
+    trap 'bash tools/slurm-local.sh stop "$DIR/slurm"' RETURN
     printf '%s\n' 'set -euo pipefail' "rm -rf '$DIR/plan' '$DIR/sharded'" \
         "'$RELUME' bake plan ${bake[*]} --threads 2 --shards 4 --out '$DIR/plan' --slurm --artifact '$DIR/sharded'" \
         "bash '$DIR/plan/slurm/submit.sh' --wait" "test -f '$DIR/sharded/manifest.json'" > "$DIR/sharded.sh"

@@ -177,7 +177,7 @@ pub struct Made {
 }
 
 /// Items a plan times in each stratum: one in this many (at least one).
-const SAMPLED_SHARE: u64 = 64;
+const SAMPLED_SHARE: u64 = 128;
 
 fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|e| e.into_inner())
@@ -188,7 +188,7 @@ fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 pub fn gather<T: Pod>(
     role: Option<&Role>,
     items: &Items,
-    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
     mut take: impl FnMut(Vec<T>) -> Result<(), String>,
 ) -> Result<(), String> {
     if items.value_bytes != std::mem::size_of::<T>() {
@@ -251,24 +251,26 @@ pub fn part_rows(folder: &Path, index: usize, gather: usize) -> PathBuf {
 }
 
 /// The seconds per item of `strata` equal stretches of the items, each timed on its first
-/// items (one in [`SAMPLED_SHARE`]).
+/// items (one in [`SAMPLED_SHARE`]) on one thread: an item's cost whatever threads a shard has.
 fn sample<T>(
     items: &Items,
     strata: u64,
-    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
 ) -> Result<Vec<(Range<u64>, f64)>, String> {
     let strata = strata.clamp(1, items.count.max(1));
-    let mut costs = Vec::new();
-    for s in 0..strata {
-        let stratum = items.count * s / strata..items.count * (s + 1) / strata;
-        let taken = ((stratum.end - stratum.start) / SAMPLED_SHARE).max(1).min(stratum.end - stratum.start);
-        let start = Instant::now();
-        for piece in items.pieces(stratum.start..stratum.start + taken) {
-            make(piece)?;
+    crate::work::with_threads(Some(1), || {
+        let mut costs = Vec::new();
+        for s in 0..strata {
+            let stratum = items.count * s / strata..items.count * (s + 1) / strata;
+            let taken = ((stratum.end - stratum.start) / SAMPLED_SHARE).max(1).min(stratum.end - stratum.start);
+            let start = Instant::now();
+            for piece in items.pieces(stratum.start..stratum.start + taken) {
+                make(piece)?;
+            }
+            costs.push((stratum, start.elapsed().as_secs_f64() / taken.max(1) as f64));
         }
-        costs.push((stratum, start.elapsed().as_secs_f64() / taken.max(1) as f64));
-    }
-    Ok(costs)
+        Ok(costs)
+    })
 }
 
 /// Writes the rows of `range` into `path` (staged, moved in place whole); returns its size

@@ -76,7 +76,7 @@ impl WorkOptions {
     pub fn gather<T: bytemuck::Pod>(
         &self,
         items: &Items,
-        make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+        make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
         take: impl FnMut(Vec<T>) -> Result<(), String>,
     ) -> Result<(), String> {
         shards::gather(self.shard, items, make, take)

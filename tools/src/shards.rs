@@ -109,9 +109,11 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let ranges = shards::balanced(&planned, args.shards).map_err(|e| anyhow!("--shards: {e}"))?;
     let scene_file = args.bake.scene.as_deref().unwrap_or(Path::new(""));
     let artifact = args.artifact.clone().unwrap_or_else(|| default_bake_dir(scene_file, bake.method.name()));
+    let argv = args.bake.argv()?;
     let facts = json!({
         "method": bake.method.name(),
-        "args": args.bake.argv()?,
+        "settings_checksum": relume_bake::artifact::checksum(argv.join("\n").as_bytes()),
+        "args": argv,
         "scene": scene_facts(&bake, scene_file)?,
     });
     let contents = Plan::contents(facts, &planned, &ranges).map_err(|e| anyhow!(e))?;
@@ -133,7 +135,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     }
     outputs.commit()?;
     println!(
-        "planned {} shards of {} work items (about {:.0} s of work at the plan's threads, sampled) in {}{}",
+        "planned {} shards of {} work items (about {:.0} s of work on one thread, sampled) in {}{}",
         ranges.len(),
         planned.count(),
         contents["estimated_seconds"].as_f64().unwrap_or(0.0),
