@@ -340,19 +340,22 @@ figure_shards() {
     for k in 1 10; do
         "$RELUME" scenes --scale $k --out "$DIR/scenes"
     done
-    local bake=("$DIR/scenes/scale-1.gltf" --method light-cloud --samples 128 --memory-limit 16G)
-    bash tools/slurm-local.sh start "$DIR/slurm"
-    source "$DIR/slurm/env"
-    # Set after `source`, whose own return would run it.
-    trap 'bash tools/slurm-local.sh stop "$DIR/slurm"' RETURN
-    printf '%s\n' 'set -euo pipefail' "rm -rf '$DIR/plan' '$DIR/sharded'" \
-        "'$RELUME' bake plan ${bake[*]} --threads 2 --shards 4 --out '$DIR/plan' --slurm --artifact '$DIR/sharded'" \
-        "bash '$DIR/plan/slurm/submit.sh' --wait" "test -f '$DIR/sharded/manifest.json'" > "$DIR/sharded.sh"
-    farm-bench -n 3 --timeout 1800 --vs "$RELUME bake ${bake[*]} --threads 2 --out $DIR/whole" -- bash "$DIR/sharded.sh"
+    # In a subshell: its exit (by set -e too) stops the cluster.
+    (
+        bash tools/slurm-local.sh start "$DIR/slurm"
+        trap 'bash tools/slurm-local.sh stop "$DIR/slurm"' EXIT
+        source "$DIR/slurm/env"
+        local bake=("$DIR/scenes/scale-1.gltf" --method light-cloud --samples 128 --memory-limit 16G)
+        printf '%s\n' 'set -euo pipefail' "rm -rf '$DIR/plan' '$DIR/sharded'" \
+            "'$RELUME' bake plan ${bake[*]} --threads 2 --shards 4 --out '$DIR/plan' --slurm --artifact '$DIR/sharded'" \
+            "bash '$DIR/plan/slurm/submit.sh' --wait" "test -f '$DIR/sharded/manifest.json'" > "$DIR/sharded.sh"
+        farm-bench -n 3 --timeout 1800 --vs "$RELUME bake ${bake[*]} --threads 2 --out $DIR/whole" -- bash "$DIR/sharded.sh"
+    )
     for f in "$DIR"/whole/*; do
         [ "${f##*/}" = stats.json ] || cmp "$f" "$DIR/sharded/${f##*/}"
     done
     echo "the sharded artifact is the whole bake's bytes"
+    grep -h "done .* in \|written" "$DIR"/plan/slurm/logs/*.log
     "$RELUME" bake plan "$DIR/scenes/scale-10.gltf" --method light-cloud --memory-limit 16G --threads 2 --shards 32 --out "$DIR/plan-10"
 }
 

@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// What one gather of a bake makes: `count` items of `width` values each (f32 or f64, as the
-/// bake keeps them), made and taken in the pieces `chunks` ends (ascending, the last `count`):
+/// What one gather of a bake makes: `count` items of `width` values each (f32, f64 or a Vec3
+/// of f32, as the bake keeps them), made and taken in the pieces `chunks` ends (ascending, the last `count`):
 /// a light cloud's zones, FIV's tables, or one piece. A bake may gather more than once (the
 /// light path maps: their obscurance, then their transfers): a gather `followed` by another
 /// is one whose rows nothing reads before that next gather.
@@ -26,7 +26,7 @@ use std::time::Instant;
 pub struct Items {
     pub count: u64,
     pub width: usize,
-    /// Bytes a value takes (4 or 8).
+    /// Bytes a value takes (4, 8 or 12).
     pub value_bytes: usize,
     pub chunks: Vec<u64>,
     pub followed: bool,
@@ -43,6 +43,18 @@ impl Items {
         Items { count: chunks.last().copied().unwrap_or(0), width, value_bytes: std::mem::size_of::<T>(), chunks, followed: false }
     }
 
+    /// Items in pieces of `sizes` items each, of `width` values of `T`.
+    pub fn sized<T>(width: usize, sizes: impl IntoIterator<Item = u64>) -> Items {
+        let ends = sizes
+            .into_iter()
+            .scan(0, |end, size| {
+                *end += size;
+                Some(*end)
+            })
+            .collect();
+        Items::chunked::<T>(width, ends)
+    }
+
     /// The same items, followed by another gather (`followed` true) or not.
     pub fn followed(self, followed: bool) -> Items {
         Items { followed, ..self }
@@ -53,26 +65,27 @@ impl Items {
         items * (self.width * self.value_bytes) as u64
     }
 
-    /// The parts of `range` each within one chunk, in order.
-    fn pieces(&self, range: Range<u64>) -> Vec<Range<u64>> {
-        let mut start = range.start;
-        let mut pieces = Vec::new();
-        for &end in &self.chunks {
-            if start >= range.end {
-                break;
-            }
-            if end > start {
-                pieces.push(start..end.min(range.end));
-                start = end.min(range.end);
-            }
-        }
-        pieces
+    /// The parts of `range` each within one chunk, in order, with their chunk's index.
+    fn pieces(&self, range: Range<u64>) -> Vec<(usize, Range<u64>)> {
+        let within = |(chunk, whole): (usize, Range<u64>)| {
+            let piece = whole.start.max(range.start)..whole.end.min(range.end);
+            (piece.start < piece.end).then_some((chunk, piece))
+        };
+        self.chunk_ranges().into_iter().enumerate().filter_map(within).collect()
     }
 
     /// Every chunk's range, empty ones too.
     fn chunk_ranges(&self) -> Vec<Range<u64>> {
         let starts = std::iter::once(0).chain(self.chunks.iter().copied());
         starts.zip(&self.chunks).map(|(start, &end)| start..end).collect()
+    }
+
+    /// Whether the items could be a bake's: chunks ascending to `count`, values of a size a
+    /// gather takes, and rows whose bytes a part's size can hold.
+    fn consistent(&self) -> bool {
+        let ascending = self.chunks.windows(2).all(|w| w[0] <= w[1]) && self.chunks.last() == Some(&self.count);
+        let bytes = self.count.checked_mul(self.width as u64).and_then(|v| v.checked_mul(self.value_bytes as u64));
+        ascending && [4, 8, 12].contains(&self.value_bytes) && bytes.is_some_and(|b| b < 1 << 60)
     }
 
     fn json(&self) -> Value {
@@ -114,8 +127,9 @@ pub enum Role {
     Plan { strata: u64, found: Mutex<Planned> },
     /// Makes the rows of the items `range` into the part `index` in `folder`.
     Shard { range: Range<u64>, folder: PathBuf, index: usize, made: Mutex<Vec<Made>> },
-    /// Reads every row from the parts instead of making it: `rows[gather][part]`.
-    Merge { rows: Vec<Vec<PathBuf>>, taken: Mutex<usize> },
+    /// Reads every row from the parts instead of making it, `rows[gather][part]`, checking
+    /// each gather's items against the plan's `gathers`; `read`: the gathers read so far.
+    Merge { gathers: Vec<Items>, rows: Vec<Vec<PathBuf>>, read: Mutex<usize> },
 }
 
 impl Role {
@@ -183,26 +197,26 @@ fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Runs a gather in `role` (None: the whole bake): `make` makes the rows of a range of items
-/// within one chunk, `take` takes every chunk's rows in order.
+/// Runs a gather in `role` (None: the whole bake): `make(chunk, range)` makes the rows of a
+/// range of items within the chunk `chunk`, `take` takes every chunk's rows in order.
 pub fn gather<T: Pod>(
     role: Option<&Role>,
     items: &Items,
-    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
+    mut make: impl FnMut(usize, Range<u64>) -> Result<Vec<T>, String> + Send,
     mut take: impl FnMut(Vec<T>) -> Result<(), String>,
 ) -> Result<(), String> {
     if items.value_bytes != std::mem::size_of::<T>() {
         return Err(format!("the gather's items hold {}-byte values, its rows {}-byte ones", items.value_bytes, std::mem::size_of::<T>()));
     }
-    let mut checked = |range: Range<u64>| {
-        let rows = make(range.clone())?;
+    let mut checked = |(chunk, range): (usize, Range<u64>)| {
+        let rows = make(chunk, range.clone())?;
         match rows.len() as u64 == (range.end - range.start) * items.width as u64 {
             true => Ok(rows),
             false => Err(format!("the gather made {} values for items {range:?} of width {}", rows.len(), items.width)),
         }
     };
     match role {
-        None => items.chunk_ranges().into_iter().try_for_each(|chunk| take(checked(chunk)?)),
+        None => items.chunk_ranges().into_iter().enumerate().try_for_each(|chunk| take(checked(chunk)?)),
         Some(Role::Plan { strata, found }) => {
             let offset = locked(found).count();
             let costs = sample(items, *strata, checked)?;
@@ -210,7 +224,7 @@ pub fn gather<T: Pod>(
             found.costs.extend(costs.into_iter().map(|(r, c)| (r.start + offset..r.end + offset, c)));
             found.gathers.push(items.clone());
             drop(found);
-            go_on(items, take)
+            go_on(items)
         }
         Some(Role::Shard { range, folder, index, made }) => {
             let gather = locked(made).len();
@@ -218,15 +232,18 @@ pub fn gather<T: Pod>(
             let path = part_rows(folder, *index, gather);
             let (bytes, checksum) = write_rows(&path, items, within(range, offset, items.count), checked)?;
             locked(made).push(Made { items: items.clone(), bytes, checksum });
-            go_on(items, take)
+            go_on(items)
         }
-        Some(Role::Merge { rows, taken }) => {
+        Some(Role::Merge { gathers, rows, read }) => {
             let gather = {
-                let mut taken = locked(taken);
-                *taken += 1;
-                *taken - 1
+                let mut read = locked(read);
+                *read += 1;
+                *read - 1
             };
-            let parts = rows.get(gather).ok_or("the bake gathers more often than its plan: the plan is not this bake's")?;
+            if gathers.get(gather) != Some(items) {
+                return Err(format!("the bake's gather {gather} is not the plan's ({items:?}): the plan is not this bake's; plan again"));
+            }
+            let parts = &rows[gather];
             let mut reader = PartsReader { parts: parts.iter(), current: None };
             items.chunk_ranges().into_iter().try_for_each(|chunk| take(reader.read((chunk.end - chunk.start) as usize * items.width)?))?;
             reader.finish()
@@ -234,13 +251,11 @@ pub fn gather<T: Pod>(
     }
 }
 
-/// After a plan's or a shard's gather: on to the next gather with rows nothing reads, or the
-/// stop after the last.
-fn go_on<T: Pod>(items: &Items, mut take: impl FnMut(Vec<T>) -> Result<(), String>) -> Result<(), String> {
+/// After a plan's or a shard's gather: on to the next gather without its rows (nothing reads
+/// them before it), or the stop after the last.
+fn go_on(items: &Items) -> Result<(), String> {
     match items.followed {
-        true => {
-            items.chunk_ranges().into_iter().try_for_each(|chunk| take(vec![T::zeroed(); (chunk.end - chunk.start) as usize * items.width]))
-        }
+        true => Ok(()),
         false => Err(STOPPED.into()),
     }
 }
@@ -250,14 +265,16 @@ pub fn part_rows(folder: &Path, index: usize, gather: usize) -> PathBuf {
     folder.join(format!("part-{index}-{gather}.rows"))
 }
 
-/// The seconds per item of `strata` equal stretches of the items, each timed on its first
-/// items (one in [`SAMPLED_SHARE`]) on one thread: an item's cost whatever threads a shard has.
+/// The seconds per item of at most `strata` equal stretches of the items, each timed on its
+/// first items (one in [`SAMPLED_SHARE`]) on one thread (the bake's work options give the
+/// plan's gathers no pool of their own): an item's cost whatever threads a shard has.
 fn sample<T>(
     items: &Items,
     strata: u64,
-    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
+    mut make: impl FnMut((usize, Range<u64>)) -> Result<Vec<T>, String> + Send,
 ) -> Result<Vec<(Range<u64>, f64)>, String> {
-    let strata = strata.clamp(1, items.count.max(1));
+    // Few enough stretches that one item in SAMPLED_SHARE is timed, however few the items.
+    let strata = strata.min(items.count.div_ceil(SAMPLED_SHARE)).max(1);
     crate::work::with_threads(Some(1), || {
         let mut costs = Vec::new();
         for s in 0..strata {
@@ -279,7 +296,7 @@ fn write_rows<T: Pod>(
     path: &Path,
     items: &Items,
     range: Range<u64>,
-    mut make: impl FnMut(Range<u64>) -> Result<Vec<T>, String>,
+    mut make: impl FnMut((usize, Range<u64>)) -> Result<Vec<T>, String>,
 ) -> Result<(u64, String), String> {
     let mut outputs = Outputs::new();
     outputs
@@ -441,13 +458,16 @@ impl Plan {
             .as_array()
             .and_then(|g| g.iter().map(Items::from_json).collect::<Option<Vec<_>>>())
             .ok_or_else(|| again("its gathers do not read"))?;
+        if let Some(g) = gathers.iter().find(|g| !g.consistent()) {
+            return Err(again(&format!("a gather's items do not hold together ({g:?})")));
+        }
         let plan = Plan { folder: folder.to_path_buf(), json, checksum: checksum(&bytes), ranges, gathers };
         plan.check_cover().map_err(|e| again(&e))?;
         Ok(plan)
     }
 
     fn check_cover(&self) -> Result<(), String> {
-        let count: u64 = self.gathers.iter().map(|g| g.count).sum();
+        let count = self.gathers.iter().try_fold(0u64, |sum, g| sum.checked_add(g.count)).ok_or("its gathers hold too many items")?;
         let mut next = 0;
         for (i, r) in self.ranges.iter().enumerate() {
             if r.start != next || r.end <= r.start {
@@ -508,9 +528,9 @@ impl Plan {
     }
 
     /// Checks shard `index`'s part against this plan: its manifest names this plan and its
-    /// range, and each gather's rows have the size and checksum the manifest records;
-    /// refusals name the part and the fix.
-    pub fn check_part(&self, index: usize) -> Result<(), String> {
+    /// range, and each gather's rows have the size and (`whole`: reading every byte) the
+    /// checksum the manifest records; refusals name the part and the fix.
+    pub fn check_part(&self, index: usize, whole: bool) -> Result<(), String> {
         let manifest = self.part_manifest_path(index);
         let rerun = format!("run `relume bake shard {} --index {index}` again", self.folder.display());
         let bytes = std::fs::read(&manifest).map_err(|e| format!("{}: part {index} is missing ({e}): {rerun}", manifest.display()))?;
@@ -535,8 +555,11 @@ impl Plan {
             let rows = part_rows(&self.parts(), index, gather);
             let size =
                 std::fs::metadata(&rows).map_err(|e| format!("{}: part {index}'s rows are missing ({e}): {rerun}", rows.display()))?.len();
-            let sum = file_checksum(&rows).map_err(|e| format!("{}: {e}", rows.display()))?;
             let wanted = &part["gathers"][gather]["checksum"];
+            let sum = match whole {
+                true => file_checksum(&rows).map_err(|e| format!("{}: {e}", rows.display()))?,
+                false => wanted.as_str().unwrap_or_default().to_string(),
+            };
             if size != expected || wanted != sum.as_str() {
                 return Err(format!(
                     "{}: part {index}'s rows do not match its manifest ({size} bytes, checksum {sum}; the manifest says {expected} bytes, {wanted}): the part is damaged; remove it and {rerun}",
@@ -547,15 +570,16 @@ impl Plan {
         Ok(())
     }
 
-    /// The shards whose parts are missing or do not check, each with why.
-    pub fn unfinished(&self) -> Vec<(usize, String)> {
-        (0..self.ranges.len()).filter_map(|i| self.check_part(i).err().map(|e| (i, e))).collect()
+    /// The shards whose parts are missing or do not check (`whole`: their every byte), each
+    /// with why.
+    pub fn unfinished(&self, whole: bool) -> Vec<(usize, String)> {
+        (0..self.ranges.len()).filter_map(|i| self.check_part(i, whole).err().map(|e| (i, e))).collect()
     }
 
     /// What the merge reads: every gather's rows files, part by part.
     pub fn merge_role(&self) -> Role {
         let rows = (0..self.gathers.len()).map(|g| (0..self.ranges.len()).map(|i| part_rows(&self.parts(), i, g)).collect()).collect();
-        Role::Merge { rows, taken: Mutex::new(0) }
+        Role::Merge { gathers: self.gathers.clone(), rows, read: Mutex::new(0) }
     }
 
     /// What shard `index` does.
@@ -571,9 +595,9 @@ mod tests {
     #[test]
     fn pieces_keep_within_chunks_and_cover_the_range() {
         let items = Items::chunked::<f32>(1, vec![3, 3, 7, 10]);
-        assert_eq!(items.pieces(0..10), [0..3, 3..7, 7..10]);
-        assert_eq!(items.pieces(2..8), [2..3, 3..7, 7..8]);
-        assert_eq!(items.pieces(4..5), [4..5]);
+        assert_eq!(items.pieces(0..10), [(0, 0..3), (2, 3..7), (3, 7..10)]);
+        assert_eq!(items.pieces(2..8), [(0, 2..3), (2, 3..7), (3, 7..8)]);
+        assert_eq!(items.pieces(4..5), [(2, 4..5)]);
     }
 
     /// Balanced ranges cover every item once, each shard at least one, and give a shard of

@@ -31,8 +31,9 @@ pub struct WorkOptions {
     pub started: Option<Instant>,
     /// Which library casts the job's rays.
     pub ray_backend: RayBackend,
-    /// The bake's part in a sharded one (`shards`); None: a whole bake.
-    pub shard: Option<&'static Role>,
+    /// The bake's role in a sharded one (`shards`): a plan, a shard or the merge; None: a
+    /// whole bake.
+    pub role: Option<&'static Role>,
 }
 
 impl WorkOptions {
@@ -69,17 +70,18 @@ impl WorkOptions {
         ))
     }
 
-    /// Makes the rows of a bake's long work, `items`: `make` makes the rows of a range of items
-    /// within one of their chunks, each row a function of its item and the seed alone; `take`
-    /// takes each chunk's rows in order. In a sharded bake (`shard`) the rows are sampled (a
-    /// plan), made for a range only (a shard), or read from the shards' parts (the merge).
+    /// Makes the rows of a bake's long work, `items`: `make(chunk, range)` makes the rows of a
+    /// range of items within the chunk `chunk`, each row a function of its item and the seed
+    /// alone; `take` takes each chunk's rows in order. In a sharded bake (`role`) the rows are
+    /// sampled (a plan), made for a range only (a shard), or read from the shards' parts (the
+    /// merge).
     pub fn gather<T: bytemuck::Pod>(
         &self,
         items: &Items,
-        make: impl FnMut(Range<u64>) -> Result<Vec<T>, String> + Send,
+        make: impl FnMut(usize, Range<u64>) -> Result<Vec<T>, String> + Send,
         take: impl FnMut(Vec<T>) -> Result<(), String>,
     ) -> Result<(), String> {
-        shards::gather(self.shard, items, make, take)
+        shards::gather(self.role, items, make, take)
     }
 
     /// Runs `pass` on the worker threads over 0..total (rays, walks) in ranges of `step`,

@@ -109,17 +109,12 @@ pub(crate) struct WorkArgs {
 }
 
 impl WorkArgs {
-    /// The command line that gives these arguments.
+    /// The command line that gives what these arguments make of the bake's bytes: the seed,
+    /// the ray backend and a memory limit given (not the threads, which change no byte; a
+    /// time limit a sharded bake refuses).
     pub fn argv(&self) -> Vec<String> {
         let mut argv = vec!["--seed".to_string(), self.seed.to_string(), "--ray-backend".into(), self.ray_backend.name().into()];
-        let optional = [
-            ("--threads", self.threads.map(|n| n.to_string())),
-            ("--time-limit", self.time_limit.map(|t| t.as_secs_f64().to_string())),
-            ("--memory-limit", self.memory_limit.map(|b| b.to_string())),
-        ];
-        for (name, value) in optional {
-            argv.extend(value.map(|v| [name.to_string(), v]).into_iter().flatten());
-        }
+        argv.extend(self.memory_limit.map(|b| ["--memory-limit".to_string(), b.to_string()]).into_iter().flatten());
         argv
     }
 
@@ -133,7 +128,7 @@ impl WorkArgs {
             memory_limit: self.memory_limit.or_else(relume_bake::work::machine_memory_bytes),
             started: None,
             ray_backend: self.ray_backend,
-            shard: None,
+            role: None,
         };
         options.validate().map_err(|e| anyhow::anyhow!("--threads: {e}"))?;
         Ok(options)

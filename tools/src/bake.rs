@@ -142,6 +142,12 @@ impl Prepared {
 }
 
 impl BakeArgs {
+    /// The files besides the scene that these arguments have the bake read, by flag.
+    pub(crate) fn files(&self) -> Vec<(&'static str, &Path)> {
+        let given = [("recommended", &self.recommended), ("environment", &self.environment), ("lights", &self.lights)];
+        given.into_iter().filter_map(|(name, path)| Some((name, path.as_deref()?))).collect()
+    }
+
     /// The command line that gives these arguments (without --out), its paths absolute: what
     /// a plan keeps for its shards and merge to bake the same.
     pub(crate) fn argv(&self) -> Result<Vec<String>> {
@@ -154,10 +160,8 @@ impl BakeArgs {
         if let Some(method) = &self.method {
             push("method", Some(method.clone()));
         }
-        for (name, path) in [("recommended", &self.recommended), ("environment", &self.environment), ("lights", &self.lights)] {
-            if let Some(path) = path {
-                push(name, Some(absolute(path)?));
-            }
+        for (name, path) in self.files() {
+            push(name, Some(absolute(path)?));
         }
         if self.allow_outside_files {
             push("allow-outside-files", None);
@@ -205,7 +209,7 @@ pub(crate) fn bake_scene(
 }
 
 /// A bake's error naming the scene, once (an atlas's error names it already).
-fn naming(scene: &Scene, error: String) -> anyhow::Error {
+pub(crate) fn naming(scene: &Scene, error: String) -> anyhow::Error {
     let path = scene.source.display().to_string();
     match error.starts_with(&path) {
         true => anyhow::anyhow!(error),

@@ -2,7 +2,7 @@
 //! machines bake apart and a merge puts together, the same bytes as the whole bake
 //! (docs/CLUSTER.md; the splitting itself is `relume_bake::shards`).
 
-use crate::bake::{bake_scene, default_bake_dir, BakeArgs, Prepared};
+use crate::bake::{bake_scene, default_bake_dir, naming, BakeArgs, Prepared};
 use crate::methods;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
@@ -104,17 +104,23 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let bake = Prepared::new(&args.bake)?;
     let role = leak(Role::Plan { strata: STRATA, found: Mutex::new(Planned::default()) });
     eprintln!("plan: preparing the bake, then timing a sample of its work items ...");
-    run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
+    // The gathers get no pool of their own: the plan times items on one thread.
+    run_to_gather(&bake, bake.work.threads, WorkOptions { role: Some(role), threads: None, ..bake.work })?;
     let planned = role.planned();
     let ranges = shards::balanced(&planned, args.shards).map_err(|e| anyhow!("--shards: {e}"))?;
     let scene_file = args.bake.scene.as_deref().unwrap_or(Path::new(""));
     let artifact = args.artifact.clone().unwrap_or_else(|| default_bake_dir(scene_file, bake.method.name()));
-    let argv = args.bake.argv()?;
+    let mut argv = args.bake.argv()?;
+    // The limit the plan's machine gave: the light path maps' search chooses within it, so
+    // every shard and the merge bake within the same.
+    if let (None, Some(limit)) = (args.bake.work.memory_limit, bake.work.memory_limit) {
+        argv.extend(["--memory-limit".to_string(), limit.to_string()]);
+    }
     let facts = json!({
         "method": bake.method.name(),
         "settings_checksum": relume_bake::artifact::checksum(argv.join("\n").as_bytes()),
         "args": argv,
-        "scene": scene_facts(&bake, scene_file)?,
+        "inputs": inputs(&bake, &args.bake)?,
     });
     let contents = Plan::contents(facts, &planned, &ranges).map_err(|e| anyhow!(e))?;
     let mut outputs = Outputs::new();
@@ -154,25 +160,35 @@ fn refuse_foreign(folder: &Path) -> Result<()> {
     }
 }
 
-/// What a plan records of its scene, and what each shard checks: the scene file's checksum
-/// and that of its surfaces as loaded.
-fn scene_facts(bake: &Prepared, file: &Path) -> Result<Value> {
-    let sum = file_checksum(file).with_context(|| file.display().to_string())?;
-    Ok(json!({ "file": std::path::absolute(file)?, "file_checksum": sum, "checksum": scene_checksum(&bake.scene) }))
+/// What a plan records of the files the bake reads, and what each shard and the merge check:
+/// the scene file's checksum and that of its surfaces as loaded, and those of the environment,
+/// lights and recommended files given.
+fn inputs(bake: &Prepared, args: &BakeArgs) -> Result<Value> {
+    let sum = |file: &Path| -> Result<Value> {
+        let checksum = file_checksum(file).with_context(|| file.display().to_string())?;
+        Ok(json!({ "file": std::path::absolute(file)?, "checksum": checksum }))
+    };
+    let scene = args.scene.as_deref().ok_or_else(|| anyhow!("give the scene to bake"))?;
+    let mut inputs = json!({ "scene": sum(scene)?, "surfaces": scene_checksum(&bake.scene) });
+    for (name, file) in args.files() {
+        inputs[name] = sum(file)?;
+    }
+    Ok(inputs)
 }
 
 fn leak(role: Role) -> &'static Role {
     Box::leak(Box::new(role))
 }
 
-/// Runs the bake until its gather has done what `work`'s role asks, then stops.
-fn run_to_gather(bake: &Prepared, work: WorkOptions) -> Result<()> {
+/// Runs the bake on a pool of `threads` until its gathers have done what `work`'s role asks,
+/// then stops.
+fn run_to_gather(bake: &Prepared, threads: Option<usize>, work: WorkOptions) -> Result<()> {
     methods::refuse(bake.method, &bake.scene)?;
     let baker = bake.method.baker(&bake.scene, &bake.values)?;
     let mut stages = Stages::default();
-    match with_threads(work.threads, || baker.bake(&bake.scene, &work.begun(), &mut stages)) {
+    match with_threads(threads, || baker.bake(&bake.scene, &work.begun(), &mut stages)) {
         Err(e) if shards::stopped(&e) => Ok(()),
-        Err(e) => bail!("{}: {e}", bake.scene.source.display()),
+        Err(e) => Err(naming(&bake.scene, e)),
         Ok(_) => bail!(
             "--method {}: this bake has no long work to split (all its work is what a merge would do); bake it whole with `relume bake`",
             bake.method.name()
@@ -194,9 +210,11 @@ fn planned_bake(folder: &Path, threads: Option<usize>) -> Result<(Plan, Prepared
     let kept = Kept::try_parse_from(std::iter::once("relume-bake".to_string()).chain(argv))
         .map_err(|e| anyhow!("{}: its bake's arguments do not parse ({e}): plan again", folder.join(shards::PLAN_FILE).display()))?;
     let mut bake = Prepared::new(&kept.bake)?;
-    let file = kept.bake.scene.clone().unwrap_or_default();
-    if scene_facts(&bake, &file)? != plan.json["bake"]["scene"] {
-        bail!("{}: the scene has changed since the plan {} was made: plan again", file.display(), folder.display());
+    let now = inputs(&bake, &kept.bake)?;
+    if now != plan.json["bake"]["inputs"] {
+        let changed = now.as_object().into_iter().flatten().filter(|(k, v)| plan.json["bake"]["inputs"][k.as_str()] != **v);
+        let names: Vec<&str> = changed.map(|(k, _)| k.as_str()).collect();
+        bail!("{}: the bake's {} changed since the plan was made: plan again", folder.display(), names.join(", "));
     }
     bake.work.threads = threads.or(bake.work.threads);
     Ok((plan, bake))
@@ -205,12 +223,12 @@ fn planned_bake(folder: &Path, threads: Option<usize>) -> Result<(Plan, Prepared
 fn shard(args: &ShardArgs) -> Result<()> {
     let (plan, bake) = planned_bake(&args.plan, args.threads)?;
     let range = plan.range(args.index).map_err(|e| anyhow!(e))?;
-    if plan.check_part(args.index).is_ok() {
+    if plan.check_part(args.index, true).is_ok() {
         println!("shard {}: its part is complete, kept", args.index);
         return Ok(());
     }
     let role = leak(plan.shard_role(args.index));
-    run_to_gather(&bake, WorkOptions { shard: Some(role), ..bake.work })?;
+    run_to_gather(&bake, bake.work.threads, WorkOptions { role: Some(role), ..bake.work })?;
     let made = role.made();
     let manifest = plan.part_manifest_path(args.index);
     let contents = plan.part_manifest(args.index, &made).map_err(|e| anyhow!(e))?;
@@ -223,19 +241,20 @@ fn shard(args: &ShardArgs) -> Result<()> {
 
 fn merge(args: &MergeArgs) -> Result<()> {
     let (plan, bake) = planned_bake(&args.plan, args.threads)?;
-    let unfinished = plan.unfinished();
+    let unfinished = plan.unfinished(true);
     if !unfinished.is_empty() {
         let why: Vec<String> = unfinished.iter().map(|(_, e)| e.clone()).collect();
         bail!("{} of {} parts are not complete:\n{}", unfinished.len(), plan.ranges.len(), why.join("\n"));
     }
     let role = leak(plan.merge_role());
-    print!("{}", bake_scene(&bake.scene, bake.method, &bake.values, WorkOptions { shard: Some(role), ..bake.work }, &args.out)?);
+    print!("{}", bake_scene(&bake.scene, bake.method, &bake.values, WorkOptions { role: Some(role), ..bake.work }, &args.out)?);
     Ok(())
 }
 
 fn status(args: &StatusArgs) -> Result<()> {
     let plan = Plan::read(&args.plan).map_err(|e| anyhow!(e))?;
-    let unfinished = plan.unfinished();
+    // Sizes and manifests only: the merge reads every byte.
+    let unfinished = plan.unfinished(false);
     if args.missing {
         println!("{}", unfinished.iter().map(|(i, _)| i.to_string()).collect::<Vec<_>>().join(","));
         return Ok(());

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 /// What the scripts need: absolute paths, since a task runs wherever Slurm puts it.
 pub(crate) struct Settings {
     pub plan: PathBuf,
-    /// Where relative paths among the bake's parameters (--dictionary-cache) resolve: the
-    /// folder the plan was made in.
+    /// Where relative paths among the bake's parameters resolve: the folder the plan was
+    /// made in.
     pub folder: PathBuf,
     pub artifact: PathBuf,
     pub shards: usize,
@@ -19,8 +19,15 @@ pub(crate) struct Settings {
     pub cpus_per_task: u32,
 }
 
-/// Writes `slurm/` (its scripts and an empty `logs/`) into the plan folder `staged`.
+/// Writes `slurm/` (its scripts and an empty `logs/`) into the plan folder `staged`; refuses
+/// paths that an `#SBATCH` line cannot hold (white space, and `%`, which Slurm expands).
 pub(crate) fn write_scripts(staged: &Path, settings: &Settings) -> Result<()> {
+    for path in [&settings.plan, &settings.folder, &settings.artifact] {
+        let text = path.display().to_string();
+        if text.contains(|c: char| c.is_whitespace() || c == '%') {
+            anyhow::bail!("{text}: a path with white space or % cannot go in an #SBATCH line; plan in, and bake to, folders without them");
+        }
+    }
     let folder = staged.join("slurm");
     std::fs::create_dir_all(folder.join("logs")).with_context(|| format!("{}: cannot create the folder", folder.display()))?;
     let program = std::env::current_exe().context("cannot find relume's own program")?;
@@ -43,13 +50,15 @@ pub(crate) fn write_scripts(staged: &Path, settings: &Settings) -> Result<()> {
          exec \"$relume\" bake shard {plan} --index \"$SLURM_ARRAY_TASK_ID\" --threads \"${{SLURM_CPUS_PER_TASK:-{cpus}}}\"\n",
         logs.display()
     );
-    // The merge's reduction runs on one node: it takes the whole node and all its cores.
+    // The merge's reduction runs on one node: it takes the whole node, all its cores and
+    // memory (--exclusive alone leaves memory at the partition's default where it is limited).
     let merge = format!(
         "#!/bin/bash\n\
          # The merge of the plan's parts into the artifact (written by `relume bake plan --slurm`).\n\
          #SBATCH --job-name=relume-merge\n\
          #SBATCH --chdir={chdir}\n\
          #SBATCH --exclusive\n\
+         #SBATCH --mem=0\n\
          #SBATCH --output={}/merge.log\n\
          set -euo pipefail\n\
          {program}\n\
@@ -80,7 +89,7 @@ if [ -n "$missing" ]; then
   dependency=(--dependency="$after" --kill-on-invalid-dep=yes)
 fi
 echo "submitting the merge"
-sbatch --parsable "${{dependency[@]}}" "$@" "$here/merge.sbatch"
+sbatch --parsable ${{dependency[@]+"${{dependency[@]}}"}} "$@" "$here/merge.sbatch"
 "#,
         settings.shards
     );

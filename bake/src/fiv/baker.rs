@@ -155,35 +155,27 @@ fn tables(
     settings: &FivBakeSettings,
     work: &WorkOptions,
 ) -> Result<Vec<OccluderTable>, String> {
-    let ends: Vec<u64> = shapes
-        .iter()
-        .flat_map(Shape::samples)
-        .scan(0, |end, n| {
-            *end += n;
-            Some(*end)
-        })
-        .collect();
-    let items = Items::chunked::<f32>(SAMPLE_VALUES, ends.clone());
+    let items = Items::sized::<f32>(SAMPLE_VALUES, shapes.iter().flat_map(Shape::samples));
+    let starts: Vec<u64> = std::iter::once(0).chain(items.chunks.iter().copied()).collect();
     let mut progress = Progress::new(items.count, "fiv tables", work.progress);
     let mut tables: Vec<OccluderTable> = shapes.iter().map(|s| s.table.clone()).collect();
-    let make = |range: Range<u64>| {
-        let chunk = ends.partition_point(|&end| end <= range.start);
-        let start = if chunk == 0 { 0 } else { ends[chunk - 1] };
+    let make = |chunk: usize, range: Range<u64>| {
+        let start = starts[chunk];
         let shape = &shapes[chunk / 2];
         let samples = (range.start - start) as u32..(range.end - start) as u32;
         let sums = every_sample(work, samples, &progress, |s| shape.sample(environment, settings, chunk % 2 == 1, s))?;
         Ok(sums.iter().flat_map(|(sum, valid)| sum.iter().flat_map(|v| v.to_array()).chain([*valid as u32 as f32])).collect())
     };
-    let mut taken = 0;
+    let mut next = 0;
     let take = |rows: Vec<f32>| {
         let (sums, valid) =
             rows.chunks_exact(SAMPLE_VALUES).map(|r| ([0, 3, 6].map(|c| Vec3::from_slice(&r[c..c + 3])), r[9] != 0.0)).unzip();
-        let table = &mut tables[taken / 2];
-        match taken % 2 {
+        let table = &mut tables[next / 2];
+        match next % 2 {
             0 => (table.fiv, table.valid) = (sums, valid),
             _ => (table.surface, table.surface_valid) = (sums, valid),
         }
-        taken += 1;
+        next += 1;
         Ok(())
     };
     work.gather(&items, make, take)?;

@@ -163,16 +163,8 @@ pub fn gather_zones(gatherer: &Gatherer, zones: &[Vec<u32>], samples: u32, store
     let share = |zone: &[u32]| zone.len() as f64 / gatherer.vertices().max(1) as f64;
     let (mut taken, mut scale) = (samples, 0f32);
     let members = zones.concat();
-    let ends: Vec<u64> = zones
-        .iter()
-        .scan(0u64, |end, zone| {
-            *end += zone.len() as u64;
-            Some(*end)
-        })
-        .collect();
-    let items = Items::chunked::<f32>(gatherer.row_values(), ends.clone());
-    let make = |range: Range<u64>| {
-        let z = ends.partition_point(|&end| end <= range.start);
+    let items = Items::sized::<f32>(gatherer.row_values(), zones.iter().map(|zone| zone.len() as u64));
+    let make = |z: usize, range: Range<u64>| {
         let limit = left.filter(|_| z == 0).map(|left| left.mul_f64(share(&zones[z])));
         let zone_work = WorkOptions { time_limit: limit, started: None, ..*work };
         let (rows, zone_taken) = gatherer.rows(&members[range.start as usize..range.end as usize], taken, &zone_work, &progress);

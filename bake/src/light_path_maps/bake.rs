@@ -136,8 +136,8 @@ impl Baker for LightPathMapsBaker {
             "compression": format!("{:?}", self.compression),
             "seed": work.seed,
         });
-        baked.stats["light_path_maps"] = stats(&entries, &transfers, &compressed);
-        baked.summary += &summary(&entries, &transfers, &compressed);
+        baked.stats["light_path_maps"] = stats(&entries, &transfers, &compressed, work.role.is_some());
+        baked.summary += &summary(&entries, &transfers, &compressed, work.role.is_some());
         if let Compression::BestWithin(budget) = self.compression {
             if compressed.relative_error > budget {
                 let room = match most_textures {
@@ -157,14 +157,17 @@ impl Baker for LightPathMapsBaker {
     }
 }
 
-fn stats(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed) -> serde_json::Value {
+/// `merged`: the transfers were read from a sharded bake's parts, so this process counted no
+/// virtual light or connection (null in stats.json).
+fn stats(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed, merged: bool) -> serde_json::Value {
+    let counted = |count: u64| (!merged).then_some(count);
     json!({
         "entry_points": entries.entries.len(),
         "rays_per_test_point": entries.rays_per_test_point,
         "covered_texels": transfers.texels.len(),
         "walks": transfers.walks,
-        "virtual_lights": transfers.virtual_lights,
-        "connections": transfers.connections,
+        "virtual_lights": counted(transfers.virtual_lights),
+        "connections": counted(transfers.connections),
         "clusters": compressed.clusters,
         "basis": compressed.basis,
         "relative_error": compressed.relative_error,
@@ -173,15 +176,17 @@ fn stats(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed) 
     })
 }
 
-fn summary(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed) -> String {
+fn summary(entries: &EntryPoints, transfers: &Transfers, compressed: &Compressed, merged: bool) -> String {
     let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
+    let work = match merged {
+        true => "virtual lights and connections made by the shards".to_string(),
+        false => format!("{} virtual lights, {} connections", transfers.virtual_lights, transfers.connections),
+    };
     format!(
-        "light path maps: {} entry points from {} test points, {} texels, {} virtual lights, {} connections; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB\n",
+        "light path maps: {} entry points from {} test points, {} texels, {work}; C = {}, D = {}, relative error {:.4}, {:.1} MiB -> {:.1} MiB\n",
         entries.entries.len(),
         entries.test_points.len(),
         transfers.texels.len(),
-        transfers.virtual_lights,
-        transfers.connections,
         compressed.clusters,
         compressed.basis,
         compressed.relative_error,

@@ -375,7 +375,7 @@ pub fn bake_transfers(
     let start = Instant::now();
     let mut walks = settings.walks;
     // An entry point's transfers are its row; its walks are seeded by its index.
-    let make = |range: Range<u64>| {
+    let make = |_, range: Range<u64>| {
         let first = range.start as usize;
         let mut rows = vec![Vec3::ZERO; (range.end - range.start) as usize * n];
         walks = settings.work.in_passes(settings.walks, 1, |walk| {

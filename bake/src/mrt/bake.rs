@@ -108,7 +108,7 @@ impl MrtBaker {
         };
         let dir = cache.join(dictionary::key(block, interface));
         // A sharded bake makes its dictionary: its shapes' F are what its shards split.
-        if dir.exists() && work.shard.is_none() {
+        if dir.exists() && work.role.is_none() {
             match Artifact::read(&dir).and_then(|artifact| dictionary::read(&artifact, Some((block, interface)))) {
                 Ok((kept, _)) => {
                     eprintln!("mrt: the dictionary made with these parameters, from {}", dir.display());
@@ -120,7 +120,7 @@ impl MrtBaker {
         work.admit("mrt", &self.estimate(scene))?;
         eprintln!("mrt: the dictionary (six block shapes, then their interfaces) ...");
         let start = Instant::now();
-        let made = Dictionary::build_in(block, interface, work.shard, |stage| {
+        let made = Dictionary::build_in_role(block, interface, work.role, |stage| {
             if work.out_of_time(start) {
                 return Err(format!("--time-limit ran out before the dictionary's {stage}; a dictionary needs all its stages: give fewer --gather-rays, a longer --time-limit, or an earlier bake's dictionary with --dictionary DIR"));
             }

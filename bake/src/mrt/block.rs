@@ -103,31 +103,33 @@ fn f_rows(shape: Shape, samples: &Samples, range: Range<usize>, rays: u32, seed:
             }
         }
     });
-    rows.concat()
+    rows
 }
 
-/// Every shape's F, on `settings`' threads: each shape's rows are a gather of the bake
-/// (`shard`: its part in a sharded one, `shards`), none read before the last is made.
-pub fn gather_shapes(shapes: &[(Shape, Samples)], settings: &BlockSettings, shard: Option<&Role>) -> Result<Vec<DMatrix<f64>>, String> {
-    let mut operators = Vec::new();
-    for (k, (shape, samples)) in shapes.iter().enumerate() {
-        let n = samples.len();
-        let items = Items::whole::<f64>(n as u64, n).followed(k + 1 < shapes.len());
-        let make =
-            |range: Range<u64>| Ok(f_rows(*shape, samples, range.start as usize..range.end as usize, settings.gather_rays, settings.seed));
-        let take = |rows: Vec<f64>| {
-            operators.push(DMatrix::from_row_slice(n, n, &rows));
-            Ok(())
-        };
-        with_threads(settings.threads, || shards::gather(shard, &items, make, take))?;
-    }
-    Ok(operators)
+/// A shape's F, its rows a gather of the bake (`role`: the bake's in a sharded one, `shards`;
+/// `followed`: another shape's gather follows), handed to `take` once made or read.
+pub fn gather_shape(
+    shape: Shape,
+    samples: &Samples,
+    settings: &BlockSettings,
+    role: Option<&Role>,
+    followed: bool,
+    take: impl FnOnce(DMatrix<f64>) -> Result<(), String>,
+) -> Result<(), String> {
+    let n = samples.len();
+    let items = Items::whole::<f64>(n as u64, n).followed(followed);
+    let make = |_, range: Range<u64>| {
+        let rows = range.start as usize..range.end as usize;
+        Ok(with_threads(settings.threads, || f_rows(shape, samples, rows, settings.gather_rays, settings.seed)))
+    };
+    let mut take = Some(take);
+    shards::gather(role, &items, make, |rows: Vec<f64>| take.take().map_or(Ok(()), |take| take(DMatrix::from_row_slice(n, n, &rows))))
 }
 
-/// For each sample (in parallel; each row on its own, so the result does not depend on the
-/// thread count) `rays` cosine-distributed directions about its normal: `visit(face, point,
-/// direction, row)` adds what the ray brings, where it leaves the block, into the sample's row
-/// of `width` values; the rows are then averaged over the rays.
+/// For each sample of `range` (in parallel; each row on its own, so the result does not depend
+/// on the thread count) `rays` cosine-distributed directions about its normal: `visit(face,
+/// point, direction, row)` adds what the ray brings, where it leaves the block, into the
+/// sample's row of `width` values; the rows, averaged over the rays, one after another.
 pub(super) fn gather_rows(
     samples: &Samples,
     range: Range<usize>,
@@ -135,24 +137,21 @@ pub(super) fn gather_rows(
     seed: u64,
     width: usize,
     visit: impl Fn(Face, Vec3, Vec3, &mut [f64]) + Sync,
-) -> Vec<Vec<f64>> {
-    range
-        .into_par_iter()
-        .map(|i| {
-            let mut row = vec![0.0f64; width];
-            let (_, origin, normal) = samples.sample(i);
-            let (t, b) = orthonormal_basis(normal);
-            for r in 0..rays {
-                let u = PathSampler::new(seed, i as u32, r).sobol4(0);
-                let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
-                let direction = t * local.x + b * local.y + normal * local.z;
-                let (face, point) = exit(origin, direction);
-                visit(face, point, direction, &mut row);
-            }
-            row.iter_mut().for_each(|v| *v /= rays as f64);
-            row
-        })
-        .collect()
+) -> Vec<f64> {
+    let mut rows = vec![0.0f64; range.len() * width];
+    rows.par_chunks_mut(width.max(1)).zip(range.into_par_iter()).for_each(|(row, i)| {
+        let (_, origin, normal) = samples.sample(i);
+        let (t, b) = orthonormal_basis(normal);
+        for r in 0..rays {
+            let u = PathSampler::new(seed, i as u32, r).sobol4(0);
+            let local = cosine_hemisphere(Vec2::new(u[0], u[1]));
+            let direction = t * local.x + b * local.y + normal * local.z;
+            let (face, point) = exit(origin, direction);
+            visit(face, point, direction, row);
+        }
+        row.iter_mut().for_each(|v| *v /= rays as f64);
+    });
+    rows
 }
 
 /// Where a ray from inside the unit cube leaves it: the face and the point.

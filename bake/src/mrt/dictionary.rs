@@ -267,28 +267,28 @@ mod built {
             interface: &InterfaceSettings,
             stage: impl FnMut(&str) -> Result<(), String>,
         ) -> Result<Dictionary, String> {
-            Dictionary::build_in(settings, interface, None, stage)
+            Dictionary::build_in_role(settings, interface, None, stage)
         }
 
-        /// As [`Dictionary::build`], in a bake that is `shard`'s part of a sharded one: the
-        /// six shapes' F are its gathers.
-        pub fn build_in(
+        /// As [`Dictionary::build`], in a bake whose `role` in a sharded one (`shards`) is a
+        /// plan, a shard or the merge: the six shapes' F are its gathers, each shape reduced
+        /// once its F is made or read.
+        pub fn build_in_role(
             settings: &BlockSettings,
             interface: &InterfaceSettings,
-            shard: Option<&Role>,
+            role: Option<&Role>,
             mut stage: impl FnMut(&str) -> Result<(), String>,
         ) -> Result<Dictionary, String> {
-            let shapes: Vec<(Shape, Samples)> =
-                Shape::dictionary().iter().map(|&s| (s, Samples::new(s, settings.samples_per_face))).collect();
-            stage("the six block shapes' one-bounce operators F")?;
-            let gathered = block::gather_shapes(&shapes, settings, shard)?;
-            let count = shapes.len();
-            let operators: Vec<BlockOperators> = (shapes.into_iter().zip(&gathered).enumerate())
-                .map(|(i, ((shape, samples), f))| {
-                    stage(&format!("block shape {} of {count}", i + 1))?;
-                    Ok(block::reduced(shape, samples, f, settings))
-                })
-                .collect::<Result<_, String>>()?;
+            let shapes = Shape::dictionary();
+            let mut operators: Vec<BlockOperators> = Vec::with_capacity(shapes.len());
+            for (i, &shape) in shapes.iter().enumerate() {
+                stage(&format!("block shape {} of {}", i + 1, shapes.len()))?;
+                let samples = Samples::new(shape, settings.samples_per_face);
+                block::gather_shape(shape, &samples, settings, role, i + 1 < shapes.len(), |f| {
+                    operators.push(block::reduced(shape, samples.clone(), &f, settings));
+                    Ok(())
+                })?;
+            }
             stage("interfaces")?;
             let built = crate::work::with_threads(settings.threads, || interface::build(&operators, interface));
             Ok(Dictionary::of(settings, interface, &operators, &built))

@@ -242,7 +242,7 @@ fn respond(receiver: &Samples, h_rlf: &DMatrix<f64>, cells: Cells, settings: &In
                 row.iter_mut().zip(h_rlf.row(source).iter()).for_each(|(v, x)| *v += x * std::f64::consts::PI);
             }
         });
-    DMatrix::from_fn(receiver.len(), h_rlf.ncols(), |r, c| rows[r][c])
+    DMatrix::from_row_slice(receiver.len(), h_rlf.ncols(), &rows)
 }
 
 /// The light volume's probes (volume::ROWS x k_rlf) for each basis lightfield entering

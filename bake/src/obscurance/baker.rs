@@ -185,7 +185,7 @@ pub(crate) fn gather_obscurance(
     let start = Instant::now();
     let mut taken = settings.rays_per_texel;
     let mut values = vec![Vec3::ZERO; atlas.texels.len()];
-    let make = |range: Range<u64>| {
+    let make = |_, range: Range<u64>| {
         let texels = &covered[range.start as usize..range.end as usize];
         let mut sums = vec![Vec3::ZERO; texels.len()];
         taken = settings.work.in_passes(settings.rays_per_texel, RAYS_PER_PASS, |rays| {
