@@ -27,8 +27,6 @@
 // max(0, y(to camera) . a) (004 eq. 8), a the interpolated coefficients (16 rgb).
 #include "lights.glsl"
 #include "lighting_interface.glsl"
-#include "bilinear.glsl"
-#include "sh.glsl"
 
 struct Material {
     vec4 base_color;
@@ -64,15 +62,6 @@ layout(location = 0) out vec4 radiance;
 
 const float PI = 3.14159265358979;
 
-// An atlas image at uv1 (relume_bake::atlas's convention): page = floor(u), the page's own
-// u = fract(u), v in [0, 1] with row 0 at the top; filtered within the page, clamped to its edge.
-vec3 atlas_sample(sampler2DArray image, vec2 uv) {
-    ivec3 size = textureSize(image, 0);
-    float page = floor(uv.x);
-    int layer = clamp(int(page), 0, size.z - 1);
-    return sample_bilinear(image, layer, size.xy, vec2(uv.x - page, uv.y), WRAP_CLAMP).rgb;
-}
-
 // The glossy lobe of f, the normalised modified Phong lobe the path tracer also evaluates
 // (bake/src/bsdf.rs): rho_s (e + 2) / 2 pi max(0, wi . reflect(wo))^e.
 vec3 phong_lobe(vec4 phong, vec3 n, vec3 to_camera, vec3 to_light) {
@@ -90,26 +79,12 @@ vec3 environment_irradiance(vec3 n) {
     return max(sh_irradiance(n, radiance), vec3(0.0));
 }
 
-#ifdef SH_RADIANCE
-// 004 eq. (8): the exitant radiance towards the camera, clamped at zero.
-vec3 radiance_term(vec3 to_camera) {
-    float y[16];
-    sh_eval(to_camera, y);
-    vec3 sum = vec3(0.0);
-    for (int k = 0; k < 16; ++k) {
-        int f = 3 * k;
-        vec3 a = vec3(radiance_sh[f / 4][f % 4], radiance_sh[(f + 1) / 4][(f + 1) % 4], radiance_sh[(f + 2) / 4][(f + 2) % 4]);
-        sum += a * y[k];
-    }
-    return max(sum, vec3(0.0));
-}
-#else
+#ifndef SH_RADIANCE
 vec3 irradiance_term() {
-    if (IRRADIANCE_TERM == TERM_TEXEL) return atlas_sample(irradiance_texels, uv1);
-    if (IRRADIANCE_TERM == TERM_VERTEX) return vertex_term.rgb;
-    // Alpha is 1 across a mesh lit per vertex and 0 across the others: exact when interpolated.
-    if (IRRADIANCE_TERM == TERM_TEXEL_OR_VERTEX) return vertex_term.a > 0.5 ? vertex_term.rgb : atlas_sample(irradiance_texels, uv1);
-    return texelFetch(irradiance_pixels, ivec3(ivec2(gl_FragCoord.xy), 0), 0).rgb;
+    if (IRRADIANCE_TERM == RELUME_TERM_TEXEL) return relume_atlas(irradiance_texels, uv1);
+    if (IRRADIANCE_TERM == RELUME_TERM_VERTEX) return vertex_term.rgb;
+    if (IRRADIANCE_TERM == RELUME_TERM_TEXEL_OR_VERTEX) return relume_texel_or_vertex(irradiance_texels, uv1, vertex_term);
+    return relume_pixel(irradiance_pixels, gl_FragCoord.xy);
 }
 #endif
 
@@ -143,16 +118,16 @@ void main() {
     if (frame.ambient_beta != vec4(0.0) || frame.environment_ambient != 0u) {
         vec3 ambient = frame.ambient_beta.rgb + frame.ambient_beta.w * unshadowed;   // I_A + I'_S
         if (frame.environment_ambient != 0u) ambient += environment_irradiance(n);
-        vec3 o = OCCLUSION_TERM ? atlas_sample(occlusion, uv1) : vec3(1.0);
+        vec3 o = OCCLUSION_TERM ? relume_atlas(occlusion, uv1) : vec3(1.0);
         result += albedo / PI * ambient * o;
     }
 #ifdef SH_RADIANCE
-    result += radiance_term(to_camera);
+    result += relume_radiance(radiance_sh, to_camera);
 #else
-    if (IRRADIANCE_TERM != TERM_NONE) {
+    if (IRRADIANCE_TERM != RELUME_TERM_NONE) {
         vec3 term = irradiance_term();
         if (OCCLUSION_TERM && frame.irradiance_times_occlusion != 0u) {
-            vec3 o = atlas_sample(occlusion, uv1);
+            vec3 o = relume_atlas(occlusion, uv1);
             term = frame.occluded_direct != 0u ? o * (term + direct) : o * term;
         }
         result += albedo / PI * term;

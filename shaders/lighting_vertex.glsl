@@ -26,18 +26,10 @@ void main() {
     uv0 = in_uv0;
     uv1 = in_uv1;
 #ifdef SH_RADIANCE
-    // Coefficient k's rgb at floats 3k..3k+2 of the 48.
-    for (int i = 0; i < 12; ++i) {
-        vec4 packed;
-        for (int c = 0; c < 4; ++c) {
-            int f = 4 * i + c;
-            packed[c] = vertex_irradiance[16 * gl_VertexIndex + f / 3][f % 3];
-        }
-        radiance_sh[i] = packed;
-    }
+    relume_pack_radiance(uint(gl_VertexIndex), radiance_sh);
 #else
-    bool per_vertex = IRRADIANCE_TERM == TERM_VERTEX || IRRADIANCE_TERM == TERM_TEXEL_OR_VERTEX;
-    vertex_term = per_vertex ? vertex_irradiance[gl_VertexIndex] : vec4(0.0);
+    bool per_vertex = IRRADIANCE_TERM == RELUME_TERM_VERTEX || IRRADIANCE_TERM == RELUME_TERM_TEXEL_OR_VERTEX;
+    vertex_term = per_vertex ? relume_vertex_value(uint(gl_VertexIndex)) : vec4(0.0);
 #endif
     gl_Position = frame.clip_from_world * vec4(in_position, 1.0);
 }

@@ -11,13 +11,16 @@
 //! With `--validation` the engine turns on the Khronos validation layer with synchronization
 //! validation and counts its messages (a wrong handed-back layout would be one).
 
+#[path = "common/engine_device.rs"]
+mod engine_device;
+
 use ash::vk;
+use engine_device::Engine;
 use relume_renderer::vk::{CommandRecorder, Context, ImageState};
 use relume_renderer::{CallerImage, RenderSettings, Renderer};
 use std::error::Error;
-use std::ffi::c_void;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// What the engine got out of one frame.
 pub struct Outcome {
@@ -58,14 +61,7 @@ fn main() -> Result<(), Box<dyn Error>> {
 pub fn run(scene: &Path, width: u32, height: u32, validation: bool) -> Result<Outcome, Box<dyn Error>> {
     let engine = Engine::new(validation)?;
     let loaded = relume_bake::gltf_load::load(scene)?;
-    let ctx = Context::from_existing(
-        engine.entry.clone(),
-        engine.instance.clone(),
-        engine.physical,
-        engine.device.clone(),
-        engine.family,
-        engine.queue,
-    )?;
+    let ctx = engine.context()?;
     let settings = RenderSettings { width, height, ..RenderSettings::default() };
     let mut renderer = Renderer::new_blocking(&ctx, &loaded.scene, &settings, &[])?;
     let frame = engine.frame(&ctx, &mut renderer, width, height);
@@ -75,75 +71,13 @@ pub fn run(scene: &Path, width: u32, height: u32, validation: bool) -> Result<Ou
         device: engine.name.clone(),
         pixels,
         handed_back,
-        validation_messages: engine.messages.lock().map(|m| m.clone()).unwrap_or_default(),
+        validation_messages: engine.validation_messages(),
     });
     engine.destroy();
     outcome
 }
 
-/// The engine's own Vulkan objects.
-struct Engine {
-    entry: ash::Entry,
-    instance: ash::Instance,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
-    messages: Box<Mutex<Vec<String>>>,
-    physical: vk::PhysicalDevice,
-    name: String,
-    device: ash::Device,
-    family: u32,
-    queue: vk::Queue,
-}
-
 impl Engine {
-    fn new(validation: bool) -> Result<Engine, Box<dyn Error>> {
-        let messages = Box::new(Mutex::new(Vec::new()));
-        // SAFETY: the engine loads Vulkan and creates an instance and a device from valid
-        // create infos whose pointers outlive each call; `destroy` undoes it in reverse.
-        unsafe {
-            let entry = ash::Entry::load()?;
-            let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
-            let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
-            let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
-            let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-            let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
-            let mut info = vk::InstanceCreateInfo::default().application_info(&app);
-            if validation {
-                info = info.enabled_layer_names(&layers).enabled_extension_names(&extensions).push_next(&mut features);
-            }
-            let instance = entry.create_instance(&info, None)?;
-            let debug = match validation {
-                true => {
-                    let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-                    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
-                        .message_type(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL)
-                        .pfn_user_callback(Some(collect_message))
-                        .user_data(&*messages as *const Mutex<Vec<String>> as *mut c_void);
-                    let messenger = loader.create_debug_utils_messenger(&info, None)?;
-                    Some((loader, messenger))
-                }
-                false => None,
-            };
-            let physical = instance.enumerate_physical_devices()?[0];
-            let props = instance.get_physical_device_properties(physical);
-            let name = props.device_name_as_c_str()?.to_string_lossy().into_owned();
-            let family = instance
-                .get_physical_device_queue_family_properties(physical)
-                .iter()
-                .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-                .ok_or("no graphics and compute queue")? as u32;
-            let priorities = [1.0];
-            let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-            // What relume documents it needs (Context::from_existing).
-            let base = vk::PhysicalDeviceFeatures::default().shader_storage_image_extended_formats(true);
-            let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
-            let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_features(&base).push_next(&mut v13);
-            let device = instance.create_device(physical, &info, None)?;
-            let queue = device.get_device_queue(family, 0);
-            Ok(Engine { entry, instance, debug, messages, physical, name, device, family, queue })
-        }
-    }
-
     /// One frame: the engine's clear, relume's frame into the engine's image, the engine's
     /// copy to host memory; submitted and waited for by the engine. Returns the pixels and the
     /// state relume handed back.
@@ -208,10 +142,7 @@ impl Engine {
                 .dst_stage_mask(vk::PipelineStageFlags2::HOST)
                 .dst_access_mask(vk::AccessFlags2::HOST_READ)];
             d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&to_host));
-            d.end_command_buffer(cmd)?;
-            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-            d.queue_submit2(self.queue, &[vk::SubmitInfo2::default().command_buffer_infos(&cmds)], fence)?;
-            d.wait_for_fences(&[fence], true, u64::MAX)?;
+            self.end_submit_and_wait(cmd, fence)?;
 
             let mapped = d.map_memory(buffer_memory, 0, bytes, vk::MemoryMapFlags::empty())? as *const u8;
             let pixels = std::slice::from_raw_parts(mapped, bytes as usize).to_vec();
@@ -238,19 +169,6 @@ impl Engine {
             Ok(self.device.allocate_memory(&info, None)?)
         }
     }
-
-    /// The engine's teardown, after relume is gone (relume never destroys what it was lent).
-    fn destroy(self) {
-        // SAFETY: nothing made from the device or instance is alive any more.
-        unsafe {
-            let _ = self.device.device_wait_idle();
-            self.device.destroy_device(None);
-            if let Some((loader, messenger)) = &self.debug {
-                loader.destroy_debug_utils_messenger(*messenger, None);
-            }
-            self.instance.destroy_instance(None);
-        }
-    }
 }
 
 /// The engine's own barrier of `image` from one state to another.
@@ -273,22 +191,4 @@ fn barrier(
         .subresource_range(range)];
     // SAFETY: `cmd` is recording and `image` is the engine's live image.
     unsafe { device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barrier)) };
-}
-
-unsafe extern "system" fn collect_message(
-    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
-    _kind: vk::DebugUtilsMessageTypeFlagsEXT,
-    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    user_data: *mut c_void,
-) -> vk::Bool32 {
-    // SAFETY: the layer passes valid callback data; user_data is the engine's boxed log,
-    // alive until the messenger is destroyed.
-    let (message, log) = unsafe {
-        let text = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned());
-        (text.unwrap_or_default(), &*(user_data as *const Mutex<Vec<String>>))
-    };
-    if let Ok(mut messages) = log.lock() {
-        messages.push(format!("[{severity:?}] {message}"));
-    }
-    vk::FALSE
 }

@@ -1,26 +1,21 @@
-//! The frame, top to bottom: the frame's uniforms and lights, the variance shadow maps
-//! (moments, blur), each technique's passes in the order the techniques were given, the
-//! lighting pass (direct light plus the techniques' terms), the tonemap, and, when the caller
+//! The frame, top to bottom: the effect's passes (the frame's uniforms and lights, the variance
+//! shadow maps, each technique's passes in the order the techniques were given: `crate::effect`),
+//! the lighting pass (direct light plus the techniques' terms), the tonemap, and, when the caller
 //! hands relume its own image, the copy of the display image into it. [`Renderer::record`]
 //! writes a frame into any command buffer (the caller's: an integrator's); nothing in a frame
 //! allocates, submits or waits. The headless driver relume's own tools use (command buffer,
 //! fence, read-back) is `crate::headless`, apart from this library type.
 
-use crate::atlas_image::check_uv1;
-use crate::gpu_scene::{FrameUniforms, GpuScene};
-use crate::passes::lighting::{LightingPass, Terms, DEPTH_FORMAT, RADIANCE_FORMAT};
+use crate::effect::Effect;
+use crate::passes::lighting::{LightingPass, DEPTH_FORMAT, RADIANCE_FORMAT};
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
-use crate::passes::vsm::VsmPass;
-use crate::passes::vsm_blur::VsmBlurPass;
-use crate::technique::{MakeTechnique, Resource, Shared, Technique, Term};
-use crate::vk::{
-    transition, vk, Access, CommandRecorder, Context, Image, ImageDesc, ImageRef, ImageState, Readback, TimestampQueries, Tracker,
-};
+use crate::technique::{MakeTechnique, Resource, Technique};
+use crate::vk::Tracker;
+use crate::vk::{transition, vk, Access, CommandRecorder, Context, Image, ImageDesc, ImageRef, ImageState, Readback, TimestampQueries};
 use crate::vk::{VkError, VkResult};
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use relume_bake::scene::{Camera, Light, Scene};
 use relume_bake::settings::first_failed_check;
-use std::any::Any;
 use std::sync::Arc;
 
 /// Everything that shapes a frame; validated by [`RenderSettings::validate`].
@@ -138,17 +133,13 @@ pub struct CallerImage {
     pub state: ImageState,
 }
 
-/// The renderer: the scene uploaded, the shared passes, the techniques and the frame's
-/// images. It holds its context (`Arc`), so a caller can own both side by side. Dropping it
-/// releases everything it made; the caller must first wait for any frame it submitted.
+/// The renderer: an effect (the scene uploaded, the shadow maps, the techniques) and the
+/// frame around it: the lighting pass that reads the effect's terms, the tonemap and the
+/// frame's images. It holds its context (`Arc`), so a caller can own both side by side.
+/// Dropping it releases everything it made; the caller must first wait for any frame it
+/// submitted.
 pub struct Renderer {
-    ctx: Arc<Context>,
-    settings: RenderSettings,
-    camera: Camera,
-    scene: GpuScene,
-    vsm: VsmPass,
-    blur: VsmBlurPass,
-    techniques: Vec<Box<dyn Technique>>,
+    effect: Effect,
     lighting: LightingPass,
     tonemap: TonemapPass,
     radiance: Image,
@@ -157,145 +148,107 @@ pub struct Renderer {
     queries: Option<TimestampQueries>,
     /// The passes the last frame recorded (its timestamps' names).
     recorded: FrameTimings,
-    tracker: Tracker,
-    /// The scene's environment's radiance in spherical harmonics (zero without one).
-    environment_sh: [Vec4; 9],
 }
 
 impl Renderer {
-    /// Uploads the scene, creates every shared pass and target, then each technique from its
-    /// data, in the given order (which is the order of their passes in a frame), and the
-    /// lighting pass for the terms they hand over. Blocking: uploads go through one-time
-    /// submissions on the context's queue, each waited for by its own fence (never the
-    /// device); nothing here runs per frame. Refused, by name: invalid settings, what a
-    /// technique refuses, two techniques handing over a term of the same role, and a texel
-    /// term on a scene without uv1 on the atlas's pages.
+    /// Makes the effect of the techniques (`Effect::new_blocking`: the scene uploaded, every
+    /// technique made in the given order, which is the order of their passes in a frame), then
+    /// the lighting pass for the terms they hand over, the tonemap and the frame's images.
+    /// Blocking: uploads go through one-time submissions on the context's queue, each waited
+    /// for by its own fence (never the device); nothing here runs per frame. Refused, by name:
+    /// what the effect refuses, and more technique passes than a frame times.
     pub fn new_blocking(
         ctx: &Arc<Context>,
         scene: &Scene,
         settings: &RenderSettings,
         techniques: &[&dyn MakeTechnique],
     ) -> VkResult<Renderer> {
-        settings.validate().map_err(VkError::Invalid)?;
-        let (w, h) = (settings.width, settings.height);
-        let target = |name, format, usage| {
-            Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
-        };
-        use vk::ImageUsageFlags as U;
-        let gpu_scene = GpuScene::upload_blocking(ctx, scene)?;
-        let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
-        let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings };
-        let techniques = techniques.iter().map(|t| t.make_blocking(&shared)).collect::<VkResult<Vec<_>>>()?;
-        let technique_passes: usize = techniques.iter().map(|t| t.passes().len()).sum();
+        let effect = Effect::new_blocking(ctx, scene, settings, techniques)?;
+        let technique_passes = effect.technique_passes();
         if technique_passes > MAX_PASSES - FRAME_PASSES {
             return Err(VkError::Invalid(format!(
                 "the techniques record {technique_passes} passes a frame; at most {} fit beside the frame's own",
                 MAX_PASSES - FRAME_PASSES
             )));
         }
-        let terms = Terms::gather(techniques.iter().map(|t| (t.name(), t.term())))?;
-        for atlas in terms.atlas_images() {
-            check_uv1(scene, atlas.desc.layers)?;
-        }
-        let lighting = LightingPass::new(ctx, &gpu_scene, &vsm.moments, &terms)?;
+        let (w, h) = (settings.width, settings.height);
+        let target = |name, format, usage| {
+            Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
+        };
+        use vk::ImageUsageFlags as U;
+        let lighting = LightingPass::new(ctx, &effect.scene, effect.moments(), &effect.terms()?)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
         let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
         let tonemap = TonemapPass::new(ctx, &radiance, &display)?;
-        let mut renderer = Renderer {
-            ctx: Arc::clone(ctx),
-            settings: settings.clone(),
-            camera: scene.camera,
+        Ok(Renderer {
             queries: TimestampQueries::new(ctx)?,
-            scene: gpu_scene,
-            vsm,
-            blur,
-            techniques,
+            effect,
             lighting,
             tonemap,
             radiance,
             depth,
             display,
             recorded: FrameTimings::default(),
-            tracker: Tracker::default(),
-            environment_sh: scene.environment.as_ref().map_or([Vec4::ZERO; 9], |e| e.radiance_sh().map(|c| c.extend(0.0))),
-        };
-        renderer.forget_states();
-        Ok(renderer)
+        })
     }
 
     pub fn context(&self) -> &Arc<Context> {
-        &self.ctx
+        self.effect.context()
     }
 
     pub fn settings(&self) -> &RenderSettings {
-        &self.settings
+        self.effect.settings()
+    }
+
+    /// The effect the frame is built on (its techniques, lights and meshes).
+    pub fn effect(&self) -> &Effect {
+        &self.effect
+    }
+
+    /// The effect, to change what it holds: lights, meshes, ambient, camera, its techniques'
+    /// own settings (`Effect::technique_mut`).
+    pub fn effect_mut(&mut self) -> &mut Effect {
+        &mut self.effect
     }
 
     /// The technique of type `T`, if the renderer has one (to change its own settings).
     pub fn technique_mut<T: Technique>(&mut self) -> Option<&mut T> {
-        self.techniques.iter_mut().find_map(|t| (t.as_mut() as &mut dyn Any).downcast_mut::<T>())
+        self.effect.technique_mut()
     }
 
     /// GPU work the techniques timed at creation (`<technique>.<work>`, milliseconds).
     pub fn creation_timings(&self) -> Vec<(&'static str, f64)> {
-        self.techniques.iter().flat_map(|t| t.creation_timings()).collect()
+        self.effect.creation_timings()
     }
 
-    /// Changes I_A (lux) and beta (see [`RenderSettings::ambient`]) for the frames recorded
-    /// from now on, without allocating; refused like invalid settings.
+    /// [`Effect::set_ambient`].
     pub fn set_ambient(&mut self, ambient: Vec3, beta: f32) -> VkResult<()> {
-        let next = RenderSettings { ambient, beta, ..self.settings.clone() };
-        next.validate().map_err(VkError::Invalid)?;
-        self.settings = next;
-        Ok(())
+        self.effect.set_ambient(ambient, beta)
     }
 
-    /// Moves the lights (same kinds and count as the scene had), without allocating, and tells
-    /// every technique (`Technique::lights_set`). The next frame recorded carries the new data
-    /// in its command buffer, so a frame still in flight is not disturbed.
+    /// [`Effect::set_lights`].
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
-        self.place_lights(lights, None)
+        self.effect.set_lights(lights)
     }
 
-    /// As [`Renderer::set_lights`] for lights that moved continuously over `seconds` (a frame's
-    /// time): techniques that ease changes over time (a fade as visibility changes) advance by
-    /// it instead of settling at once.
+    /// [`Effect::move_lights`].
     pub fn move_lights(&mut self, lights: &[Light], seconds: f32) -> VkResult<()> {
-        self.place_lights(lights, Some(seconds))
+        self.effect.move_lights(lights, seconds)
     }
 
-    fn place_lights(&mut self, lights: &[Light], elapsed: Option<f32>) -> VkResult<()> {
-        self.scene.set_lights(lights)?;
-        self.techniques.iter_mut().for_each(|t| t.lights_set(lights, elapsed));
-        Ok(())
-    }
-
-    /// Moves mesh `mesh` (an index into the scene's meshes) by `translation` from where the
-    /// scene had it, for the frames recorded from now on, without allocating; the shadow
-    /// maps refit to the moved scene at the next [`Renderer::set_lights`], and every technique
-    /// hears of it (`Technique::mesh_translated`: one that models moving geometry follows).
-    /// Baked data stays as baked: that is what a moving-occluder sweep measures. The vertex
-    /// buffer is written at once, so no frame this renderer recorded may be in flight.
+    /// [`Effect::set_mesh_translation`].
     pub fn set_mesh_translation(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
-        self.scene.translate_mesh(mesh, translation)?;
-        self.techniques.iter_mut().for_each(|t| t.mesh_translated(mesh, translation));
-        Ok(())
+        self.effect.set_mesh_translation(mesh, translation)
     }
 
-    /// Gives mesh `mesh` new vertex positions and normals (one each per vertex of the mesh as
-    /// the renderer was made with it, in that order; its triangles stay), for the frames
-    /// recorded from now on, without allocating: a deforming receiver (003 §5: receivers need
-    /// no precomputation). Its translation, if any, still applies. Baked data stays as baked.
-    /// The vertex buffer is written at once, so no frame this renderer recorded may be in
-    /// flight.
+    /// [`Effect::set_mesh_vertices`].
     pub fn set_mesh_vertices(&mut self, mesh: usize, positions: &[Vec3], normals: &[Vec3]) -> VkResult<()> {
-        self.scene.reshape_mesh(mesh, positions, normals)
+        self.effect.set_mesh_vertices(mesh, positions, normals)
     }
 
     pub fn set_camera(&mut self, camera: Camera) {
-        self.camera = camera;
+        self.effect.set_camera(camera);
     }
 
     /// Records one whole frame into `rec` (begun, ended and submitted by the caller, who
@@ -304,9 +257,9 @@ impl Renderer {
     /// afterwards `radiance` is left as compute storage read ([`Renderer::radiance_state`])
     /// and `display` as compute storage write ([`Renderer::display_state`]).
     pub fn record(&mut self, rec: &CommandRecorder) {
-        let mut tracker = std::mem::take(&mut self.tracker);
+        let mut tracker = self.effect.take_tracker();
         self.recorded = self.record_frame(rec, &mut tracker);
-        self.tracker = tracker;
+        self.effect.put_tracker(tracker);
     }
 
     /// [`Renderer::record`], then the copy of the display image into the caller's `target`
@@ -318,10 +271,10 @@ impl Renderer {
         if target.extent != self.display.desc.extent() || !formats.contains(&target.format) {
             return Err(VkError::Invalid(format!(
                 "the caller's image is {}x{} {:?}; relume copies its {}x{} display (sRGB-encoded RGBA8) into an image of that size in R8G8B8A8_UNORM or R8G8B8A8_SRGB",
-                target.extent.width, target.extent.height, target.format, self.settings.width, self.settings.height
+                target.extent.width, target.extent.height, target.format, self.settings().width, self.settings().height
             )));
         }
-        let mut tracker = std::mem::take(&mut self.tracker);
+        let mut tracker = self.effect.take_tracker();
         let mut timer = PassTimer::resume(self.queries.as_ref(), self.record_frame(rec, &mut tracker));
         tracker.use_image(rec, &self.display, Access::TransferSource);
         let target_ref = ImageRef { raw: target.image, range: self.display.desc.all_layers() };
@@ -329,18 +282,18 @@ impl Renderer {
         rec.copy_image(&self.display, target.image);
         timer.stamp(rec, "output_copy");
         self.recorded = timer.recorded;
-        self.tracker = tracker;
+        self.effect.put_tracker(tracker);
         Ok(state)
     }
 
     /// How the last frame recorded left `radiance` (linear radiance, RGBA32F).
     pub fn radiance_state(&self) -> ImageState {
-        self.tracker.state(&self.radiance).state()
+        self.effect.tracker().state(&self.radiance).state()
     }
 
     /// How the last frame recorded left `display` (tonemapped, sRGB-encoded RGBA8).
     pub fn display_state(&self) -> ImageState {
-        self.tracker.state(&self.display).state()
+        self.effect.tracker().state(&self.display).state()
     }
 
     pub fn radiance(&self) -> &Image {
@@ -358,16 +311,10 @@ impl Renderer {
             "display" => return Ok(Resource::Image(&self.display)),
             _ => {}
         }
-        let found = name.split_once('.').and_then(|(technique, resource)| {
-            let technique = self.techniques.iter().find(|t| t.name() == technique)?;
-            technique.resources().into_iter().find(|(n, _)| *n == resource).map(|(_, r)| r)
-        });
-        found.ok_or_else(|| {
-            let known: Vec<String> =
-                self.techniques.iter().flat_map(|t| t.resources().into_iter().map(|(n, _)| format!("{}.{n}", t.name()))).collect();
+        self.effect.resource(name).ok_or_else(|| {
             VkError::Invalid(format!(
                 "this renderer has no resource \"{name}\"; it has radiance, display{}",
-                known.iter().map(|k| format!(", {k}")).collect::<String>()
+                self.effect.resource_names().iter().map(|k| format!(", {k}")).collect::<String>()
             ))
         })
     }
@@ -375,12 +322,12 @@ impl Renderer {
     /// Records the copy of resource `name` into `readback` (sized for it) after its last use
     /// in the frames recorded so far; the bytes are there once that submission completed.
     pub fn record_readback(&mut self, rec: &CommandRecorder, name: &str, readback: &Readback) -> VkResult<()> {
-        let mut tracker = std::mem::take(&mut self.tracker);
+        let mut tracker = self.effect.take_tracker();
         let recorded = self.resource(name).map(|resource| match resource {
             Resource::Image(image) => readback.record_image(rec, &mut tracker, image),
             Resource::Buffer(buffer) => readback.record_buffer(rec, &mut tracker, buffer),
         });
-        self.tracker = tracker;
+        self.effect.put_tracker(tracker);
         recorded
     }
 
@@ -399,62 +346,21 @@ impl Renderer {
         Ok(timings)
     }
 
-    /// Forgets what the renderer's images were last used for, after a recorded frame was
-    /// never submitted or its submission failed. Safe because every frame rewrites every
-    /// image and buffer it uses; the next frame transitions them from UNDEFINED. Uploaded
-    /// images, which no frame writes, stay known as ready for sampling.
+    /// [`Effect::forget_states`]: the frame's images too are transitioned from UNDEFINED by
+    /// the next frame.
     pub fn forget_states(&mut self) {
-        self.tracker = Tracker::default();
-        self.scene.register_states(&mut self.tracker);
-        for technique in &self.techniques {
-            technique.register_states(&mut self.tracker);
-        }
-    }
-
-    fn frame_uniforms(&self) -> FrameUniforms {
-        let s = &self.settings;
-        let flags = self.techniques.iter().find_map(|t| match t.term() {
-            Some(Term::Irradiance { times_occlusion, occluded_direct, .. }) => Some((times_occlusion, occluded_direct)),
-            _ => None,
-        });
-        let (times_occlusion, occluded_direct) = flags.unwrap_or_default();
-        FrameUniforms {
-            clip_from_world: self.camera.clip_from_world(s.width, s.height),
-            camera_position: self.camera.position().extend(1.0),
-            ambient_beta: s.ambient.extend(s.beta),
-            light_count: self.scene.light_count(),
-            shadows: s.shadows as u32,
-            min_variance: s.min_variance,
-            bleeding_reduction: s.bleeding_reduction,
-            irradiance_times_occlusion: times_occlusion as u32,
-            occluded_direct: occluded_direct as u32,
-            environment_ambient: (s.environment_ambient && self.environment_sh != [Vec4::ZERO; 9]) as u32,
-            _pad: 0,
-            environment_sh: self.environment_sh,
-        }
+        self.effect.forget_states();
     }
 
     /// The frame itself; returns the passes it recorded (whose timestamps it wrote).
     fn record_frame(&self, rec: &CommandRecorder, tracker: &mut Tracker) -> FrameTimings {
-        self.scene.record_updates(rec, &self.frame_uniforms());
         let mut timer = PassTimer::start(self.queries.as_ref(), rec);
-        if self.settings.shadows && !self.scene.shadow_views.is_empty() {
-            self.vsm.record(rec, tracker, &self.scene);
-            timer.stamp(rec, "vsm_moments");
-            if self.settings.blur_radius > 0 {
-                self.blur.record(rec, tracker);
-                timer.stamp(rec, "vsm_blur");
-            }
-        }
-        for technique in &self.techniques {
-            for (pass, name) in technique.passes().iter().enumerate() {
-                technique.record(pass, rec, tracker);
-                timer.stamp(rec, name);
-            }
-        }
-        self.lighting.record(rec, tracker, &self.scene, &self.radiance, &self.depth);
+        // The lighting pass reads the shadow maps whatever the techniques read.
+        self.effect.record_passes(rec, tracker, true, &mut |rec, name| timer.stamp(rec, name));
+        let scene = &self.effect.scene;
+        self.lighting.record(rec, tracker, scene, &self.radiance, &self.depth);
         timer.stamp(rec, "lighting");
-        self.tonemap.record(rec, tracker, self.settings.exposure);
+        self.tonemap.record(rec, tracker, self.settings().exposure);
         timer.stamp(rec, "tonemap");
         timer.recorded
     }

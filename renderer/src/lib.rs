@@ -5,9 +5,11 @@
 //!
 //! Layers (docs/ARCHITECTURE.md): `vk` owns every unsafe Vulkan call; `passes` are the shared
 //! passes, safe code, one file each; `techniques` holds each method's run-time part, one
-//! folder each, behind the [`technique::Technique`] trait; `frame` wires them in order.
+//! folder each, behind the [`technique::Technique`] trait; `effect` runs techniques without
+//! relume's frame (for an engine's own), and `frame` is relume's frame around an effect.
 
 pub mod atlas_image;
+pub mod effect;
 pub mod frame;
 pub mod gpu_scene;
 pub mod headless;
@@ -18,6 +20,7 @@ pub mod upload;
 pub mod vk;
 
 pub use atlas_image::AtlasImage;
+pub use effect::{Effect, EffectOutput, TermReads};
 pub use frame::{CallerImage, FrameTimings, RenderSettings, Renderer};
 pub use headless::Headless;
 pub use technique::{MakeTechnique, Technique};

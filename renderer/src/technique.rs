@@ -5,7 +5,7 @@
 //! shaders in a folder of the same name under `shaders/`.
 
 use crate::gpu_scene::GpuScene;
-use crate::vk::{Buffer, CommandRecorder, Context, Image, Tracker, VkResult};
+use crate::vk::{Buffer, CommandRecorder, Context, Image, Tracker, VkError, VkResult};
 use crate::RenderSettings;
 use glam::Vec3;
 use relume_bake::scene::{Light, Scene};
@@ -60,6 +60,106 @@ pub enum Term<'t> {
     Radiance(&'t Buffer),
 }
 
+/// The terms a set of techniques hands over, at most one of each role: what the lighting pass
+/// reads, and what an effect gives an engine (`crate::effect`).
+#[derive(Default)]
+pub struct Terms<'t> {
+    /// `Term::Occlusion`'s atlas image.
+    pub occlusion: Option<&'t Image>,
+    pub irradiance: Option<Source<'t>>,
+    /// Exitant radiance in spherical harmonics per vertex: in place of `irradiance`.
+    pub radiance: Option<&'t Buffer>,
+    /// The irradiance term's flags (`Term::Irradiance`); false without one.
+    pub times_occlusion: bool,
+    pub occluded_direct: bool,
+}
+
+/// shaders/include/relume.glsl's RELUME_TERM_* kinds of the irradiance term.
+pub const TERM_NONE: u32 = 0;
+pub const TERM_TEXEL: u32 = 1;
+pub const TERM_VERTEX: u32 = 2;
+pub const TERM_PIXEL: u32 = 3;
+pub const TERM_TEXEL_OR_VERTEX: u32 = 4;
+
+impl<'t> Terms<'t> {
+    /// Gathers the terms of techniques named `names`; two of one role are refused.
+    pub fn gather(terms: impl Iterator<Item = (&'static str, Option<Term<'t>>)>) -> VkResult<Terms<'t>> {
+        let mut gathered = Terms::default();
+        let mut givers: [Option<&str>; 2] = [None, None];
+        for (name, term) in terms {
+            let role = match term {
+                None => continue,
+                Some(Term::Occlusion(image)) => {
+                    gathered.occlusion = Some(image);
+                    0
+                }
+                Some(Term::Irradiance { source, times_occlusion, occluded_direct }) => {
+                    gathered.irradiance = Some(source);
+                    (gathered.times_occlusion, gathered.occluded_direct) = (times_occlusion, occluded_direct);
+                    1
+                }
+                Some(Term::Radiance(buffer)) => {
+                    gathered.radiance = Some(buffer);
+                    1
+                }
+            };
+            if let Some(first) = givers[role].replace(name) {
+                let what = ["an occlusion", "an irradiance or radiance"][role];
+                return Err(VkError::Invalid(format!(
+                    "techniques {first} and {name} both hand the lighting pass {what} term; a frame takes one of each"
+                )));
+            }
+        }
+        Ok(gathered)
+    }
+
+    /// The atlas images the terms are read from through uv1.
+    pub fn atlas_images(&self) -> impl Iterator<Item = &'t Image> {
+        self.occlusion.into_iter().chain(self.texels())
+    }
+
+    /// The irradiance term's atlas image, when it reads one.
+    pub fn texels(&self) -> Option<&'t Image> {
+        match self.irradiance {
+            Some(Source::Texel(image)) | Some(Source::TexelOrVertex(image, _)) => Some(image),
+            _ => None,
+        }
+    }
+
+    /// The irradiance term's image of one texel per pixel, when it is one.
+    pub fn pixels(&self) -> Option<&'t Image> {
+        match self.irradiance {
+            Some(Source::Pixel(image)) => Some(image),
+            _ => None,
+        }
+    }
+
+    /// The buffer read per vertex: a vertex (or texel-or-vertex) irradiance term's, or the
+    /// radiance term's.
+    pub fn vertex_values(&self) -> Option<&'t Buffer> {
+        match (&self.irradiance, self.radiance) {
+            (Some(Source::Vertex(buffer)), _) | (Some(Source::TexelOrVertex(_, buffer)), _) => Some(buffer),
+            (_, radiance) => radiance,
+        }
+    }
+
+    /// Every image the terms are read from.
+    pub fn images(&self) -> impl Iterator<Item = &'t Image> {
+        self.atlas_images().chain(self.pixels())
+    }
+
+    /// The irradiance term's kind, as the shaders number it (`TERM_*`).
+    pub fn irradiance_kind(&self) -> u32 {
+        match self.irradiance {
+            None => TERM_NONE,
+            Some(Source::Texel(_)) => TERM_TEXEL,
+            Some(Source::Vertex(_)) => TERM_VERTEX,
+            Some(Source::Pixel(_)) => TERM_PIXEL,
+            Some(Source::TexelOrVertex(..)) => TERM_TEXEL_OR_VERTEX,
+        }
+    }
+}
+
 /// A technique's image or buffer, named for read-back (tests and tools).
 pub enum Resource<'r> {
     Image(&'r Image),
@@ -82,6 +182,12 @@ pub trait Technique: Any + Send {
     /// The term it hands the lighting pass this frame, or none. Its kind and images are fixed
     /// at creation (they pick the lighting pass's variant); its flags may change per frame.
     fn term(&self) -> Option<Term<'_>>;
+
+    /// Whether its passes read the variance shadow maps (`Shared::moments`): an effect then
+    /// renders them before its passes (`crate::effect`).
+    fn reads_shadows(&self) -> bool {
+        false
+    }
 
     /// Tells a frame's tracker the state its uploads left its images in.
     fn register_states(&self, _tracker: &mut Tracker) {}

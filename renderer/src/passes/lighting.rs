@@ -19,85 +19,14 @@
 
 use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
 use crate::shaders;
-use crate::technique::{Source, Term};
+use crate::technique::Terms;
 use crate::vk::{vk, Access, Binding, Buffer, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, Pipeline};
-use crate::vk::{Sampler, Tracker, Use, VkError, VkResult};
+use crate::vk::{Sampler, Tracker, Use, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-
-/// lighting_interface.glsl's TERM_* kinds of the irradiance term.
-const TERM_NONE: u32 = 0;
-const TERM_TEXEL: u32 = 1;
-const TERM_VERTEX: u32 = 2;
-const TERM_PIXEL: u32 = 3;
-const TERM_TEXEL_OR_VERTEX: u32 = 4;
-
-/// The terms a frame's techniques hand over, at most one of each role.
-#[derive(Default)]
-pub struct Terms<'t> {
-    pub occlusion: Option<&'t Image>,
-    pub irradiance: Option<Source<'t>>,
-    /// Exitant radiance in spherical harmonics per vertex: in place of `irradiance`.
-    pub radiance: Option<&'t Buffer>,
-}
-
-impl<'t> Terms<'t> {
-    /// Gathers the terms of techniques named `names`; two of one role are refused.
-    pub fn gather(terms: impl Iterator<Item = (&'static str, Option<Term<'t>>)>) -> VkResult<Terms<'t>> {
-        let mut gathered = Terms::default();
-        let mut givers: [Option<&str>; 2] = [None, None];
-        for (name, term) in terms {
-            let role = match term {
-                None => continue,
-                Some(Term::Occlusion(image)) => {
-                    gathered.occlusion = Some(image);
-                    0
-                }
-                Some(Term::Irradiance { source, .. }) => {
-                    gathered.irradiance = Some(source);
-                    1
-                }
-                Some(Term::Radiance(buffer)) => {
-                    gathered.radiance = Some(buffer);
-                    1
-                }
-            };
-            if let Some(first) = givers[role].replace(name) {
-                let what = ["an occlusion", "an irradiance or radiance"][role];
-                return Err(VkError::Invalid(format!(
-                    "techniques {first} and {name} both hand the lighting pass {what} term; a frame takes one of each"
-                )));
-            }
-        }
-        Ok(gathered)
-    }
-
-    /// The atlas images the terms are read from through uv1.
-    pub fn atlas_images(&self) -> impl Iterator<Item = &'t Image> {
-        self.occlusion.into_iter().chain(self.texels())
-    }
-
-    /// The irradiance term's atlas image, when it reads one.
-    fn texels(&self) -> Option<&'t Image> {
-        match self.irradiance {
-            Some(Source::Texel(image)) | Some(Source::TexelOrVertex(image, _)) => Some(image),
-            _ => None,
-        }
-    }
-
-    fn irradiance_kind(&self) -> u32 {
-        match self.irradiance {
-            None => TERM_NONE,
-            Some(Source::Texel(_)) => TERM_TEXEL,
-            Some(Source::Vertex(_)) => TERM_VERTEX,
-            Some(Source::Pixel(_)) => TERM_PIXEL,
-            Some(Source::TexelOrVertex(..)) => TERM_TEXEL_OR_VERTEX,
-        }
-    }
-}
 
 pub struct LightingPass {
     pipeline: Pipeline,
@@ -132,16 +61,8 @@ impl LightingPass {
         let stand_in_buffer = Buffer::new(ctx, "lighting stand-in", 16, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
         let sampled = |image: &Image| Binding::SampledImage { view: image.view, sampler: texture_sampler.raw };
         let term_image = |image: Option<&Image>| sampled(image.unwrap_or(&stand_in_image));
-        let texels = terms.texels();
-        let pixels = match terms.irradiance {
-            Some(Source::Pixel(image)) => Some(image),
-            _ => None,
-        };
-        let vertices = match (&terms.irradiance, terms.radiance) {
-            (Some(Source::Vertex(buffer)), _) | (Some(Source::TexelOrVertex(_, buffer)), _) => *buffer,
-            (_, Some(buffer)) => buffer,
-            _ => &stand_in_buffer,
-        };
+        let (texels, pixels) = (terms.texels(), terms.pixels());
+        let vertices = terms.vertex_values().unwrap_or(&stand_in_buffer);
         let (vertex, fragment) = match terms.radiance {
             Some(_) => (shaders::LIGHTING_SH_VERT, shaders::LIGHTING_SH_FRAG),
             None => (shaders::LIGHTING_VERT, shaders::LIGHTING_FRAG),

@@ -67,8 +67,9 @@ pub(super) fn shipped(name: &str) -> Scene {
     scene
 }
 
-/// Bakes (with the least effort) and renders `method` on `scene`; Err: why it failed.
-fn renders(method: &dyn Method, scene: &Scene, ctx: &Arc<Context>, dir: &Path) -> Result<(), String> {
+/// Bakes `method` on `scene` with the least effort (into a folder under `dir`) and loads it
+/// with its default run-time values; Err: why it failed.
+pub(super) fn least_effort_loaded(method: &dyn Method, scene: &Scene, dir: &Path) -> Result<Box<dyn super::Loaded>, String> {
     let pairs: Vec<(String, String)> =
         least_effort(method.name(), &dir.join("dictionaries")).into_iter().map(|(k, v)| (k.into(), v)).collect();
     let values = super::parse_values(method, &pairs, None).map_err(|e| format!("{e:#}"))?;
@@ -82,7 +83,12 @@ fn renders(method: &dyn Method, scene: &Scene, ctx: &Arc<Context>, dir: &Path) -
         false => None,
     };
     let render_values = super::parse_values(method, &[], Some(super::params::Stage::Render)).map_err(|e| format!("{e:#}"))?;
-    let loaded = super::load(method, artifact.as_ref(), scene, &render_values).map_err(|e| format!("load: {e:#}"))?;
+    super::load(method, artifact.as_ref(), scene, &render_values).map_err(|e| format!("load: {e:#}"))
+}
+
+/// Bakes (with the least effort) and renders `method` on `scene`; Err: why it failed.
+fn renders(method: &dyn Method, scene: &Scene, ctx: &Arc<Context>, dir: &Path) -> Result<(), String> {
+    let loaded = least_effort_loaded(method, scene, dir)?;
     let (ambient, beta) = super::frame_ambient(method.ambient(scene), None, None);
     let settings = RenderSettings {
         width: 16,

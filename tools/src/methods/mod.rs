@@ -5,6 +5,8 @@
 mod atlas;
 mod constant;
 mod direct;
+#[cfg(test)]
+mod effects;
 mod fiv;
 mod light_cloud;
 mod light_path_maps;

@@ -137,6 +137,11 @@ impl Technique for LightPathMaps {
         }
     }
 
+    /// Its entry points' direct light is shadowed by the variance shadow maps.
+    fn reads_shadows(&self) -> bool {
+        true
+    }
+
     fn term(&self) -> Option<Term<'_>> {
         Some(Term::Irradiance {
             source: Source::Texel(&self.indirect),

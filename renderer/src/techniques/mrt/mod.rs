@@ -168,6 +168,11 @@ impl Technique for Mrt {
         self.dispatches[pass].record(rec, tracker, &self.push);
     }
 
+    /// Its samples' direct light is shadowed by the variance shadow maps.
+    fn reads_shadows(&self) -> bool {
+        true
+    }
+
     fn term(&self) -> Option<Term<'_>> {
         let source = match self.push.dynamic_count {
             0 => Source::Texel(&self.light_map),

@@ -1,0 +1,295 @@
+//! Effect mode: techniques without relume's frame, recorded into an engine's command buffer
+//! (docs/ARCHITECTURE.md, "The integrator's contract"). An [`Effect`] is the scene uploaded,
+//! the variance shadow maps its techniques read, and the techniques; per frame it takes the
+//! engine's lights and camera, records the techniques' passes and hands back their terms
+//! (`Terms`: the padded light map of a texel term, the per-vertex buffer of a vertex term, the
+//! image of a pixel term, the spherical-harmonic buffer of a radiance term) as resources the
+//! engine borrows, left in the state the engine asked for. The engine samples them with
+//! `shaders/include/relume.glsl`, as relume's own lighting pass does. relume's frame
+//! (`crate::Renderer`) is one user of an effect: its lighting pass reads the same terms.
+
+use crate::atlas_image::check_uv1;
+use crate::gpu_scene::{FrameUniforms, GpuScene};
+use crate::passes::vsm::VsmPass;
+use crate::passes::vsm_blur::VsmBlurPass;
+use crate::technique::{MakeTechnique, Resource, Shared, Technique, Terms};
+use crate::vk::{Access, CommandRecorder, Context, Image, ImageState, Tracker, VkError, VkResult};
+use crate::RenderSettings;
+use glam::{Vec3, Vec4};
+use relume_bake::scene::{Camera, Light, Scene};
+use std::any::Any;
+use std::sync::Arc;
+
+/// How the engine will read the terms an effect hands back: `images` as FragmentSampled or
+/// ComputeSampled, `buffers` as GraphicsStorageRead or ComputeStorageRead.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TermReads {
+    pub images: Access,
+    pub buffers: Access,
+}
+
+impl Default for TermReads {
+    /// Read in the engine's own graphics pass.
+    fn default() -> Self {
+        TermReads { images: Access::FragmentSampled, buffers: Access::GraphicsStorageRead }
+    }
+}
+
+/// What one frame of an effect hands the engine: its terms, borrowed until the next frame is
+/// recorded, and the state each kind of resource is left in.
+pub struct EffectOutput<'e> {
+    pub terms: Terms<'e>,
+    /// The state of every image of `terms` (the engine's next barrier starts from it).
+    pub images: ImageState,
+    /// The access every buffer of `terms` was made ready for.
+    pub buffers: Access,
+}
+
+/// The scene uploaded, the shadow maps and the techniques, with what a frame needs of them.
+pub struct Effect {
+    ctx: Arc<Context>,
+    settings: RenderSettings,
+    camera: Camera,
+    pub(crate) scene: GpuScene,
+    vsm: VsmPass,
+    blur: VsmBlurPass,
+    techniques: Vec<Box<dyn Technique>>,
+    tracker: Tracker,
+    /// The scene's environment's radiance in spherical harmonics (zero without one).
+    environment_sh: [Vec4; 9],
+}
+
+impl Effect {
+    /// Uploads the scene, creates the shadow maps and each technique from its data, in the
+    /// given order (the order of their passes). Blocking: uploads go through one-time
+    /// submissions, each waited for by its own fence; nothing here runs per frame. Refused, by
+    /// name: invalid settings, what a technique refuses, two techniques handing over a term of
+    /// the same role, and a texel term on a scene without uv1 on the atlas's pages. `settings`'
+    /// size is a pixel term's; its shadow settings are the shadow maps'.
+    pub fn new_blocking(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        settings: &RenderSettings,
+        techniques: &[&dyn MakeTechnique],
+    ) -> VkResult<Effect> {
+        settings.validate().map_err(VkError::Invalid)?;
+        let gpu_scene = GpuScene::upload_blocking(ctx, scene)?;
+        let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
+        let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
+        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings };
+        let techniques = techniques.iter().map(|t| t.make_blocking(&shared)).collect::<VkResult<Vec<_>>>()?;
+        let mut effect = Effect {
+            ctx: Arc::clone(ctx),
+            settings: settings.clone(),
+            camera: scene.camera,
+            scene: gpu_scene,
+            vsm,
+            blur,
+            techniques,
+            tracker: Tracker::default(),
+            environment_sh: scene.environment.as_ref().map_or([Vec4::ZERO; 9], |e| e.radiance_sh().map(|c| c.extend(0.0))),
+        };
+        for atlas in effect.terms()?.atlas_images() {
+            check_uv1(scene, atlas.desc.layers)?;
+        }
+        effect.forget_states();
+        Ok(effect)
+    }
+
+    pub fn context(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// The terms the techniques hand over (checked at creation: at most one of each role).
+    pub fn terms(&self) -> VkResult<Terms<'_>> {
+        Terms::gather(self.techniques.iter().map(|t| (t.name(), t.term())))
+    }
+
+    /// The blurred variance shadow maps (one layer per shadow view of every light).
+    pub(crate) fn moments(&self) -> &Image {
+        &self.vsm.moments
+    }
+
+    /// Passes the techniques record per frame.
+    pub(crate) fn technique_passes(&self) -> usize {
+        self.techniques.iter().map(|t| t.passes().len()).sum()
+    }
+
+    /// The technique of type `T`, if the effect has one (to change its own settings).
+    pub fn technique_mut<T: Technique>(&mut self) -> Option<&mut T> {
+        self.techniques.iter_mut().find_map(|t| (t.as_mut() as &mut dyn Any).downcast_mut::<T>())
+    }
+
+    /// GPU work the techniques timed at creation (`<technique>.<work>`, milliseconds).
+    pub fn creation_timings(&self) -> Vec<(&'static str, f64)> {
+        self.techniques.iter().flat_map(|t| t.creation_timings()).collect()
+    }
+
+    /// Changes I_A (lux) and beta (see [`RenderSettings::ambient`]) for the frames recorded
+    /// from now on, without allocating; refused like invalid settings.
+    pub fn set_ambient(&mut self, ambient: Vec3, beta: f32) -> VkResult<()> {
+        let next = RenderSettings { ambient, beta, ..self.settings.clone() };
+        next.validate().map_err(VkError::Invalid)?;
+        self.settings = next;
+        Ok(())
+    }
+
+    /// Moves the lights (same kinds and count as the scene had), without allocating, and tells
+    /// every technique (`Technique::lights_set`). The next frame recorded carries the new data
+    /// in its command buffer, so a frame still in flight is not disturbed.
+    pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
+        self.place_lights(lights, None)
+    }
+
+    /// As [`Effect::set_lights`] for lights that moved continuously over `seconds` (a frame's
+    /// time): techniques that ease changes over time (a fade as visibility changes) advance by
+    /// it instead of settling at once.
+    pub fn move_lights(&mut self, lights: &[Light], seconds: f32) -> VkResult<()> {
+        self.place_lights(lights, Some(seconds))
+    }
+
+    fn place_lights(&mut self, lights: &[Light], elapsed: Option<f32>) -> VkResult<()> {
+        self.scene.set_lights(lights)?;
+        self.techniques.iter_mut().for_each(|t| t.lights_set(lights, elapsed));
+        Ok(())
+    }
+
+    /// Moves mesh `mesh` (an index into the scene's meshes) by `translation` from where the
+    /// scene had it, for the frames recorded from now on, without allocating; the shadow
+    /// maps refit to the moved scene at the next [`Effect::set_lights`], and every technique
+    /// hears of it (`Technique::mesh_translated`: one that models moving geometry follows).
+    /// Baked data stays as baked: that is what a moving-occluder sweep measures. The vertex
+    /// buffer is written at once, so no frame this effect recorded may be in flight.
+    pub fn set_mesh_translation(&mut self, mesh: usize, translation: Vec3) -> VkResult<()> {
+        self.scene.translate_mesh(mesh, translation)?;
+        self.techniques.iter_mut().for_each(|t| t.mesh_translated(mesh, translation));
+        Ok(())
+    }
+
+    /// Gives mesh `mesh` new vertex positions and normals (one each per vertex of the mesh as
+    /// the effect was made with it, in that order; its triangles stay), for the frames
+    /// recorded from now on, without allocating: a deforming receiver (003 §5: receivers need
+    /// no precomputation). Its translation, if any, still applies. Baked data stays as baked.
+    /// The vertex buffer is written at once, so no frame this effect recorded may be in flight.
+    pub fn set_mesh_vertices(&mut self, mesh: usize, positions: &[Vec3], normals: &[Vec3]) -> VkResult<()> {
+        self.scene.reshape_mesh(mesh, positions, normals)
+    }
+
+    /// The viewer: a pixel term's (and a radiance term's relume frame's) camera.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
+    }
+
+    /// Records one frame of the techniques into the engine's command buffer (begun, ended and
+    /// submitted by the engine, which must not submit two frames of one effect at once): the
+    /// frame's uniforms and lights, the shadow maps when a technique reads them, every
+    /// technique's passes; then the barriers that make every term's image ready for
+    /// `reads.images` and every buffer for `reads.buffers`. Nothing is allocated, submitted or
+    /// waited on. Refused before anything is recorded: a read that is not a sampled image
+    /// read or a storage buffer read.
+    pub fn record(&mut self, rec: &CommandRecorder, reads: TermReads) -> VkResult<EffectOutput<'_>> {
+        let image_reads = [Access::FragmentSampled, Access::ComputeSampled];
+        let buffer_reads = [Access::GraphicsStorageRead, Access::ComputeStorageRead];
+        if !image_reads.contains(&reads.images) || !buffer_reads.contains(&reads.buffers) {
+            return Err(VkError::Invalid(format!(
+                "an effect's terms are read as images {image_reads:?} and buffers {buffer_reads:?}; asked for {:?} and {:?}",
+                reads.images, reads.buffers
+            )));
+        }
+        let mut tracker = std::mem::take(&mut self.tracker);
+        let shadows = self.techniques.iter().any(|t| t.reads_shadows());
+        self.record_passes(rec, &mut tracker, shadows, &mut |_, _| {});
+        let terms = self.terms()?;
+        terms.images().for_each(|image| tracker.use_image(rec, image, reads.images));
+        terms.vertex_values().into_iter().for_each(|buffer| tracker.use_buffer(rec, buffer, reads.buffers));
+        self.tracker = tracker;
+        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers })
+    }
+
+    /// The frame's uniforms, lights and shadow layers, the shadow maps when `shadows` (and a
+    /// light casts them), and every technique's passes, calling `stamp` after each pass.
+    pub(crate) fn record_passes(
+        &self,
+        rec: &CommandRecorder,
+        tracker: &mut Tracker,
+        shadows: bool,
+        stamp: &mut dyn FnMut(&CommandRecorder, &'static str),
+    ) {
+        self.scene.record_updates(rec, &self.frame_uniforms());
+        if shadows && self.settings.shadows && !self.scene.shadow_views.is_empty() {
+            self.vsm.record(rec, tracker, &self.scene);
+            stamp(rec, "vsm_moments");
+            if self.settings.blur_radius > 0 {
+                self.blur.record(rec, tracker);
+                stamp(rec, "vsm_blur");
+            }
+        }
+        for technique in &self.techniques {
+            for (pass, name) in technique.passes().iter().enumerate() {
+                technique.record(pass, rec, tracker);
+                stamp(rec, name);
+            }
+        }
+    }
+
+    /// A technique's resource by its full name, `<technique>.<resource>`.
+    pub fn resource(&self, name: &str) -> Option<Resource<'_>> {
+        let (technique, resource) = name.split_once('.')?;
+        let technique = self.techniques.iter().find(|t| t.name() == technique)?;
+        technique.resources().into_iter().find(|(n, _)| *n == resource).map(|(_, r)| r)
+    }
+
+    /// Every technique resource's full name.
+    pub fn resource_names(&self) -> Vec<String> {
+        self.techniques.iter().flat_map(|t| t.resources().into_iter().map(|(n, _)| format!("{}.{n}", t.name()))).collect()
+    }
+
+    /// Forgets what the effect's images were last used for, after a recorded frame was never
+    /// submitted or its submission failed. Safe because every frame rewrites every image and
+    /// buffer it uses; the next frame transitions them from UNDEFINED. Uploaded images, which
+    /// no frame writes, stay known as ready for sampling.
+    pub fn forget_states(&mut self) {
+        self.tracker = Tracker::default();
+        self.scene.register_states(&mut self.tracker);
+        for technique in &self.techniques {
+            technique.register_states(&mut self.tracker);
+        }
+    }
+
+    /// The tracker, taken for a frame that records more than the effect's passes (relume's
+    /// own: its lighting pass and tonemap); handed back with [`Effect::put_tracker`].
+    pub(crate) fn take_tracker(&mut self) -> Tracker {
+        std::mem::take(&mut self.tracker)
+    }
+
+    pub(crate) fn put_tracker(&mut self, tracker: Tracker) {
+        self.tracker = tracker;
+    }
+
+    pub(crate) fn tracker(&self) -> &Tracker {
+        &self.tracker
+    }
+
+    fn frame_uniforms(&self) -> FrameUniforms {
+        let s = &self.settings;
+        let (times_occlusion, occluded_direct) = self.terms().map_or((false, false), |t| (t.times_occlusion, t.occluded_direct));
+        FrameUniforms {
+            clip_from_world: self.camera.clip_from_world(s.width, s.height),
+            camera_position: self.camera.position().extend(1.0),
+            ambient_beta: s.ambient.extend(s.beta),
+            light_count: self.scene.light_count(),
+            shadows: s.shadows as u32,
+            min_variance: s.min_variance,
+            bleeding_reduction: s.bleeding_reduction,
+            irradiance_times_occlusion: times_occlusion as u32,
+            occluded_direct: occluded_direct as u32,
+            environment_ambient: (s.environment_ambient && self.environment_sh != [Vec4::ZERO; 9]) as u32,
+            _pad: 0,
+            environment_sh: self.environment_sh,
+        }
+    }
+}
