@@ -395,7 +395,7 @@ figure_correctness_tests() {
     cargo test --locked -p relume-bake --lib -- --nocapture cpca sh:: hemisphere
     cargo test --locked -p relume-tests --test gpu_vs_reference --test obscurance_render --test atlas_padding_classroom \
         --test obscurance_end_to_end --test atlas_seam --test light_path_maps_transfer --test light_path_maps_end_to_end \
-        --test light_path_maps_gpu --test frame_allocations --test technique_terms --test integrator --test light_cloud_gpu \
+        --test light_path_maps_gpu --test frame_allocations --test technique_terms --test integrator --test pass_interface --test light_cloud_gpu \
         --test fiv_gpu --test fiv_end_to_end -- --nocapture
     cargo test --locked -p relume-tools -- --nocapture
 }

@@ -217,6 +217,7 @@ impl Forward {
         let pipeline = Pipeline::graphics(
             ctx,
             &GraphicsPipelineDesc {
+                name: "engine.forward",
                 vertex: &compile(include_str!("engine_shaders/forward.vert"), shaderc::ShaderKind::Vertex, &defines)?,
                 fragment: &compile(include_str!("engine_shaders/forward.frag"), shaderc::ShaderKind::Fragment, &defines)?,
                 specialization: &[],
@@ -229,7 +230,7 @@ impl Forward {
                 color_formats: &[vk::Format::R32G32B32A32_SFLOAT],
                 depth_format: vk::Format::D32_SFLOAT,
                 cull_mode: vk::CullModeFlags::NONE,
-                set_layout: descriptors.layout,
+                set: &descriptors,
                 push_bytes: std::mem::size_of::<EngineMaterial>() as u32,
             },
         )?;

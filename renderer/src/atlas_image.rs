@@ -8,7 +8,7 @@
 
 use crate::passes::padding::{PaddingPass, ATLAS_FORMAT};
 use crate::upload::{submit_blocking, upload_array_layers_blocking};
-use crate::vk::{vk, Access, Context, Image, ImageDesc, Readback, TimestampQueries, Tracker, VkError, VkResult};
+use crate::vk::{vk, Access, Context, Image, ImageDesc, Readback, TimestampQueries, Tracker, Use, VkError, VkResult};
 use glam::Vec4;
 use relume_bake::artifact::PageLayout;
 use relume_bake::scene::Scene;
@@ -131,7 +131,7 @@ impl GpuAtlasImage {
         submit_blocking(&self.ctx, |rec, tracker| {
             self.register_state(tracker);
             readback.record_image(rec, tracker, &self.image);
-            tracker.use_image(rec, &self.image, Access::FragmentSampled);
+            tracker.pass(rec, [Use::image(&self.image, Access::FragmentSampled)], |_| {});
         })?;
         Ok(readback.floats()?.chunks_exact(4).map(Vec4::from_slice).collect())
     }

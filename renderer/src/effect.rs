@@ -13,7 +13,7 @@ use crate::gpu_scene::{FrameUniforms, GpuScene};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
 use crate::technique::{MakeTechnique, Resource, Shared, Technique, Terms};
-use crate::vk::{Access, CommandRecorder, Context, Image, ImageState, Tracker, VkError, VkResult};
+use crate::vk::{Access, CommandRecorder, Context, Image, ImageState, Tracker, Use, VkError, VkResult};
 use crate::RenderSettings;
 use glam::{Vec3, Vec4};
 use relume_bake::scene::{Camera, Light, Scene};
@@ -204,8 +204,10 @@ impl Effect {
         let shadows = self.techniques.iter().any(|t| t.reads_shadows());
         self.record_passes(rec, &mut tracker, shadows, &mut |_, _| {});
         let terms = self.terms()?;
-        terms.images().for_each(|image| tracker.use_image(rec, image, reads.images));
-        terms.vertex_values().into_iter().for_each(|buffer| tracker.use_buffer(rec, buffer, reads.buffers));
+        // The engine's read is a pass of its own: what it uses is declared here, for it.
+        let images = terms.images().map(|image| Use::image(image, reads.images));
+        let buffers = terms.vertex_values().into_iter().map(|buffer| Use::buffer(buffer, reads.buffers));
+        tracker.pass(rec, images.chain(buffers), |_| {});
         self.tracker = tracker;
         Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers })
     }

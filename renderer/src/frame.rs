@@ -10,8 +10,8 @@ use crate::effect::Effect;
 use crate::passes::lighting::{LightingPass, DEPTH_FORMAT, RADIANCE_FORMAT};
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use crate::technique::{MakeTechnique, Resource, Technique};
-use crate::vk::Tracker;
 use crate::vk::{transition, vk, Access, CommandRecorder, Context, Image, ImageDesc, ImageRef, ImageState, Readback, TimestampQueries};
+use crate::vk::{Tracker, Use};
 use crate::vk::{VkError, VkResult};
 use glam::Vec3;
 use relume_bake::scene::{Camera, Light, Scene};
@@ -143,7 +143,8 @@ pub struct Renderer {
     lighting: LightingPass,
     tonemap: TonemapPass,
     radiance: Image,
-    depth: Image,
+    /// Held while the lighting pass draws into it.
+    _depth: Image,
     display: Image,
     queries: Option<TimestampQueries>,
     /// The passes the last frame recorded (its timestamps' names).
@@ -176,9 +177,9 @@ impl Renderer {
             Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
         };
         use vk::ImageUsageFlags as U;
-        let lighting = LightingPass::new(ctx, &effect.scene, effect.moments(), &effect.terms()?)?;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
+        let lighting = LightingPass::new(ctx, &effect.scene, effect.moments(), &effect.terms()?, (&radiance, &depth))?;
         let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
         let tonemap = TonemapPass::new(ctx, &radiance, &display)?;
         Ok(Renderer {
@@ -187,7 +188,7 @@ impl Renderer {
             lighting,
             tonemap,
             radiance,
-            depth,
+            _depth: depth,
             display,
             recorded: FrameTimings::default(),
         })
@@ -276,10 +277,13 @@ impl Renderer {
         }
         let mut tracker = self.effect.take_tracker();
         let mut timer = PassTimer::resume(self.queries.as_ref(), self.record_frame(rec, &mut tracker));
-        tracker.use_image(rec, &self.display, Access::TransferSource);
         let target_ref = ImageRef { raw: target.image, range: self.display.desc.all_layers() };
-        let state = transition(rec, target_ref, target.state, Access::TransferDestination);
-        rec.copy_image(&self.display, target.image);
+        let mut state = target.state;
+        // The caller's image is no tracker's: its barrier comes from the state the caller gave.
+        tracker.pass(rec, [Use::image(&self.display, Access::TransferSource)], |rec| {
+            state = transition(rec, target_ref, target.state, Access::TransferDestination);
+            rec.copy_image(&self.display, target.image);
+        });
         timer.stamp(rec, "output_copy");
         self.recorded = timer.recorded;
         self.effect.put_tracker(tracker);
@@ -357,8 +361,7 @@ impl Renderer {
         let mut timer = PassTimer::start(self.queries.as_ref(), rec);
         // The lighting pass reads the shadow maps whatever the techniques read.
         self.effect.record_passes(rec, tracker, true, &mut |rec, name| timer.stamp(rec, name));
-        let scene = &self.effect.scene;
-        self.lighting.record(rec, tracker, scene, &self.radiance, &self.depth);
+        self.lighting.record(rec, tracker, &self.effect.scene);
         timer.stamp(rec, "lighting");
         self.tonemap.record(rec, tracker, self.settings().exposure);
         timer.stamp(rec, "tonemap");

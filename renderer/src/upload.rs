@@ -3,7 +3,7 @@
 //! its own fence (never the device); every function here says so in its name (`_blocking`),
 //! and none runs in a frame.
 
-use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, Tracker, VkError, VkResult};
+use crate::vk::{vk, Access, Buffer, CommandBuffer, CommandRecorder, Context, Fence, Image, Tracker, Use, VkError, VkResult};
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -39,14 +39,15 @@ pub fn upload_array_layers_blocking(
         offset += std::mem::size_of_val(*texels);
     }
     submit_blocking(ctx, |rec, tracker| {
-        tracker.use_image(rec, image, Access::TransferDestination);
-        let mut offset = 0;
-        for (layer, (_, extent)) in layers.iter().enumerate() {
-            rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
-            offset += area(extent) * 16;
-        }
+        tracker.pass(rec, [Use::image(image, Access::TransferDestination)], |rec| {
+            let mut offset = 0;
+            for (layer, (_, extent)) in layers.iter().enumerate() {
+                rec.copy_buffer_to_image_layer(staging.raw, offset, image, layer as u32, *extent);
+                offset += area(extent) * 16;
+            }
+        });
         then(rec, tracker);
-        tracker.use_image(rec, image, Access::FragmentSampled);
+        tracker.pass(rec, [Use::image(image, Access::FragmentSampled)], |_| {});
     })
 }
 
@@ -71,9 +72,10 @@ pub fn upload_buffers_blocking<const N: usize>(ctx: &Arc<Context>, sources: [(&s
         let mut offset = 0u64;
         for (buffer, (_, bytes)) in buffers.iter().zip(sources) {
             if !bytes.is_empty() {
-                tracker.use_buffer(rec, buffer, Access::TransferDestination);
-                rec.copy_buffer(staging.raw, offset, buffer.raw, bytes.len() as u64);
-                tracker.use_buffer(rec, buffer, Access::ComputeStorageRead);
+                tracker.pass(rec, [Use::buffer(buffer, Access::TransferDestination)], |rec| {
+                    rec.copy_buffer(staging.raw, offset, buffer.raw, bytes.len() as u64)
+                });
+                tracker.pass(rec, [Use::buffer(buffer, Access::ComputeStorageRead)], |_| {});
             }
             offset += bytes.len() as u64;
         }

@@ -14,7 +14,7 @@ use relume_bake::image::Image;
 use relume_bake::scene::Scene;
 use relume_bake::testing::{self, Facing};
 use relume_renderer::technique::{MakeTechnique, Shared, Source, Technique, Term};
-use relume_renderer::vk::{vk, Access, Buffer, CommandRecorder, Image as GpuImage, ImageDesc, Tracker, VkResult};
+use relume_renderer::vk::{vk, Access, Buffer, CommandRecorder, Image as GpuImage, ImageDesc, Tracker, Use, VkResult};
 use relume_renderer::RenderSettings;
 use relume_tests::*;
 
@@ -91,14 +91,12 @@ impl Technique for TermTechnique {
 
     fn record(&self, _pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
         match &self.target {
-            Target::Vertices(buffer) => {
-                tracker.use_buffer(rec, buffer, Access::TransferDestination);
-                rec.copy_buffer(self.staging.raw, 0, buffer.raw, self.staging.size);
-            }
-            Target::Pixels(image) => {
-                tracker.use_image(rec, image, Access::TransferDestination);
-                rec.copy_buffer_to_image_layer(self.staging.raw, 0, image, 0, image.desc.extent());
-            }
+            Target::Vertices(buffer) => tracker.pass(rec, [Use::buffer(buffer, Access::TransferDestination)], |rec| {
+                rec.copy_buffer(self.staging.raw, 0, buffer.raw, self.staging.size)
+            }),
+            Target::Pixels(image) => tracker.pass(rec, [Use::image(image, Access::TransferDestination)], |rec| {
+                rec.copy_buffer_to_image_layer(self.staging.raw, 0, image, 0, image.desc.extent())
+            }),
         }
     }
 

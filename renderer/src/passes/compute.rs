@@ -1,16 +1,21 @@
-//! The one shape of a compute pass. A pass names, once at creation, every resource its shader
-//! binds and how the shader uses it ([`Slot`]); each dispatch then declares those uses to the
-//! tracker (which records the barriers), binds, pushes the constants and dispatches. A pass
-//! with several descriptor sets of one layout (ping-pong passes) picks one per dispatch.
+//! The one shape of a compute pass. A pass is one value: its name, every resource its shader
+//! binds with how the shader uses it ([`Slot`], named once at creation), its push block (the
+//! type `P`) and its shader, whose SPIR-V is checked against all of them when the pipeline is
+//! made (a mismatch is refused, naming the pass and the binding). Each dispatch declares the
+//! uses to the tracker (which records the barriers), binds, pushes and dispatches enough of the
+//! shader's workgroups, whose size comes from its SPIR-V, to cover the invocations asked for.
+//! A pass with several descriptor sets of one layout (ping-pong passes) picks one per dispatch.
 
 use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, Pipeline, Sampler, Tracker};
 use crate::vk::{Buffer, Use, VkResult};
 use bytemuck::NoUninit;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
-/// A resource bound to a compute shader and how the shader uses it.
+/// A resource bound to a shader and how the shader uses it.
 pub enum Slot<'r> {
-    /// A storage buffer used as `access` (ComputeStorageRead, -Write or -ReadWrite).
+    /// A storage buffer used as `access` (ComputeStorageRead, -Write or -ReadWrite, or
+    /// GraphicsStorageRead).
     Buffer(&'r Buffer, Access),
     /// A storage buffer the frame rewrites in its command stream before any pass (the lights
     /// and shadow layers, `GpuScene::record_updates`), whose barriers come with that update,
@@ -20,12 +25,20 @@ pub enum Slot<'r> {
     Uniform(&'r Buffer),
     /// A storage image used as `access`.
     StorageImage(&'r Image, Access),
-    /// An image sampled through `sampler`.
+    /// An image sampled through `sampler` (by the compute shader, or by a graphics pass's
+    /// fragment stage).
     Sampled(&'r Image, &'r Sampler),
 }
 
+/// Which kind of pass samples a `Slot::Sampled` image.
+#[derive(Clone, Copy)]
+pub(crate) enum Sampling {
+    Compute,
+    Fragment,
+}
+
 impl Slot<'_> {
-    fn binding(&self) -> Binding {
+    pub(crate) fn binding(&self) -> Binding {
         match self {
             Slot::Buffer(buffer, _) | Slot::Updated(buffer) => Binding::StorageBuffer(buffer.raw),
             Slot::Uniform(buffer) => Binding::UniformBuffer(buffer.raw),
@@ -34,53 +47,69 @@ impl Slot<'_> {
         }
     }
 
-    fn tracked(&self) -> Option<Use> {
+    pub(crate) fn tracked(&self, sampling: Sampling) -> Option<Use> {
+        let sampled = match sampling {
+            Sampling::Compute => Access::ComputeSampled,
+            Sampling::Fragment => Access::FragmentSampled,
+        };
         match self {
-            Slot::Buffer(buffer, access) => Some(Use::Buffer((*buffer).into(), *access)),
-            Slot::StorageImage(image, access) => Some(Use::Image((*image).into(), *access)),
-            Slot::Sampled(image, _) => Some(Use::Image((*image).into(), Access::ComputeSampled)),
+            Slot::Buffer(buffer, access) => Some(Use::buffer(*buffer, *access)),
+            Slot::StorageImage(image, access) => Some(Use::image(*image, *access)),
+            Slot::Sampled(image, _) => Some(Use::image(*image, sampled)),
             Slot::Updated(_) | Slot::Uniform(_) => None,
         }
     }
 }
 
-pub struct ComputePass {
+/// A compute pass whose push block is a `P` (`()` for none).
+pub struct ComputePass<P = ()> {
     pipeline: Pipeline,
     sets: Vec<(DescriptorSet, Vec<Use>)>,
+    push: PhantomData<P>,
 }
 
-impl ComputePass {
-    /// A pass of one descriptor set.
-    pub fn new(ctx: &Arc<Context>, spirv: &[u8], push_bytes: u32, slots: &[Slot]) -> VkResult<ComputePass> {
-        ComputePass::with_sets(ctx, spirv, push_bytes, &[slots])
+impl<P: NoUninit> ComputePass<P> {
+    /// Pass `name` of one descriptor set.
+    pub fn new(ctx: &Arc<Context>, name: &str, spirv: &[u8], slots: &[Slot]) -> VkResult<Self> {
+        ComputePass::with_sets(ctx, name, spirv, &[slots])
     }
 
-    /// A pass whose dispatches each bind one of `sets` (all with the same kinds of bindings).
-    pub fn with_sets(ctx: &Arc<Context>, spirv: &[u8], push_bytes: u32, sets: &[&[Slot]]) -> VkResult<ComputePass> {
+    /// Pass `name`, whose dispatches each bind one of `sets` (all with the same kinds of
+    /// bindings). Refused, naming the pass and the binding: a shader that binds another kind
+    /// at a slot's binding, binds what no slot gives, or whose push block is not a `P`.
+    pub fn with_sets(ctx: &Arc<Context>, name: &str, spirv: &[u8], sets: &[&[Slot]]) -> VkResult<Self> {
         let mut made = Vec::with_capacity(sets.len());
         for slots in sets {
             let bindings: Vec<Binding> = slots.iter().map(Slot::binding).collect();
             let set = DescriptorSet::new(ctx, vk::ShaderStageFlags::COMPUTE, &bindings)?;
-            made.push((set, slots.iter().filter_map(Slot::tracked).collect()));
+            made.push((set, slots.iter().filter_map(|s| s.tracked(Sampling::Compute)).collect()));
         }
-        let pipeline = Pipeline::compute(ctx, spirv, made[0].0.layout, push_bytes)?;
-        Ok(ComputePass { pipeline, sets: made })
+        let pipeline = Pipeline::compute(ctx, name, spirv, &made[0].0, std::mem::size_of::<P>() as u32)?;
+        Ok(ComputePass { pipeline, sets: made, push: PhantomData })
     }
 
-    /// Declares set `set`'s uses, binds it and dispatches `groups` workgroups with `push` as
-    /// the push constants (none for a zero-sized type). Allocates nothing.
-    pub fn dispatch<P: NoUninit>(&self, rec: &CommandRecorder, tracker: &mut Tracker, set: usize, push: &P, groups: [u32; 3]) {
+    /// Declares set `set`'s uses, binds it and dispatches the workgroups that cover
+    /// `invocations` with `push` as the push constants. Allocates nothing.
+    pub fn dispatch(&self, rec: &CommandRecorder, tracker: &mut Tracker, set: usize, push: &P, invocations: [u32; 3]) {
+        let size = self.pipeline.local_size;
+        self.dispatch_groups(rec, tracker, set, push, [0, 1, 2].map(|axis| invocations[axis].div_ceil(size[axis])));
+    }
+
+    /// As [`ComputePass::dispatch`], for a pass whose work items are workgroups: `groups` of
+    /// them.
+    pub fn dispatch_groups(&self, rec: &CommandRecorder, tracker: &mut Tracker, set: usize, push: &P, groups: [u32; 3]) {
         let (descriptors, uses) = &self.sets[set];
-        tracker.declare(rec, uses);
-        rec.bind_compute(self.pipeline.raw, self.pipeline.layout, descriptors.set);
-        if std::mem::size_of::<P>() > 0 {
-            rec.push_constants(self.pipeline.layout, push);
-        }
-        rec.dispatch(groups[0], groups[1], groups[2]);
+        tracker.pass(rec, uses.iter().copied(), |rec| {
+            rec.bind_compute(self.pipeline.raw, self.pipeline.layout, descriptors.set);
+            if std::mem::size_of::<P>() > 0 {
+                rec.push_constants(self.pipeline.layout, push);
+            }
+            rec.dispatch(groups[0], groups[1], groups[2]);
+        });
     }
 }
 
-/// Workgroups of 8 x 8 (x one layer) covering an image: the grid of every per-texel pass.
+/// One invocation per texel of every layer of `image`: the grid of every per-texel pass.
 pub fn per_texel(image: &Image) -> [u32; 3] {
-    [image.desc.width.div_ceil(8), image.desc.height.div_ceil(8), image.desc.layers]
+    [image.desc.width, image.desc.height, image.desc.layers]
 }

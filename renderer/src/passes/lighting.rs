@@ -17,11 +17,12 @@
 //! mesh; per fragment one shadow-map fetch per light facing it, 4 texel fetches for a texel
 //! term (8 when an irradiance term is scaled by the occlusion term: both are read).
 
-use crate::gpu_scene::{vertex_attributes, GpuScene, VERTEX_STRIDE};
+use super::compute::Slot;
+use super::graphics::{GraphicsPass, Shaders, Target};
+use crate::gpu_scene::GpuScene;
 use crate::shaders;
 use crate::technique::Terms;
-use crate::vk::{vk, Access, Binding, Buffer, CommandRecorder, Context, DescriptorSet, GraphicsPipelineDesc, Image, ImageDesc, Pipeline};
-use crate::vk::{Sampler, Tracker, Use, VkResult};
+use crate::vk::{vk, Access, Buffer, CommandRecorder, Context, Image, ImageDesc, Sampler, Tracker, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -29,10 +30,9 @@ pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 pub struct LightingPass {
-    pipeline: Pipeline,
-    descriptors: DescriptorSet,
-    /// What the pass reads every frame (the terms' stand-ins where absent).
-    reads: Vec<Use>,
+    pass: GraphicsPass<u32, 1>,
+    /// Where it draws: `radiance`'s extent and view, `depth`'s view.
+    target: (vk::Extent2D, vk::ImageView, vk::ImageView),
     // Held so the samplers and stand-ins live as long as the descriptor set that names them.
     _shadow_sampler: Sampler,
     _texture_sampler: Sampler,
@@ -41,7 +41,14 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
-    pub fn new(ctx: &Arc<Context>, scene: &GpuScene, moments: &Image, terms: &Terms) -> VkResult<LightingPass> {
+    /// Writes `radiance` and `depth`, reading the scene, the moments and the terms.
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &GpuScene,
+        moments: &Image,
+        terms: &Terms,
+        (radiance, depth): (&Image, &Image),
+    ) -> VkResult<LightingPass> {
         let shadow_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         // Textures and atlas images are filtered by hand in the shader (texelFetch, with
         // their own wrap modes); the sampler only binds them.
@@ -59,54 +66,29 @@ impl LightingPass {
             },
         )?;
         let stand_in_buffer = Buffer::new(ctx, "lighting stand-in", 16, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
-        let sampled = |image: &Image| Binding::SampledImage { view: image.view, sampler: texture_sampler.raw };
-        let term_image = |image: Option<&Image>| sampled(image.unwrap_or(&stand_in_image));
-        let (texels, pixels) = (terms.texels(), terms.pixels());
-        let vertices = terms.vertex_values().unwrap_or(&stand_in_buffer);
         let (vertex, fragment) = match terms.radiance {
             Some(_) => (shaders::LIGHTING_SH_VERT, shaders::LIGHTING_SH_FRAG),
             None => (shaders::LIGHTING_VERT, shaders::LIGHTING_FRAG),
         };
-        let descriptors = DescriptorSet::new(
-            ctx,
-            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            &[
-                Binding::StorageBuffer(scene.lights.raw),
-                Binding::StorageBuffer(scene.layers.raw),
-                Binding::SampledImage { view: moments.view, sampler: shadow_sampler.raw },
-                Binding::StorageBuffer(scene.materials.raw),
-                sampled(&scene.textures),
-                term_image(terms.occlusion),
-                term_image(texels),
-                term_image(pixels),
-                Binding::StorageBuffer(vertices.raw),
-                Binding::UniformBuffer(scene.frame.raw),
-            ],
-        )?;
-        let sampled = |image: &Image| Use::Image(image.into(), Access::FragmentSampled);
-        let mut reads = vec![sampled(moments), sampled(&scene.textures)];
-        reads.extend([terms.occlusion, texels, pixels].into_iter().map(|image| sampled(image.unwrap_or(&stand_in_image))));
-        reads.push(Use::Buffer(vertices.into(), Access::GraphicsStorageRead));
-        let pipeline = Pipeline::graphics(
-            ctx,
-            &GraphicsPipelineDesc {
-                vertex,
-                fragment,
-                specialization: &[terms.occlusion.is_some() as u32, terms.irradiance_kind()],
-                vertex_stride: VERTEX_STRIDE,
-                attributes: &vertex_attributes(),
-                color_formats: &[RADIANCE_FORMAT],
-                depth_format: DEPTH_FORMAT,
-                // Surfaces are two-sided, as in the reference path tracer.
-                cull_mode: vk::CullModeFlags::NONE,
-                set_layout: descriptors.layout,
-                push_bytes: 4,
-            },
-        )?;
+        let read = Access::GraphicsStorageRead;
+        let slots = [
+            Slot::Updated(&scene.lights),
+            Slot::Updated(&scene.layers),
+            Slot::Sampled(moments, &shadow_sampler),
+            Slot::Buffer(&scene.materials, read),
+            Slot::Sampled(&scene.textures, &texture_sampler),
+            Slot::Sampled(terms.occlusion.unwrap_or(&stand_in_image), &texture_sampler),
+            Slot::Sampled(terms.texels().unwrap_or(&stand_in_image), &texture_sampler),
+            Slot::Sampled(terms.pixels().unwrap_or(&stand_in_image), &texture_sampler),
+            Slot::Buffer(terms.vertex_values().unwrap_or(&stand_in_buffer), read),
+            Slot::Uniform(&scene.frame),
+        ];
+        let specialization = [terms.occlusion.is_some() as u32, terms.irradiance_kind()];
+        let shaders = Shaders { vertex, fragment, specialization: &specialization, attributes: 4 };
+        let pass = GraphicsPass::new(ctx, "lighting", scene, &shaders, &slots, ([radiance], depth))?;
         Ok(LightingPass {
-            pipeline,
-            descriptors,
-            reads,
+            pass,
+            target: (radiance.desc.extent(), radiance.view, depth.view),
             _shadow_sampler: shadow_sampler,
             _texture_sampler: texture_sampler,
             _stand_in_image: stand_in_image,
@@ -114,19 +96,11 @@ impl LightingPass {
         })
     }
 
-    /// Writes `radiance` and `depth`. One draw per mesh, so the material (and its texture) is
-    /// uniform across each draw; its index is the push block.
-    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, scene: &GpuScene, radiance: &Image, depth: &Image) {
-        tracker.declare(rec, &self.reads);
-        tracker.use_image(rec, radiance, Access::ColorAttachmentWrite);
-        tracker.use_image(rec, depth, Access::DepthAttachmentWrite);
-        rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
-        rec.begin_rendering(radiance.desc.extent(), [radiance.view], [0.0; 4], depth.view);
-        rec.bind_geometry(scene.vertices.raw, scene.indices.raw);
-        for draw in &scene.draws {
-            rec.push_constants(self.pipeline.layout, &draw.material);
-            rec.draw_indexed(draw.first_index, draw.index_count);
-        }
-        rec.end_rendering();
+    /// Writes `radiance` and `depth`, each cleared first. One draw per mesh, so the material
+    /// (and its texture) is uniform across each draw; its index is the push block.
+    pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, scene: &GpuScene) {
+        let (extent, radiance, depth) = self.target;
+        let target = Target { extent, colors: [radiance], clear: [0.0; 4], depth };
+        self.pass.record(rec, tracker, target, scene.draws.iter().map(|d| (d.material, d.first_index, d.index_count)));
     }
 }

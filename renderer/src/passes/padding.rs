@@ -34,7 +34,7 @@ struct PaddingPush {
 
 pub struct PaddingPass {
     /// Set i writes `seeds[i]` and reads the other; dispatch t of the pass uses set t % 2.
-    pass: ComputePass,
+    pass: ComputePass<PaddingPush>,
     _seeds: [Image; 2],
     groups: [u32; 3],
     size: u32,
@@ -64,7 +64,7 @@ impl PaddingPass {
             ]
         };
         let (set0, set1) = (set(0), set(1));
-        let pass = ComputePass::with_sets(ctx, shaders::PADDING_COMP, std::mem::size_of::<PaddingPush>() as u32, &[&set0, &set1])?;
+        let pass = ComputePass::with_sets(ctx, "padding", shaders::PADDING_COMP, &[&set0, &set1])?;
         Ok(PaddingPass { pass, groups: per_texel(image), size: d.width.max(d.height), _seeds: seeds })
     }
 

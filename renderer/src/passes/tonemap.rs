@@ -9,7 +9,7 @@ use std::sync::Arc;
 pub const DISPLAY_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
 pub struct TonemapPass {
-    pass: ComputePass,
+    pass: ComputePass<f32>,
     groups: [u32; 3],
 }
 
@@ -17,7 +17,7 @@ impl TonemapPass {
     /// Reads `radiance` (storage), writes `display` (storage).
     pub fn new(ctx: &Arc<Context>, radiance: &Image, display: &Image) -> VkResult<TonemapPass> {
         let slots = [Slot::StorageImage(radiance, Access::ComputeStorageRead), Slot::StorageImage(display, Access::ComputeStorageWrite)];
-        Ok(TonemapPass { pass: ComputePass::new(ctx, shaders::TONEMAP_COMP, 4, &slots)?, groups: per_texel(display) })
+        Ok(TonemapPass { pass: ComputePass::new(ctx, "tonemap", shaders::TONEMAP_COMP, &slots)?, groups: per_texel(display) })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, exposure: f32) {

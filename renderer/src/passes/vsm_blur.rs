@@ -16,7 +16,7 @@ struct BlurPush {
 
 pub struct VsmBlurPass {
     /// Set 0 blurs `moments` horizontally into the scratch image, set 1 vertically back.
-    pass: ComputePass,
+    pass: ComputePass<BlurPush>,
     _scratch: Image,
     radius: u32,
     groups: [u32; 3],
@@ -30,7 +30,7 @@ impl VsmBlurPass {
         let (read, write) = (Access::ComputeStorageRead, Access::ComputeStorageWrite);
         let horizontal = [Slot::StorageImage(moments, read), Slot::StorageImage(&scratch, write)];
         let vertical = [Slot::StorageImage(&scratch, read), Slot::StorageImage(moments, write)];
-        let pass = ComputePass::with_sets(ctx, shaders::VSM_BLUR_COMP, std::mem::size_of::<BlurPush>() as u32, &[&horizontal, &vertical])?;
+        let pass = ComputePass::with_sets(ctx, "vsm_blur", shaders::VSM_BLUR_COMP, &[&horizontal, &vertical])?;
         Ok(VsmBlurPass { pass, groups: per_texel(moments), _scratch: scratch, radius })
     }
 

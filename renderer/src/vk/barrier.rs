@@ -115,7 +115,6 @@ impl From<&Buffer> for BufferRef {
     }
 }
 
-/// The last known use of every image and buffer a frame touches.
 /// A resource a pass reads or writes and how: what the pass declares to the tracker before
 /// it runs.
 #[derive(Clone, Copy, Debug)]
@@ -124,6 +123,17 @@ pub enum Use {
     Image(ImageRef, Access),
 }
 
+impl Use {
+    pub fn image(image: impl Into<ImageRef>, access: Access) -> Use {
+        Use::Image(image.into(), access)
+    }
+
+    pub fn buffer(buffer: impl Into<BufferRef>, access: Access) -> Use {
+        Use::Buffer(buffer.into(), access)
+    }
+}
+
+/// The last known use of every image and buffer a frame touches.
 #[derive(Default)]
 pub struct Tracker {
     last: HashMap<vk::Image, Access>,
@@ -143,10 +153,18 @@ impl Tracker {
         self.set(image.into().raw, access);
     }
 
+    /// Records a pass: the barriers that bring every resource of `uses` into its access,
+    /// derived from how each was last used, then `commands`. Outside the backend this is the
+    /// one way a barrier is recorded: a pass declares its uses and never writes one by hand.
+    pub fn pass(&mut self, rec: &CommandRecorder, uses: impl IntoIterator<Item = Use>, commands: impl FnOnce(&CommandRecorder)) {
+        self.declare(rec, uses);
+        commands(rec);
+    }
+
     /// Brings every resource of `uses` into its access.
-    pub fn declare(&mut self, rec: &CommandRecorder, uses: &[Use]) {
+    fn declare(&mut self, rec: &CommandRecorder, uses: impl IntoIterator<Item = Use>) {
         for used in uses {
-            match *used {
+            match used {
                 Use::Buffer(buffer, access) => self.use_buffer(rec, buffer, access),
                 Use::Image(image, access) => self.use_image(rec, image, access),
             }
@@ -157,7 +175,7 @@ impl Tracker {
     /// after a write, and before a write that follows a read (write-after-read, also across
     /// frames recorded with the same tracker); none between two reads of the same kind, nor
     /// for a first use.
-    pub fn use_buffer(&mut self, rec: &CommandRecorder, buffer: impl Into<BufferRef>, next: Access) {
+    pub(super) fn use_buffer(&mut self, rec: &CommandRecorder, buffer: impl Into<BufferRef>, next: Access) {
         debug_assert!(next.is_buffer_access(), "{next:?} is not a way to use a buffer");
         let raw = buffer.into().raw;
         let previous = match self.last_buffers.get_mut(&raw) {
@@ -182,7 +200,7 @@ impl Tracker {
     }
 
     /// Records the barrier that makes `image` ready for `next`.
-    pub fn use_image(&mut self, rec: &CommandRecorder, image: impl Into<ImageRef>, next: Access) {
+    pub(super) fn use_image(&mut self, rec: &CommandRecorder, image: impl Into<ImageRef>, next: Access) {
         let image = image.into();
         let previous = self.state(image);
         self.set(image.raw, next);

@@ -37,6 +37,8 @@ impl Binding {
 
 pub struct DescriptorSet {
     ctx: Arc<Context>,
+    /// Binding i's kind: what a pipeline's shaders are checked against.
+    pub kinds: Vec<vk::DescriptorType>,
     pub layout: vk::DescriptorSetLayout,
     pub set: vk::DescriptorSet,
     pool: vk::DescriptorPool,
@@ -60,6 +62,7 @@ impl DescriptorSet {
         let device = &ctx.device;
         let mut descriptors = DescriptorSet {
             ctx: Arc::clone(ctx),
+            kinds: bindings.iter().map(Binding::kind).collect(),
             layout: vk::DescriptorSetLayout::null(),
             set: vk::DescriptorSet::null(),
             pool: vk::DescriptorPool::null(),

@@ -11,6 +11,7 @@ mod instance;
 mod pipeline;
 mod query;
 mod readback;
+mod reflect;
 mod sync;
 
 pub use ash::vk;
@@ -23,6 +24,7 @@ pub use image::{Image, ImageDesc, ImageView};
 pub use pipeline::{GraphicsPipelineDesc, Pipeline};
 pub use query::TimestampQueries;
 pub use readback::Readback;
+pub use reflect::workgroup_size;
 pub use sync::{CommandBuffer, Fence, Sampler};
 
 /// Everything that can go wrong in the backend, each with what to do about it.

@@ -1,8 +1,11 @@
 //! Compute and graphics pipelines from embedded SPIR-V, with their layouts, destroyed on drop.
 //! Graphics pipelines use dynamic rendering (no render passes) and dynamic viewport and scissor.
 //! Specialization constants pick a shader's variant at creation (constant_id i = value i).
+//! Every pipeline is made for its pass's descriptor set and push block only after its shaders'
+//! SPIR-V says they agree (`reflect.rs`); a compute pipeline keeps its workgroup size.
 
-use super::{Context, VkError, VkResult};
+use super::reflect::{check, reflect};
+use super::{Context, DescriptorSet, VkError, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -52,9 +55,13 @@ pub struct Pipeline {
     ctx: Arc<Context>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
+    /// A compute shader's workgroup size, as its SPIR-V declares it ([1, 1, 1] for graphics).
+    pub local_size: [u32; 3],
 }
 
 pub struct GraphicsPipelineDesc<'a> {
+    /// The pass's name, for refusals.
+    pub name: &'a str,
     pub vertex: &'a [u8],
     pub fragment: &'a [u8],
     /// Specialization constants of both stages.
@@ -64,7 +71,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     pub cull_mode: vk::CullModeFlags,
-    pub set_layout: vk::DescriptorSetLayout,
+    /// The pass's descriptor set: both stages' bindings are checked against its kinds.
+    pub set: &'a DescriptorSet,
     pub push_bytes: u32,
 }
 
@@ -80,11 +88,16 @@ impl Pipeline {
         });
         // SAFETY: a valid create info on a live device.
         let layout = unsafe { ctx.device.create_pipeline_layout(&info, None) }?;
-        Ok(Pipeline { ctx: Arc::clone(ctx), raw: vk::Pipeline::null(), layout })
+        Ok(Pipeline { ctx: Arc::clone(ctx), raw: vk::Pipeline::null(), layout, local_size: [1; 3] })
     }
 
-    pub fn compute(ctx: &Arc<Context>, spirv: &[u8], set_layout: vk::DescriptorSetLayout, push_bytes: u32) -> VkResult<Self> {
-        let mut pipeline = Pipeline::with_layout(ctx, set_layout, push_bytes)?;
+    /// The compute pipeline of pass `name`. Refused, naming the pass and the binding: a shader
+    /// whose bindings or push block disagree with `set` and `push_bytes`.
+    pub fn compute(ctx: &Arc<Context>, name: &str, spirv: &[u8], set: &DescriptorSet, push_bytes: u32) -> VkResult<Self> {
+        let interface = reflect(name, spirv)?;
+        check(name, &[&interface], &set.kinds, push_bytes)?;
+        let mut pipeline = Pipeline::with_layout(ctx, set.layout, push_bytes)?;
+        pipeline.local_size = interface.local_size.unwrap_or([1; 3]);
         let module = ShaderModule::new(ctx, spirv)?;
         let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module.raw).name(c"main");
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout)];
@@ -94,8 +107,11 @@ impl Pipeline {
         Ok(pipeline)
     }
 
+    /// The graphics pipeline of `desc`; refused like [`Pipeline::compute`].
     pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsPipelineDesc) -> VkResult<Self> {
-        let mut pipeline = Pipeline::with_layout(ctx, desc.set_layout, desc.push_bytes)?;
+        let stages = [reflect(desc.name, desc.vertex)?, reflect(desc.name, desc.fragment)?];
+        check(desc.name, &[&stages[0], &stages[1]], &desc.set.kinds, desc.push_bytes)?;
+        let mut pipeline = Pipeline::with_layout(ctx, desc.set.layout, desc.push_bytes)?;
         let vertex = ShaderModule::new(ctx, desc.vertex)?;
         let fragment = ShaderModule::new(ctx, desc.fragment)?;
         let specialization = Specialization::new(desc.specialization);

@@ -10,7 +10,7 @@
 
 use super::surfaces::SurfacesPass;
 use super::Buffers;
-use crate::passes::compute::{ComputePass, Slot};
+use crate::passes::compute::{per_texel, ComputePass, Slot};
 use crate::shaders;
 use crate::technique::Shared;
 use crate::vk::{Access, CommandRecorder, Image, Tracker, VkResult};
@@ -47,8 +47,8 @@ impl OccluderSumsPush {
 }
 
 pub(super) struct OccluderSumsPass {
-    pass: ComputePass,
-    groups: [u32; 3],
+    pass: ComputePass<OccluderSumsPush>,
+    grid: [u32; 3],
 }
 
 impl OccluderSumsPass {
@@ -62,12 +62,11 @@ impl OccluderSumsPass {
             Slot::Buffer(&buffers.types, Access::ComputeStorageRead),
             Slot::Updated(&buffers.occluders),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::FIV_OCCLUDER_SUMS_COMP, std::mem::size_of::<OccluderSumsPush>() as u32, &slots)?;
-        let groups = [irradiance.desc.width.div_ceil(8), irradiance.desc.height.div_ceil(8), 1];
-        Ok(OccluderSumsPass { pass, groups })
+        let pass = ComputePass::new(shared.ctx, "fiv.occluder_sums", shaders::FIV_OCCLUDER_SUMS_COMP, &slots)?;
+        Ok(OccluderSumsPass { pass, grid: per_texel(irradiance) })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, push: &OccluderSumsPush) {
-        self.pass.dispatch(rec, tracker, 0, push, self.groups);
+        self.pass.dispatch(rec, tracker, 0, push, self.grid);
     }
 }

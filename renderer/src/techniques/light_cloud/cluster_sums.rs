@@ -24,7 +24,7 @@ struct ClusterSumsPush {
 }
 
 pub(super) struct ClusterSumsPass {
-    pass: ComputePass,
+    pass: ComputePass<ClusterSumsPush>,
     term_count: u32,
     terms: u32,
     coefficients: u32,
@@ -40,12 +40,12 @@ impl ClusterSumsPass {
             Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageWrite),
             Slot::Buffer(&buffers.clusters, Access::ComputeStorageRead),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, 16, &slots)?;
+        let pass = ComputePass::new(shared.ctx, "light_cloud.cluster_sums", shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, &slots)?;
         Ok(ClusterSumsPass { pass, term_count, terms, coefficients })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, weight_count: u32) {
         let push = ClusterSumsPush { term_count: self.term_count, terms: self.terms, weight_count, coefficients: self.coefficients };
-        self.pass.dispatch(rec, tracker, 0, &push, [self.term_count.div_ceil(64), 1, 1]);
+        self.pass.dispatch(rec, tracker, 0, &push, [self.term_count, 1, 1]);
     }
 }

@@ -30,9 +30,10 @@
 mod cluster_sums;
 mod reconstruct;
 
+use crate::shaders;
 use crate::technique::{MakeTechnique, Resource, Shared, Source, Technique, Term};
 use crate::upload::upload_buffers_blocking;
-use crate::vk::{vk, Buffer, CommandRecorder, Context, Tracker, VkError, VkResult};
+use crate::vk::{vk, workgroup_size, Buffer, CommandRecorder, Context, Tracker, VkError, VkResult};
 use cluster_sums::ClusterSumsPass;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
@@ -269,10 +270,13 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
             ctx.info.name
         ));
     }
-    // 65,535 workgroups of 64 invocations: the least maxComputeWorkGroupCount Vulkan allows.
-    if terms.max(cloud.vertex_count() as u64).div_ceil(64) > 65_535 {
+    // 65,535 workgroups: the least maxComputeWorkGroupCount Vulkan allows.
+    let groups = |spirv, invocations: u64| Ok::<u64, VkError>(invocations.div_ceil(workgroup_size("light cloud", spirv)?[0] as u64));
+    let sums = groups(shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, terms)?;
+    let vertices = groups(shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, cloud.vertex_count() as u64)?;
+    if sums.max(vertices) > 65_535 {
         return refuse(format!(
-            "{terms} cluster terms and {} vertices: at most 4,194,240 of each fit one dispatch; use fewer clusters or vectors, or split the scene",
+            "{terms} cluster terms and {} vertices take {sums} and {vertices} workgroups; at most 65,535 fit one dispatch: use fewer clusters or vectors, or split the scene",
             cloud.vertex_count()
         ));
     }

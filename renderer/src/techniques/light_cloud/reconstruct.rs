@@ -23,7 +23,7 @@ struct ReconstructPush {
 }
 
 pub(super) struct ReconstructPass {
-    pass: ComputePass,
+    pass: ComputePass<ReconstructPush>,
     push: ReconstructPush,
 }
 
@@ -36,11 +36,11 @@ impl ReconstructPass {
             Slot::Buffer(&buffers.vertex_values, Access::ComputeStorageWrite),
             Slot::Buffer(&buffers.clusters, Access::ComputeStorageRead),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, 12, &slots)?;
+        let pass = ComputePass::new(shared.ctx, "light_cloud.reconstruct", shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, &slots)?;
         Ok(ReconstructPass { pass, push: ReconstructPush { vertex_count, basis, coefficients } })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
-        self.pass.dispatch(rec, tracker, 0, &self.push, [self.push.vertex_count.div_ceil(64), 1, 1]);
+        self.pass.dispatch(rec, tracker, 0, &self.push, [self.push.vertex_count, 1, 1]);
     }
 }

@@ -16,7 +16,7 @@ use crate::technique::Shared;
 use crate::vk::{Access, CommandRecorder, Tracker, VkResult};
 
 pub(super) struct ClusterSumsPass {
-    pass: ComputePass,
+    pass: ComputePass<u32>,
     clusters: u32,
     basis: u32,
 }
@@ -29,11 +29,11 @@ impl ClusterSumsPass {
             Slot::Buffer(&buffers.cluster_starts, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.cluster_sums, Access::ComputeStorageWrite),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_PATH_MAPS_CLUSTER_SUMS_COMP, 4, &slots)?;
+        let pass = ComputePass::new(shared.ctx, "light_path_maps.cluster_sums", shaders::LIGHT_PATH_MAPS_CLUSTER_SUMS_COMP, &slots)?;
         Ok(ClusterSumsPass { pass, clusters: buffers.cluster_count, basis: buffers.basis_count })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
-        self.pass.dispatch(rec, tracker, 0, &self.basis, [self.clusters, 1 + self.basis, 1]);
+        self.pass.dispatch_groups(rec, tracker, 0, &self.basis, [self.clusters, 1 + self.basis, 1]);
     }
 }

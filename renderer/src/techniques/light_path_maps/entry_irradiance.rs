@@ -26,7 +26,7 @@ struct EntryIrradiancePush {
 }
 
 pub(super) struct EntryIrradiancePass {
-    pass: ComputePass,
+    pass: ComputePass<EntryIrradiancePush>,
     push: EntryIrradiancePush,
     // Held so the sampler lives as long as the descriptor set that names it.
     _shadow_sampler: Sampler,
@@ -47,11 +47,11 @@ impl EntryIrradiancePass {
         ];
         let push = EntryIrradiancePush { entry_count: buffers.entry_count, light_area };
         let pass =
-            ComputePass::new(shared.ctx, shaders::LIGHT_PATH_MAPS_ENTRY_IRRADIANCE_COMP, std::mem::size_of_val(&push) as u32, &slots)?;
+            ComputePass::new(shared.ctx, "light_path_maps.entry_irradiance", shaders::LIGHT_PATH_MAPS_ENTRY_IRRADIANCE_COMP, &slots)?;
         Ok(EntryIrradiancePass { pass, push, _shadow_sampler: shadow_sampler })
     }
 
     pub fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker) {
-        self.pass.dispatch(rec, tracker, 0, &self.push, [self.push.entry_count.div_ceil(64), 1, 1]);
+        self.pass.dispatch(rec, tracker, 0, &self.push, [self.push.entry_count, 1, 1]);
     }
 }

@@ -16,7 +16,7 @@ use crate::technique::Shared;
 use crate::vk::{Access, CommandRecorder, Image, Tracker, VkResult};
 
 pub(super) struct ReconstructPass {
-    pass: ComputePass,
+    pass: ComputePass<u32>,
     terms: u32,
     groups: [u32; 3],
 }
@@ -29,7 +29,7 @@ impl ReconstructPass {
             Slot::Buffer(&buffers.coverage, Access::ComputeStorageRead),
             Slot::StorageImage(indirect, Access::ComputeStorageWrite),
         ];
-        let pass = ComputePass::new(shared.ctx, shaders::LIGHT_PATH_MAPS_RECONSTRUCT_COMP, 4, &slots)?;
+        let pass = ComputePass::new(shared.ctx, "light_path_maps.reconstruct", shaders::LIGHT_PATH_MAPS_RECONSTRUCT_COMP, &slots)?;
         Ok(ReconstructPass { pass, terms: buffers.term_count(), groups: per_texel(indirect) })
     }
 

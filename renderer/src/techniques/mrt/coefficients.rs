@@ -19,5 +19,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, invocations: u32) -> VkRes
         Slot::Buffer(&buffers.light, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.b0, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_COEFFICIENTS_COMP, invocations, &slots)
+    Dispatch::new(shared, "mrt.coefficients", shaders::MRT_COEFFICIENTS_COMP, invocations, &slots)
 }

@@ -21,5 +21,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, shadow_sampler: &Sampler, 
         Slot::Buffer(&buffers.direct, Access::ComputeStorageWrite),
         Slot::Uniform(&scene.frame),
     ];
-    Dispatch::new(shared, shaders::MRT_DIRECT_COMP, samples, &slots)
+    Dispatch::new(shared, "mrt.direct", shaders::MRT_DIRECT_COMP, samples, &slots)
 }

@@ -21,5 +21,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, vertices: u32) -> VkResult
         Slot::Buffer(&buffers.volume, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.vertex_light, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_DYNAMIC_COMP, vertices, &slots)
+    Dispatch::new(shared, "mrt.dynamic", shaders::MRT_DYNAMIC_COMP, vertices, &slots)
 }

@@ -16,5 +16,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, invocations: u32) -> VkRes
         Slot::Buffer(&buffers.b0, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.b, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_FEEDBACK_COMP, invocations, &slots)
+    Dispatch::new(shared, "mrt.feedback", shaders::MRT_FEEDBACK_COMP, invocations, &slots)
 }

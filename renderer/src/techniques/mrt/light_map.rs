@@ -16,5 +16,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, light_map: &Image, texels:
         Slot::Buffer(&buffers.indirect, Access::ComputeStorageRead),
         Slot::StorageImage(light_map, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_LIGHT_MAP_COMP, texels, &slots)
+    Dispatch::new(shared, "mrt.light_map", shaders::MRT_LIGHT_MAP_COMP, texels, &slots)
 }

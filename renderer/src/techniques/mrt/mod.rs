@@ -89,20 +89,20 @@ struct MrtPush {
     dynamic_count: u32,
 }
 
-/// One compute pass and its workgroup count: the shape every MRT pass has.
+/// One compute pass and its invocations: the shape every MRT pass has.
 struct Dispatch {
-    pass: ComputePass,
-    groups: u32,
+    pass: ComputePass<MrtPush>,
+    invocations: u32,
 }
 
 impl Dispatch {
-    fn new(shared: &Shared, spirv: &[u8], invocations: u32, slots: &[crate::passes::compute::Slot]) -> VkResult<Dispatch> {
-        let pass = ComputePass::new(shared.ctx, spirv, std::mem::size_of::<MrtPush>() as u32, slots)?;
-        Ok(Dispatch { pass, groups: invocations.div_ceil(64).max(1) })
+    fn new(shared: &Shared, name: &str, spirv: &[u8], invocations: u32, slots: &[crate::passes::compute::Slot]) -> VkResult<Dispatch> {
+        let pass = ComputePass::new(shared.ctx, name, spirv, slots)?;
+        Ok(Dispatch { pass, invocations: invocations.max(1) })
     }
 
     fn record(&self, rec: &CommandRecorder, tracker: &mut Tracker, push: &MrtPush) {
-        self.pass.dispatch(rec, tracker, 0, push, [self.groups, 1, 1]);
+        self.pass.dispatch(rec, tracker, 0, push, [self.invocations, 1, 1]);
     }
 }
 

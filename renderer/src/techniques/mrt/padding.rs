@@ -13,5 +13,5 @@ use crate::vk::{Access, Image, VkResult};
 
 pub(super) fn new(shared: &Shared, buffers: &Buffers, light_map: &Image, copies: u32) -> VkResult<Dispatch> {
     let slots = [Slot::Buffer(&buffers.copies, Access::ComputeStorageRead), Slot::StorageImage(light_map, Access::ComputeStorageReadWrite)];
-    Dispatch::new(shared, shaders::MRT_PADDING_COMP, copies, &slots)
+    Dispatch::new(shared, "mrt.padding", shaders::MRT_PADDING_COMP, copies, &slots)
 }

@@ -20,5 +20,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, samples: u32) -> VkResult<
         Slot::Buffer(&buffers.r, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.indirect, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_RESPONSE_COMP, samples, &slots)
+    Dispatch::new(shared, "mrt.response", shaders::MRT_RESPONSE_COMP, samples, &slots)
 }

@@ -20,5 +20,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, invocations: u32) -> VkRes
         Slot::Buffer(&buffers.b, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.r, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_TRANSFER_COMP, invocations, &slots)
+    Dispatch::new(shared, "mrt.transfer", shaders::MRT_TRANSFER_COMP, invocations, &slots)
 }

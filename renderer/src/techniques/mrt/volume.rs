@@ -19,5 +19,5 @@ pub(super) fn new(shared: &Shared, buffers: &Buffers, rows: u32) -> VkResult<Dis
         Slot::Buffer(&buffers.r, Access::ComputeStorageRead),
         Slot::Buffer(&buffers.volume, Access::ComputeStorageWrite),
     ];
-    Dispatch::new(shared, shaders::MRT_VOLUME_COMP, rows, &slots)
+    Dispatch::new(shared, "mrt.volume", shaders::MRT_VOLUME_COMP, rows, &slots)
 }
