@@ -19,10 +19,10 @@ use ash::vk;
 use bytemuck::Zeroable;
 use engine_device::Engine;
 use relume_bake::scene::{LightKind, Scene};
-use relume_renderer::technique::{MakeTechnique, Terms};
+use relume_renderer::technique::{MakeTechnique, Surfaces, Terms};
 use relume_renderer::vk::{transition, Access, Binding, Buffer, CommandBuffer, CommandRecorder, Context, DescriptorSet, Fence};
 use relume_renderer::vk::{GraphicsPipelineDesc, Image, ImageDesc, ImageState, Pipeline, Sampler};
-use relume_renderer::{Effect, RenderSettings, TermReads};
+use relume_renderer::{Effect, EngineInputs, RenderSettings, TermReads};
 use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -35,6 +35,8 @@ pub struct Outcome {
     pub radiance: Vec<f32>,
     /// The shader variant the effect's terms chose (its macro definitions).
     pub variant: String,
+    /// Whether the effect read the engine's surfaces pass (a pixel term does).
+    pub drew_surfaces: bool,
     /// The validation layer's warnings and errors over the whole run (empty without it).
     pub validation_messages: Vec<String>,
 }
@@ -84,34 +86,64 @@ pub fn run(
     let ctx = engine.context()?;
     let drawn = frame(&engine, &ctx, scene, techniques, settings);
     drop(ctx);
-    let outcome = drawn.map(|(radiance, variant)| Outcome {
+    let outcome = drawn.map(|(radiance, variant, drew_surfaces)| Outcome {
         device: engine.name.clone(),
         radiance,
         variant,
+        drew_surfaces,
         validation_messages: engine.validation_messages(),
     });
     engine.destroy();
     outcome
 }
 
-/// The effect, then the engine's forward pass and its read-back, in one command buffer the
-/// engine submits and waits for. Returns the radiance and the shader variant.
+/// The engine's surfaces pass (when the effect reads it), the effect, then the engine's forward
+/// pass and its read-back, in one command buffer the engine submits and waits for. Returns
+/// the radiance, the shader variant and whether the surfaces pass ran.
 fn frame(
     engine: &Engine,
     ctx: &Arc<Context>,
     scene: &Scene,
     techniques: &[&dyn MakeTechnique],
     settings: &RenderSettings,
-) -> Result<(Vec<f32>, String), Box<dyn Error>> {
-    let mut effect = Effect::new_blocking(ctx, scene, settings, techniques)?;
-    let forward = Forward::new(ctx, scene, &effect.terms()?, settings)?;
+) -> Result<(Vec<f32>, String, bool), Box<dyn Error>> {
+    if scene.materials.iter().any(|m| m.base_color_texture.is_some()) || (settings.environment_ambient && scene.environment.is_some()) {
+        return Err("the engine example draws untextured materials and no environment light".into());
+    }
+    let (w, h) = (settings.width, settings.height);
+    use vk::ImageUsageFlags as U;
+    let target = |name, format, usage| {
+        Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
+    };
+    let surfaces = [
+        target("engine positions", vk::Format::R32G32B32A32_SFLOAT, U::COLOR_ATTACHMENT | U::STORAGE)?,
+        target("engine normals", vk::Format::R32G32B32A32_SFLOAT, U::COLOR_ATTACHMENT | U::STORAGE)?,
+    ];
+    let inputs = EngineInputs { surfaces: Some(Surfaces { positions: &surfaces[0], normals: &surfaces[1] }) };
+    let mut effect = Effect::new_blocking(ctx, scene, settings, techniques, &inputs)?;
+    let terms = effect.terms()?;
+    let geometry = Geometry::new(ctx, scene, settings, &terms)?;
+    // A depth buffer each for the surfaces and forward passes: each clears its own.
+    let depths = [
+        target("engine surfaces depth", vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+        target("engine depth", vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+    ];
+    let surfaces_pass = match effect.surface_ids() {
+        Some(ids) => Some(SurfacesPass::new(ctx, &geometry, ids)?),
+        None => None,
+    };
+    let forward = Forward::new(ctx, &geometry, &terms, settings)?;
+    drop(terms);
     let (cmd, fence) = (CommandBuffer::new(ctx)?, Fence::new(ctx)?);
     let rec = ctx.begin(cmd.raw)?;
+    if let Some(pass) = &surfaces_pass {
+        pass.record(&rec, &geometry, (&surfaces, &depths[0]));
+    }
     let output = effect.record(&rec, TermReads::default())?;
-    forward.record(&rec, output.images);
+    forward.record(&rec, &geometry, &depths[1], output.images);
     engine.end_submit_and_wait(cmd.raw, fence.raw)?;
     let bytes = forward.readback.mapped_bytes(forward.color.desc.texel_count() as usize * 16)?;
-    Ok((bytemuck::pod_collect_to_vec(bytes), forward.variant))
+    Ok((bytemuck::pod_collect_to_vec(bytes), forward.variant, surfaces_pass.is_some()))
 }
 
 /// The engine's lights as its shader reads them (engine_shaders/engine.glsl).
@@ -141,61 +173,146 @@ struct EngineMaterial {
     phong: [f32; 4],
 }
 
-/// The engine's forward pass: its geometry (position, normal, uv1 per vertex, every mesh's
-/// vertices in the scene's order, so that gl_VertexIndex is the index relume's per-vertex
-/// terms use), its pipeline for the effect's terms, its targets and its read-back buffer.
-struct Forward {
-    pipeline: Pipeline,
-    descriptors: DescriptorSet,
+/// The engine's scene: its vertex and index buffers (position, normal, uv1 per vertex, every
+/// mesh's vertices in the scene's order, so that gl_VertexIndex is the index relume's
+/// per-vertex terms use), per mesh its index range and material, its lights and its frame
+/// uniforms.
+struct Geometry {
     vertices: Buffer,
     indices: Buffer,
     draws: Vec<(u32, u32, EngineMaterial)>,
-    color: Image,
-    depth: Image,
-    stand_in: Image,
-    readback: Buffer,
-    variant: String,
-    // Named by the descriptor set, so kept as long as it.
-    _held: (Buffer, Buffer, Buffer, Sampler),
+    lights: Buffer,
+    uniforms: Buffer,
 }
 
-impl Forward {
-    fn new(ctx: &Arc<Context>, scene: &Scene, terms: &Terms, settings: &RenderSettings) -> Result<Forward, Box<dyn Error>> {
-        if scene.materials.iter().any(|m| m.base_color_texture.is_some()) || (settings.environment_ambient && scene.environment.is_some()) {
-            return Err("the engine example draws untextured materials and no environment light".into());
-        }
+impl Geometry {
+    fn new(ctx: &Arc<Context>, scene: &Scene, settings: &RenderSettings, terms: &Terms) -> Result<Geometry, Box<dyn Error>> {
         let (vertices, indices, draws) = geometry(scene);
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let vertices = Buffer::with_data(ctx, "engine vertices", vk::BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
-        let indices = Buffer::with_data(ctx, "engine indices", vk::BufferUsageFlags::INDEX_BUFFER, &indices)?;
-        let lights = Buffer::with_data(ctx, "engine lights", usage, &engine_lights(scene))?;
-        let (w, h) = (settings.width, settings.height);
         let uniforms = EngineFrame {
-            clip_from_world: scene.camera.clip_from_world(w, h).to_cols_array(),
+            clip_from_world: scene.camera.clip_from_world(settings.width, settings.height).to_cols_array(),
             camera_position: scene.camera.position().extend(1.0).to_array(),
             ambient_beta: settings.ambient.extend(settings.beta).to_array(),
             counts: [scene.lights.len() as u32, terms.times_occlusion as u32, terms.occluded_direct as u32, 0],
         };
-        let uniforms = Buffer::with_data(ctx, "engine frame", vk::BufferUsageFlags::UNIFORM_BUFFER, &[uniforms])?;
-        let stand_in_values = Buffer::with_data(ctx, "engine stand-in", usage, &[0.0f32; 4])?;
-        let image =
-            |name, format, usage, view_type| Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type });
+        Ok(Geometry {
+            vertices: Buffer::with_data(ctx, "engine vertices", vk::BufferUsageFlags::VERTEX_BUFFER, &vertices)?,
+            indices: Buffer::with_data(ctx, "engine indices", vk::BufferUsageFlags::INDEX_BUFFER, &indices)?,
+            draws,
+            lights: Buffer::with_data(ctx, "engine lights", vk::BufferUsageFlags::STORAGE_BUFFER, &engine_lights(scene))?,
+            uniforms: Buffer::with_data(ctx, "engine frame", vk::BufferUsageFlags::UNIFORM_BUFFER, &[uniforms])?,
+        })
+    }
+
+    /// Renders every mesh into `colors` and `depth` (cleared; both new each frame, so taken from
+    /// UNDEFINED) with `pipeline`, pushing each mesh's `push`; returns the colours' state.
+    fn draw<P: bytemuck::NoUninit, const N: usize>(
+        &self,
+        rec: &CommandRecorder,
+        (pipeline, set): (&Pipeline, &DescriptorSet),
+        (colors, depth): ([&Image; N], &Image),
+        push: impl Fn(usize) -> P,
+    ) -> ImageState {
+        let undefined = Access::Undefined.state();
+        let drawn = colors.map(|image| transition(rec, image.into(), undefined, Access::ColorAttachmentWrite))[0];
+        transition(rec, depth.into(), undefined, Access::DepthAttachmentWrite);
+        rec.bind_graphics(pipeline.raw, pipeline.layout, set.set);
+        rec.begin_rendering(colors[0].desc.extent(), colors.map(|image| image.view), [0.0; 4], depth.view);
+        rec.bind_geometry(self.vertices.raw, self.indices.raw);
+        for (mesh, (first_index, index_count, _)) in self.draws.iter().enumerate() {
+            rec.push_constants(pipeline.layout, &push(mesh));
+            rec.draw_indexed(*first_index, *index_count);
+        }
+        rec.end_rendering();
+        drawn
+    }
+}
+
+/// The engine's pipeline of `shaders` (vertex, fragment) over its geometry into RGBA32F colours.
+fn pipeline(
+    ctx: &Arc<Context>,
+    name: &str,
+    shaders: [&[u8]; 2],
+    set: &DescriptorSet,
+    colors: usize,
+    push_bytes: usize,
+) -> Result<Pipeline, Box<dyn Error>> {
+    let attribute = |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
+    let formats = vec![vk::Format::R32G32B32A32_SFLOAT; colors];
+    Ok(Pipeline::graphics(
+        ctx,
+        &GraphicsPipelineDesc {
+            name,
+            vertex: shaders[0],
+            fragment: shaders[1],
+            specialization: &[],
+            vertex_stride: 32,
+            attributes: &[
+                attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
+                attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
+                attribute(2, vk::Format::R32G32_SFLOAT, 24),
+            ],
+            color_formats: &formats,
+            depth_format: vk::Format::D32_SFLOAT,
+            cull_mode: vk::CullModeFlags::NONE,
+            set,
+            push_bytes: push_bytes as u32,
+        },
+    )?)
+}
+
+/// The engine's surfaces pass (its G-buffer): every pixel's position and normal, with the id
+/// relume gave the pixel's mesh, for the effect's pixel term.
+struct SurfacesPass {
+    pipeline: Pipeline,
+    descriptors: DescriptorSet,
+    ids: Vec<u32>,
+}
+
+impl SurfacesPass {
+    fn new(ctx: &Arc<Context>, geometry: &Geometry, ids: &[u32]) -> Result<SurfacesPass, Box<dyn Error>> {
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let descriptors = DescriptorSet::new(ctx, stages, &[Binding::UniformBuffer(geometry.uniforms.raw)])?;
+        let shaders = [
+            compile(include_str!("engine_shaders/surfaces.vert"), shaderc::ShaderKind::Vertex, &[])?,
+            compile(include_str!("engine_shaders/surfaces.frag"), shaderc::ShaderKind::Fragment, &[])?,
+        ];
+        let pipeline = pipeline(ctx, "engine.surfaces", [&shaders[0], &shaders[1]], &descriptors, 2, 4)?;
+        Ok(SurfacesPass { pipeline, descriptors, ids: ids.to_vec() })
+    }
+
+    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (surfaces, depth): (&[Image; 2], &Image)) {
+        geometry.draw(rec, (&self.pipeline, &self.descriptors), ([&surfaces[0], &surfaces[1]], depth), |mesh| self.ids[mesh]);
+    }
+}
+
+/// The engine's forward pass: its pipeline for the effect's terms, its colour target, and its
+/// read-back buffer.
+struct Forward {
+    pipeline: Pipeline,
+    descriptors: DescriptorSet,
+    color: Image,
+    stand_in: Image,
+    readback: Buffer,
+    variant: String,
+    // Named by the descriptor set, so kept as long as it.
+    _held: (Buffer, Sampler),
+}
+
+impl Forward {
+    fn new(ctx: &Arc<Context>, geometry: &Geometry, terms: &Terms, settings: &RenderSettings) -> Result<Forward, Box<dyn Error>> {
+        let (w, h) = (settings.width, settings.height);
+        let stand_in_values = Buffer::with_data(ctx, "engine stand-in", vk::BufferUsageFlags::STORAGE_BUFFER, &[0.0f32; 4])?;
         use vk::ImageUsageFlags as U;
-        let color =
-            image("engine color", vk::Format::R32G32B32A32_SFLOAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC, vk::ImageViewType::TYPE_2D)?;
-        let depth = image("engine depth", vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT, vk::ImageViewType::TYPE_2D)?;
-        let stand_in = Image::new(
-            ctx,
-            "engine stand-in",
-            ImageDesc {
-                width: 1,
-                height: 1,
-                layers: 1,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                usage: U::SAMPLED,
-                view_type: vk::ImageViewType::TYPE_2D_ARRAY,
-            },
-        )?;
+        let desc = |width, height, usage, view_type| ImageDesc {
+            width,
+            height,
+            layers: 1,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            usage,
+            view_type,
+        };
+        let color = Image::new(ctx, "engine color", desc(w, h, U::COLOR_ATTACHMENT | U::TRANSFER_SRC, vk::ImageViewType::TYPE_2D))?;
+        let stand_in = Image::new(ctx, "engine stand-in", desc(1, 1, U::SAMPLED, vk::ImageViewType::TYPE_2D_ARRAY))?;
         let readback = Buffer::with_data(ctx, "engine readback", vk::BufferUsageFlags::TRANSFER_DST, &vec![0.0f32; (w * h * 4) as usize])?;
         let sampler = Sampler::new(ctx, false, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let sampled = |image: Option<&Image>| Binding::SampledImage { view: image.unwrap_or(&stand_in).view, sampler: sampler.raw };
@@ -203,8 +320,8 @@ impl Forward {
             ctx,
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             &[
-                Binding::StorageBuffer(lights.raw),
-                Binding::UniformBuffer(uniforms.raw),
+                Binding::StorageBuffer(geometry.lights.raw),
+                Binding::UniformBuffer(geometry.uniforms.raw),
                 sampled(terms.occlusion),
                 sampled(terms.texels()),
                 sampled(terms.pixels()),
@@ -212,50 +329,23 @@ impl Forward {
             ],
         )?;
         let defines = variant(terms);
-        let named: Vec<String> = defines.iter().map(|(name, value)| format!("{name}={value}")).collect();
-        let attribute = |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
-        let pipeline = Pipeline::graphics(
-            ctx,
-            &GraphicsPipelineDesc {
-                name: "engine.forward",
-                vertex: &compile(include_str!("engine_shaders/forward.vert"), shaderc::ShaderKind::Vertex, &defines)?,
-                fragment: &compile(include_str!("engine_shaders/forward.frag"), shaderc::ShaderKind::Fragment, &defines)?,
-                specialization: &[],
-                vertex_stride: 32,
-                attributes: &[
-                    attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
-                    attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
-                    attribute(2, vk::Format::R32G32_SFLOAT, 24),
-                ],
-                color_formats: &[vk::Format::R32G32B32A32_SFLOAT],
-                depth_format: vk::Format::D32_SFLOAT,
-                cull_mode: vk::CullModeFlags::NONE,
-                set: &descriptors,
-                push_bytes: std::mem::size_of::<EngineMaterial>() as u32,
-            },
-        )?;
-        let variant = named.join(" ");
-        let held = (lights, uniforms, stand_in_values, sampler);
-        Ok(Forward { pipeline, descriptors, vertices, indices, draws, color, depth, stand_in, readback, variant, _held: held })
+        let shaders = [
+            compile(include_str!("engine_shaders/forward.vert"), shaderc::ShaderKind::Vertex, &defines)?,
+            compile(include_str!("engine_shaders/forward.frag"), shaderc::ShaderKind::Fragment, &defines)?,
+        ];
+        let push_bytes = std::mem::size_of::<EngineMaterial>();
+        let pipeline = pipeline(ctx, "engine.forward", [&shaders[0], &shaders[1]], &descriptors, 1, push_bytes)?;
+        let variant = defines.iter().map(|(name, value)| format!("{name}={value}")).collect::<Vec<_>>().join(" ");
+        Ok(Forward { pipeline, descriptors, color, stand_in, readback, variant, _held: (stand_in_values, sampler) })
     }
 
     /// Draws every mesh, reading the effect's terms from the state relume left its images in
     /// (`images`), then copies the colour to the read-back buffer. The engine's barriers, by
     /// hand: its targets and stand-in are new each frame (from UNDEFINED).
-    fn record(&self, rec: &CommandRecorder, images: ImageState) {
+    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, depth: &Image, images: ImageState) {
         debug_assert_eq!(images, Access::FragmentSampled.state(), "the engine asked relume for fragment-shader reads");
-        let undefined = Access::Undefined.state();
-        transition(rec, (&self.stand_in).into(), undefined, Access::FragmentSampled);
-        let drawn = transition(rec, (&self.color).into(), undefined, Access::ColorAttachmentWrite);
-        transition(rec, (&self.depth).into(), undefined, Access::DepthAttachmentWrite);
-        rec.bind_graphics(self.pipeline.raw, self.pipeline.layout, self.descriptors.set);
-        rec.begin_rendering(self.color.desc.extent(), [self.color.view], [0.0; 4], self.depth.view);
-        rec.bind_geometry(self.vertices.raw, self.indices.raw);
-        for (first_index, index_count, material) in &self.draws {
-            rec.push_constants(self.pipeline.layout, material);
-            rec.draw_indexed(*first_index, *index_count);
-        }
-        rec.end_rendering();
+        transition(rec, (&self.stand_in).into(), Access::Undefined.state(), Access::FragmentSampled);
+        let drawn = geometry.draw(rec, (&self.pipeline, &self.descriptors), ([&self.color], depth), |mesh| geometry.draws[mesh].2);
         transition(rec, (&self.color).into(), drawn, Access::TransferSource);
         rec.copy_image_to_buffer(&self.color, self.readback.raw);
         rec.transfer_to_host_barrier();
@@ -319,6 +409,7 @@ fn compile(source: &str, kind: shaderc::ShaderKind, defines: &[(&str, String)]) 
     options.set_include_callback(move |name, _, _, _| {
         let content = match name {
             "engine.glsl" => include_str!("engine_shaders/engine.glsl").to_string(),
+            "engine_frame.glsl" => include_str!("engine_shaders/engine_frame.glsl").to_string(),
             _ => std::fs::read_to_string(relume_shaders.join(name)).map_err(|e| format!("{name}: {e}"))?,
         };
         Ok(shaderc::ResolvedInclude { resolved_name: name.to_string(), content })

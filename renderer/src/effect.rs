@@ -12,26 +12,38 @@ use crate::atlas_image::check_uv1;
 use crate::gpu_scene::{FrameUniforms, GpuScene};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
-use crate::technique::{MakeTechnique, Resource, Shared, Technique, Terms};
-use crate::vk::{Access, CommandRecorder, Context, Image, ImageState, Tracker, Use, VkError, VkResult};
+use crate::technique::{MakeTechnique, Resource, Shared, Surfaces, Technique, Terms};
+use crate::vk::{Access, CommandRecorder, Context, Image, ImageRef, ImageState, Tracker, Use, VkError, VkResult};
 use crate::RenderSettings;
 use glam::{Vec3, Vec4};
 use relume_bake::scene::{Camera, Light, Scene};
 use std::any::Any;
 use std::sync::Arc;
 
-/// How the engine will read the terms an effect hands back: `images` as FragmentSampled or
-/// ComputeSampled, `buffers` as GraphicsStorageRead or ComputeStorageRead.
+/// What the engine hands an effect at creation besides the scene: its own images, which a
+/// technique that can reads instead of drawing its own.
+#[derive(Clone, Copy, Default)]
+pub struct EngineInputs<'i> {
+    /// Its view's surfaces, for a pixel term (fiv reads them instead of its surfaces pass):
+    /// the engine draws them each frame before the effect, writing into each normal's w the id
+    /// `Effect::surface_ids` gives the mesh.
+    pub surfaces: Option<Surfaces<'i>>,
+}
+
+/// How the engine uses what an effect reads and writes in a frame: it will read the terms'
+/// `images` as FragmentSampled or ComputeSampled and their `buffers` as GraphicsStorageRead or
+/// ComputeStorageRead; the images it handed over (`EngineInputs`) were last used as `inputs`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TermReads {
     pub images: Access,
     pub buffers: Access,
+    pub inputs: Access,
 }
 
 impl Default for TermReads {
-    /// Read in the engine's own graphics pass.
+    /// Read in the engine's own graphics pass; its surfaces drawn by its own graphics pass.
     fn default() -> Self {
-        TermReads { images: Access::FragmentSampled, buffers: Access::GraphicsStorageRead }
+        TermReads { images: Access::FragmentSampled, buffers: Access::GraphicsStorageRead, inputs: Access::ColorAttachmentWrite }
     }
 }
 
@@ -43,6 +55,9 @@ pub struct EffectOutput<'e> {
     pub images: ImageState,
     /// The access every buffer of `terms` was made ready for.
     pub buffers: Access,
+    /// The state the images the engine handed over are left in (as it gave it when no
+    /// technique read them).
+    pub inputs: ImageState,
 }
 
 /// The scene uploaded, the shadow maps and the techniques, with what a frame needs of them.
@@ -54,6 +69,9 @@ pub struct Effect {
     vsm: VsmPass,
     blur: VsmBlurPass,
     techniques: Vec<Box<dyn Technique>>,
+    /// The engine's images the techniques read (`EngineInputs`): their state comes with each
+    /// frame.
+    inputs: Vec<ImageRef>,
     tracker: Tracker,
     /// The scene's environment's radiance in spherical harmonics (zero without one).
     environment_sh: [Vec4; 9],
@@ -61,23 +79,28 @@ pub struct Effect {
 
 impl Effect {
     /// Uploads the scene, creates the shadow maps and each technique from its data, in the
-    /// given order (the order of their passes). Blocking: uploads go through one-time
-    /// submissions, each waited for by its own fence; nothing here runs per frame. Refused, by
-    /// name: invalid settings, what a technique refuses, two techniques handing over a term of
-    /// the same role, and a texel term on a scene without uv1 on the atlas's pages. `settings`'
+    /// given order (the order of their passes), handing them the engine's `inputs`. Blocking:
+    /// uploads go through one-time submissions, each waited for by its own fence; nothing here
+    /// runs per frame. Refused, by name: invalid settings, what a technique refuses (engine
+    /// inputs of another size or format among it), two techniques handing over a term of the
+    /// same role, and a texel term on a scene without uv1 on the atlas's pages. `settings`'
     /// size is a pixel term's; its shadow settings are the shadow maps'.
     pub fn new_blocking(
         ctx: &Arc<Context>,
         scene: &Scene,
         settings: &RenderSettings,
         techniques: &[&dyn MakeTechnique],
+        inputs: &EngineInputs,
     ) -> VkResult<Effect> {
         settings.validate().map_err(VkError::Invalid)?;
         let gpu_scene = GpuScene::upload_blocking(ctx, scene)?;
         let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
         let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings };
+        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings, surfaces: inputs.surfaces };
         let techniques = techniques.iter().map(|t| t.make_blocking(&shared)).collect::<VkResult<Vec<_>>>()?;
+        let read_surfaces = techniques.iter().any(|t| t.surface_ids().is_some());
+        let surfaces = inputs.surfaces.filter(|_| read_surfaces);
+        let inputs = surfaces.iter().flat_map(|s| [ImageRef::from(s.positions), ImageRef::from(s.normals)]).collect();
         let mut effect = Effect {
             ctx: Arc::clone(ctx),
             settings: settings.clone(),
@@ -86,6 +109,7 @@ impl Effect {
             vsm,
             blur,
             techniques,
+            inputs,
             tracker: Tracker::default(),
             environment_sh: scene.environment.as_ref().map_or([Vec4::ZERO; 9], |e| e.radiance_sh().map(|c| c.extend(0.0))),
         };
@@ -107,6 +131,13 @@ impl Effect {
     /// The terms the techniques hand over (checked at creation: at most one of each role).
     pub fn terms(&self) -> VkResult<Terms<'_>> {
         Terms::gather(self.techniques.iter().map(|t| (t.name(), t.term())))
+    }
+
+    /// Per mesh of the scene, the id the engine writes into the w of its surfaces' normals,
+    /// when a technique reads the surfaces it handed over; None when none does (the engine
+    /// then need not draw them).
+    pub fn surface_ids(&self) -> Option<&[u32]> {
+        self.techniques.iter().find_map(|t| t.surface_ids())
     }
 
     /// The blurred variance shadow maps (one layer per shadow view of every light).
@@ -187,10 +218,10 @@ impl Effect {
     /// Records one frame of the techniques into the engine's command buffer (begun, ended and
     /// submitted by the engine, which must not submit two frames of one effect at once): the
     /// frame's uniforms and lights, the shadow maps when a technique reads them, every
-    /// technique's passes; then the barriers that make every term's image ready for
-    /// `reads.images` and every buffer for `reads.buffers`. Nothing is allocated, submitted or
-    /// waited on. Refused before anything is recorded: a read that is not a sampled image
-    /// read or a storage buffer read.
+    /// technique's passes, which read the engine's images from the state `reads.inputs`; then
+    /// the barriers that make every term's image ready for `reads.images` and every buffer for
+    /// `reads.buffers`. Nothing is allocated, submitted or waited on. Refused before anything is
+    /// recorded: a read that is not a sampled image read or a storage buffer read.
     pub fn record(&mut self, rec: &CommandRecorder, reads: TermReads) -> VkResult<EffectOutput<'_>> {
         let image_reads = [Access::FragmentSampled, Access::ComputeSampled];
         let buffer_reads = [Access::GraphicsStorageRead, Access::ComputeStorageRead];
@@ -201,6 +232,7 @@ impl Effect {
             )));
         }
         let mut tracker = std::mem::take(&mut self.tracker);
+        self.inputs.iter().for_each(|image| tracker.assume(*image, reads.inputs));
         let shadows = self.techniques.iter().any(|t| t.reads_shadows());
         self.record_passes(rec, &mut tracker, shadows, &mut |_, _| {});
         let terms = self.terms()?;
@@ -208,8 +240,9 @@ impl Effect {
         let images = terms.images().map(|image| Use::image(image, reads.images));
         let buffers = terms.vertex_values().into_iter().map(|buffer| Use::buffer(buffer, reads.buffers));
         tracker.pass(rec, images.chain(buffers), |_| {});
+        let inputs = self.inputs.first().map_or(reads.inputs, |image| tracker.state(*image)).state();
         self.tracker = tracker;
-        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers })
+        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers, inputs })
     }
 
     /// The frame's uniforms, lights and shadow layers, the shadow maps when `shadows` (and a

@@ -6,7 +6,7 @@
 //! allocates, submits or waits. The headless driver relume's own tools use (command buffer,
 //! fence, read-back) is `crate::headless`, apart from this library type.
 
-use crate::effect::Effect;
+use crate::effect::{Effect, EngineInputs};
 use crate::passes::lighting::{LightingPass, DEPTH_FORMAT, RADIANCE_FORMAT};
 use crate::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use crate::technique::{MakeTechnique, Resource, Technique};
@@ -164,7 +164,7 @@ impl Renderer {
         settings: &RenderSettings,
         techniques: &[&dyn MakeTechnique],
     ) -> VkResult<Renderer> {
-        let effect = Effect::new_blocking(ctx, scene, settings, techniques)?;
+        let effect = Effect::new_blocking(ctx, scene, settings, techniques, &EngineInputs::default())?;
         let technique_passes = effect.technique_passes();
         if technique_passes > MAX_PASSES - FRAME_PASSES {
             return Err(VkError::Invalid(format!(

@@ -20,7 +20,7 @@ pub mod upload;
 pub mod vk;
 
 pub use atlas_image::AtlasImage;
-pub use effect::{Effect, EffectOutput, TermReads};
+pub use effect::{Effect, EffectOutput, EngineInputs, TermReads};
 pub use frame::{CallerImage, FrameTimings, RenderSettings, Renderer};
 pub use headless::Headless;
 pub use technique::{MakeTechnique, Technique};

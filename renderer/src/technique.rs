@@ -14,13 +14,25 @@ use std::sync::Arc;
 
 /// What a technique is created from besides its own data: the device, the scene as loaded
 /// (with the atlas's uv1 when a bake gave one) and as uploaded (its buffers, among them the
-/// frame's uniforms), the blurred shadow moments, and the frame's settings.
+/// frame's uniforms), the blurred shadow moments, the frame's settings, and the surfaces of
+/// the view an engine draws itself, when it hands them over (`crate::effect::EngineInputs`).
 pub struct Shared<'s> {
     pub ctx: &'s Arc<Context>,
     pub scene: &'s Scene,
     pub gpu_scene: &'s GpuScene,
     pub moments: &'s Image,
     pub settings: &'s RenderSettings,
+    pub surfaces: Option<Surfaces<'s>>,
+}
+
+/// Every pixel's surface in a view, as a pixel term reads them: `positions` (world xyz; w 1
+/// where a surface is, 0 elsewhere) and `normals` (unit, turned towards the viewer; w the id
+/// `Technique::surface_ids` gives the surface's mesh), RGBA32F 2D images of the frame's size
+/// with storage usage, written by the engine's own pass before the effect runs.
+#[derive(Clone, Copy)]
+pub struct Surfaces<'s> {
+    pub positions: &'s Image,
+    pub normals: &'s Image,
 }
 
 /// Where the lighting pass reads an irradiance term.
@@ -187,6 +199,12 @@ pub trait Technique: Any + Send {
     /// renders them before its passes (`crate::effect`).
     fn reads_shadows(&self) -> bool {
         false
+    }
+
+    /// When it reads the engine's surfaces (`Shared::surfaces`) instead of drawing its own: the
+    /// id each of the scene's meshes carries in the w of the normals (fiv: its occluder + 1).
+    fn surface_ids(&self) -> Option<&[u32]> {
+        None
     }
 
     /// Tells a frame's tracker the state its uploads left its images in.

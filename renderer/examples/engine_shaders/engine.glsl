@@ -1,4 +1,4 @@
-// The engine's own shader interface (renderer/examples/engine.rs): its lights, its frame
+// The engine's forward pass's interface (renderer/examples/engine.rs): its lights, its frame
 // uniforms, its materials, and relume's terms bound where the engine chose. The engine
 // compiles one variant per effect, defining RELUME_TERM (the irradiance term's kind, 0 for
 // none), OCCLUSION when the effect hands an occlusion term and RADIANCE for a radiance term.
@@ -11,12 +11,8 @@ struct EngineLight {
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer EngineLights { EngineLight lights[]; };
-layout(std140, set = 0, binding = 1) uniform EngineFrame {
-    mat4 clip_from_world;
-    vec4 camera_position;
-    vec4 ambient_beta;      // rgb ambient irradiance, w the share of every light's irradiance added to it
-    uvec4 counts;           // x lights, y the irradiance term times the occlusion, z and the direct light too
-} frame;
+#define ENGINE_FRAME_BINDING 1
+#include "engine_frame.glsl"
 // relume's terms (stand-ins where the effect hands none).
 layout(set = 0, binding = 2) uniform sampler2DArray relume_occlusion;
 layout(set = 0, binding = 3) uniform sampler2DArray relume_texels;

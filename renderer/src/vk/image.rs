@@ -60,6 +60,8 @@ pub struct Image {
     pub view: vk::ImageView,
     pub desc: ImageDesc,
     allocation: Option<Allocation>,
+    /// False for an image the caller lent (`Image::borrowed`): never destroyed here.
+    owned: bool,
 }
 
 impl Image {
@@ -76,7 +78,7 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: a valid create info on a live device.
         let raw = unsafe { ctx.device.create_image(&info, None) }?;
-        let mut image = Image { ctx: Arc::clone(ctx), raw, view: vk::ImageView::null(), desc, allocation: None };
+        let mut image = Image { ctx: Arc::clone(ctx), raw, view: vk::ImageView::null(), desc, allocation: None, owned: true };
         // SAFETY: a plain query of the image just made.
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -93,6 +95,13 @@ impl Image {
         unsafe { ctx.device.bind_image_memory(raw, memory, offset) }?;
         image.view = create_view(ctx, raw, &desc, desc.view_type, desc.all_layers())?;
         Ok(image)
+    }
+
+    /// An image and a view over all its layers that the caller made and owns (an engine's
+    /// G-buffer), lent to relume: `desc` must describe them. relume binds and barriers it like its
+    /// own, and never destroys it; the caller keeps both alive as long as relume uses them.
+    pub fn borrowed(ctx: &Arc<Context>, raw: vk::Image, view: vk::ImageView, desc: ImageDesc) -> Image {
+        Image { ctx: Arc::clone(ctx), raw, view, desc, allocation: None, owned: false }
     }
 
     /// A 2D view of one layer, for rendering into it.
@@ -117,6 +126,9 @@ fn create_view(
 
 impl Drop for Image {
     fn drop(&mut self) {
+        if !self.owned {
+            return;
+        }
         // SAFETY: no pending GPU work uses the image; destroying a null view is a no-op.
         unsafe {
             self.ctx.device.destroy_image_view(self.view, None);

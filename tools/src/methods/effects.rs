@@ -1,6 +1,7 @@
 //! Every technique in effect mode, inside an engine that is not relume
-//! (renderer/examples/engine.rs: its own device, geometry, lights, forward pass and shaders,
-//! which sample relume's terms with shaders/include/relume.glsl). Each method is baked with
+//! (renderer/examples/engine.rs: its own device, geometry, lights, surfaces and forward passes
+//! and shaders, which sample relume's terms with shaders/include/relume.glsl; fiv reads the
+//! engine's surfaces instead of drawing its own). Each method is baked with
 //! the least effort on a scene that gives its term each kind it comes in (occlusion, texel,
 //! vertex, pixel, texel or vertex, radiance); the engine's image must equal relume's own frame
 //! of the same scene, lights and term within 1e-4 of its largest value, with validation and
@@ -56,6 +57,8 @@ fn every_technique_as_an_effect_in_an_engine_equals_relumes_frame() {
         let outcome = engine::run(loaded.scene(), &techniques, &settings, true).expect("the engine's frame");
         assert!(outcome.validation_messages.is_empty(), "{name} on {scene_name}: the engine: {:#?}", outcome.validation_messages);
         assert_eq!(outcome.variant, variant, "{name} on {scene_name}: the terms it hands over");
+        let pixel_term = variant.contains("RELUME_TERM=3");
+        assert_eq!(outcome.drew_surfaces, pixel_term, "{name} on {scene_name}: a pixel term, and only it, reads the engine's surfaces");
 
         let expected: Vec<f32> = relume.pixels.iter().flat_map(|p| p.to_array()).collect();
         let got: Vec<f32> = outcome.radiance.chunks_exact(4).flat_map(|p| p[..3].to_vec()).collect();

@@ -25,7 +25,7 @@
 mod occluder_sums;
 mod surfaces;
 
-use crate::technique::{MakeTechnique, Resource, Shared, Source, Technique, Term};
+use crate::technique::{MakeTechnique, Resource, Shared, Source, Surfaces, Technique, Term};
 use crate::upload::upload_buffers_blocking;
 use crate::vk::{vk, Buffer, CommandRecorder, Image, ImageDesc, Tracker, VkError, VkResult};
 use glam::{Vec3, Vec4};
@@ -68,7 +68,7 @@ struct Buffers {
 
 pub struct Fiv {
     buffers: Buffers,
-    surfaces: SurfacesPass,
+    surfaces: SurfacesBy,
     occluder_sums: OccluderSumsPass,
     irradiance: Image,
     occluders: Vec<GpuOccluder>,
@@ -87,18 +87,32 @@ impl Fiv {
 
 const PASSES: [&str; 2] = ["fiv.surfaces", "fiv.occluder_sums"];
 
+/// Who draws the surfaces the occluder sums read.
+enum SurfacesBy {
+    /// Its own surfaces pass.
+    Fiv(SurfacesPass),
+    /// The engine (`Shared::surfaces`), writing each mesh's id: its occluder + 1 (0 for none).
+    Engine(Vec<u32>),
+}
+
+/// Its passes when the engine draws the surfaces.
+const ENGINE_SURFACES_PASSES: [&str; 1] = ["fiv.occluder_sums"];
+
 impl Technique for Fiv {
     fn name(&self) -> &'static str {
         "fiv"
     }
 
     fn passes(&self) -> &'static [&'static str] {
-        &PASSES
+        match self.surfaces {
+            SurfacesBy::Fiv(_) => &PASSES,
+            SurfacesBy::Engine(_) => &ENGINE_SURFACES_PASSES,
+        }
     }
 
     fn record(&self, pass: usize, rec: &CommandRecorder, tracker: &mut Tracker) {
-        match pass {
-            0 => self.surfaces.record(rec, tracker),
+        match (&self.surfaces, pass) {
+            (SurfacesBy::Fiv(surfaces), 0) => surfaces.record(rec, tracker),
             _ => {
                 if !self.occluders.is_empty() {
                     rec.update_buffers([(self.buffers.occluders.raw, bytemuck::cast_slice(&self.occluders))]);
@@ -122,14 +136,22 @@ impl Technique for Fiv {
         }
     }
 
-    /// `positions` (xyz world, alpha 1 on a surface), `normals` (unnormalised) and
-    /// `irradiance` (rgb lux), as the last frame left them.
+    /// The mesh ids the engine writes into its surfaces' normals, when it draws them.
+    fn surface_ids(&self) -> Option<&[u32]> {
+        match &self.surfaces {
+            SurfacesBy::Engine(ids) => Some(ids),
+            SurfacesBy::Fiv(_) => None,
+        }
+    }
+
+    /// `irradiance` (rgb lux) and, when it draws its own surfaces, `positions` (xyz world,
+    /// alpha 1 on a surface) and `normals` (unnormalised), as the last frame left them.
     fn resources(&self) -> Vec<(&'static str, Resource<'_>)> {
-        vec![
-            ("positions", Resource::Image(&self.surfaces.positions)),
-            ("normals", Resource::Image(&self.surfaces.normals)),
-            ("irradiance", Resource::Image(&self.irradiance)),
-        ]
+        let mut resources = vec![("irradiance", Resource::Image(&self.irradiance))];
+        if let SurfacesBy::Fiv(surfaces) = &self.surfaces {
+            resources.extend([("positions", Resource::Image(&surfaces.positions)), ("normals", Resource::Image(&surfaces.normals))]);
+        }
+        resources
     }
 }
 
@@ -206,8 +228,18 @@ impl MakeTechnique for FivData<'_> {
                 None => return refuse(format!("occluder {k} is mesh {}, but the scene has {} meshes", o.mesh, shared.scene.meshes.len())),
             }
         }
-        let surfaces = SurfacesPass::new(shared, &occluder_of_mesh)?;
-        let occluder_sums = OccluderSumsPass::new(shared, &surfaces, &buffers, &irradiance)?;
+        let (surfaces, occluder_sums) = match shared.surfaces {
+            Some(engine) => {
+                check_surfaces(engine, &irradiance.desc)?;
+                (SurfacesBy::Engine(occluder_of_mesh), OccluderSumsPass::new(shared, engine, &buffers, &irradiance)?)
+            }
+            None => {
+                let own = SurfacesPass::new(shared, &occluder_of_mesh)?;
+                let read = Surfaces { positions: &own.positions, normals: &own.normals };
+                let occluder_sums = OccluderSumsPass::new(shared, read, &buffers, &irradiance)?;
+                (SurfacesBy::Fiv(own), occluder_sums)
+            }
+        };
         Ok(Box::new(Fiv {
             buffers,
             surfaces,
@@ -219,4 +251,19 @@ impl MakeTechnique for FivData<'_> {
             difmap_width: self.bake.environment.difmap_width,
         }))
     }
+}
+
+/// Refuses, naming the image, engine surfaces the occluder sums cannot read at the frame's size.
+fn check_surfaces(surfaces: Surfaces, frame: &ImageDesc) -> VkResult<()> {
+    for (name, image) in [("positions", surfaces.positions), ("normals", surfaces.normals)] {
+        let d = &image.desc;
+        let fits = d.format == vk::Format::R32G32B32A32_SFLOAT && d.usage.contains(vk::ImageUsageFlags::STORAGE) && d.layers == 1;
+        if !fits || (d.width, d.height) != (frame.width, frame.height) {
+            return Err(VkError::Invalid(format!(
+                "fiv: the engine's surface {name} is {}x{}x{} {:?} with usage {:?}; the occluder sums read an RGBA32F storage image of one layer at the effect's {}x{}",
+                d.width, d.height, d.layers, d.format, d.usage, frame.width, frame.height
+            )));
+        }
+    }
+    Ok(())
 }

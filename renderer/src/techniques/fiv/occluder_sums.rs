@@ -1,18 +1,17 @@
 //! FIV's occluder sums (compute), 003 §5 per pixel: shaders/fiv/occluder_sums.comp, whose
 //! CPU twin is relume_bake::fiv::FivBake::irradiance.
 //!
-//! Reads: `positions` and `normals` (the surfaces pass), DifMap, the tables, the types and
+//! Reads: `positions` and `normals` (its surfaces pass, or the engine's), DifMap, the tables, the types and
 //! the occluders (rewritten in the command stream at the start of the pass, from the
 //! technique's own array: no allocation). Writes: `irradiance` (RGBA32F, one layer; rgb lux,
 //! 0 where no surface). Cost: per pixel one DifMap read and, per occluder not below the
 //! surface (its own included, when self-shadowing), 8 table samples of 3 vec4, plus with the overlap correction a disc per other
 //! occluder: O(pixels x occluders^2) arithmetic, O(pixels x occluders) table reads.
 
-use super::surfaces::SurfacesPass;
 use super::Buffers;
 use crate::passes::compute::{per_texel, ComputePass, Slot};
 use crate::shaders;
-use crate::technique::Shared;
+use crate::technique::{Shared, Surfaces};
 use crate::vk::{Access, CommandRecorder, Image, Tracker, VkResult};
 use relume_bake::fiv::{Beyond, Radial, SelfShadow, SumOptions};
 
@@ -52,10 +51,10 @@ pub(super) struct OccluderSumsPass {
 }
 
 impl OccluderSumsPass {
-    pub fn new(shared: &Shared, surfaces: &SurfacesPass, buffers: &Buffers, irradiance: &Image) -> VkResult<OccluderSumsPass> {
+    pub fn new(shared: &Shared, surfaces: Surfaces, buffers: &Buffers, irradiance: &Image) -> VkResult<OccluderSumsPass> {
         let slots = [
-            Slot::StorageImage(&surfaces.positions, Access::ComputeStorageRead),
-            Slot::StorageImage(&surfaces.normals, Access::ComputeStorageRead),
+            Slot::StorageImage(surfaces.positions, Access::ComputeStorageRead),
+            Slot::StorageImage(surfaces.normals, Access::ComputeStorageRead),
             Slot::StorageImage(irradiance, Access::ComputeStorageWrite),
             Slot::Buffer(&buffers.difmap, Access::ComputeStorageRead),
             Slot::Buffer(&buffers.tables, Access::ComputeStorageRead),
