@@ -21,8 +21,8 @@ use engine_device::Engine;
 use relume_bake::scene::{LightKind, Scene};
 use relume_renderer::technique::{MakeTechnique, Surfaces, Terms};
 use relume_renderer::vk::{transition, Access, Binding, Buffer, CommandBuffer, CommandRecorder, Context, DescriptorSet, Fence};
-use relume_renderer::vk::{GraphicsPipelineDesc, Image, ImageDesc, ImageState, Pipeline, Sampler};
-use relume_renderer::{Effect, EngineInputs, RenderSettings, TermReads};
+use relume_renderer::vk::{GraphicsPipelineDesc, Image, ImageDesc, ImageState, ImageView, Pipeline, Sampler};
+use relume_renderer::{Effect, EngineInputs, LightDepth, RenderSettings, ShadowMapView, TermReads};
 use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -110,37 +110,52 @@ fn frame(
     if scene.materials.iter().any(|m| m.base_color_texture.is_some()) || (settings.environment_ambient && scene.environment.is_some()) {
         return Err("the engine example draws untextured materials and no environment light".into());
     }
-    let (w, h) = (settings.width, settings.height);
     use vk::ImageUsageFlags as U;
-    let target = |name, format, usage| {
-        Image::new(ctx, name, ImageDesc { width: w, height: h, layers: 1, format, usage, view_type: vk::ImageViewType::TYPE_2D })
+    let image = |name, (width, height, layers), format, usage, view_type| {
+        Image::new(ctx, name, ImageDesc { width, height, layers, format, usage, view_type })
     };
+    let frame_size = (settings.width, settings.height, 1);
+    let target = |name, format, usage| image(name, frame_size, format, usage, vk::ImageViewType::TYPE_2D);
     let surfaces = [
-        target("engine positions", vk::Format::R32G32B32A32_SFLOAT, U::COLOR_ATTACHMENT | U::STORAGE)?,
-        target("engine normals", vk::Format::R32G32B32A32_SFLOAT, U::COLOR_ATTACHMENT | U::STORAGE)?,
+        target("engine positions", RGBA32F, U::COLOR_ATTACHMENT | U::STORAGE)?,
+        target("engine normals", RGBA32F, U::COLOR_ATTACHMENT | U::STORAGE)?,
     ];
-    let inputs = EngineInputs { surfaces: Some(Surfaces { positions: &surfaces[0], normals: &surfaces[1] }) };
+    // Its shadow maps: one layer per shadow view relume names, six for a point light.
+    let layers = scene.lights.iter().map(|l| if l.kind == LightKind::Point { 6 } else { 1 }).sum::<u32>().max(1);
+    let size = settings.shadow_map_size;
+    let moments = image(
+        "engine moments",
+        (size, size, layers),
+        vk::Format::R32G32_SFLOAT,
+        U::COLOR_ATTACHMENT | U::SAMPLED,
+        vk::ImageViewType::TYPE_2D_ARRAY,
+    )?;
+    let inputs = EngineInputs { surfaces: Some(Surfaces { positions: &surfaces[0], normals: &surfaces[1] }), shadows: Some(&moments) };
     let mut effect = Effect::new_blocking(ctx, scene, settings, techniques, &inputs)?;
+    let views = effect.shadow_map_views();
     let terms = effect.terms()?;
-    let geometry = Geometry::new(ctx, scene, settings, &terms)?;
-    // A depth buffer each for the surfaces and forward passes: each clears its own.
+    let geometry = Geometry::new(ctx, scene, settings, &terms, &views)?;
+    // A depth buffer for each pass: each clears its own.
     let depths = [
         target("engine surfaces depth", vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT)?,
         target("engine depth", vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+        image("engine shadow depth", (size, size, 1), vk::Format::D32_SFLOAT, U::DEPTH_STENCIL_ATTACHMENT, vk::ImageViewType::TYPE_2D)?,
     ];
     let surfaces_pass = match effect.surface_ids() {
         Some(ids) => Some(SurfacesPass::new(ctx, &geometry, ids)?),
         None => None,
     };
-    let forward = Forward::new(ctx, &geometry, &terms, settings)?;
+    let shadow_pass = ShadowPass::new(ctx, &moments, &views)?;
+    let forward = Forward::new(ctx, &geometry, &terms, settings, &moments)?;
     drop(terms);
     let (cmd, fence) = (CommandBuffer::new(ctx)?, Fence::new(ctx)?);
     let rec = ctx.begin(cmd.raw)?;
+    shadow_pass.record(&rec, &geometry, (&moments, &depths[2]));
     if let Some(pass) = &surfaces_pass {
         pass.record(&rec, &geometry, (&surfaces, &depths[0]));
     }
     let output = effect.record(&rec, TermReads::default())?;
-    forward.record(&rec, &geometry, &depths[1], output.images);
+    forward.record(&rec, &geometry, (&moments, &depths[1]), (output.images, output.shadows));
     engine.end_submit_and_wait(cmd.raw, fence.raw)?;
     let bytes = forward.readback.mapped_bytes(forward.color.desc.texel_count() as usize * 16)?;
     Ok((bytemuck::pod_collect_to_vec(bytes), forward.variant, surfaces_pass.is_some()))
@@ -154,6 +169,8 @@ struct EngineLight {
     direction_range: [f32; 4],
     intensity: [f32; 4],
     cone: [f32; 4],
+    /// Its first shadow-map layer, a directional light's depth origin.
+    shadow: [f32; 4],
 }
 
 #[repr(C)]
@@ -163,6 +180,7 @@ struct EngineFrame {
     camera_position: [f32; 4],
     ambient_beta: [f32; 4],
     counts: [u32; 4],
+    shadow: [f32; 4],
 }
 
 #[repr(C)]
@@ -175,69 +193,86 @@ struct EngineMaterial {
 
 /// The engine's scene: its vertex and index buffers (position, normal, uv1 per vertex, every
 /// mesh's vertices in the scene's order, so that gl_VertexIndex is the index relume's
-/// per-vertex terms use), per mesh its index range and material, its lights and its frame
-/// uniforms.
+/// per-vertex terms use), per mesh its index range and material, its lights, its frame
+/// uniforms and its shadow maps' layers.
 struct Geometry {
     vertices: Buffer,
     indices: Buffer,
     draws: Vec<(u32, u32, EngineMaterial)>,
     lights: Buffer,
     uniforms: Buffer,
+    layers: Buffer,
 }
 
+/// Where a pass draws: its extent, a view of each colour attachment, their clear value and
+/// the depth attachment's view.
+type Target<const N: usize> = (vk::Extent2D, [vk::ImageView; N], [f32; 4], vk::ImageView);
+
 impl Geometry {
-    fn new(ctx: &Arc<Context>, scene: &Scene, settings: &RenderSettings, terms: &Terms) -> Result<Geometry, Box<dyn Error>> {
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        settings: &RenderSettings,
+        terms: &Terms,
+        views: &[ShadowMapView],
+    ) -> Result<Geometry, Box<dyn Error>> {
         let (vertices, indices, draws) = geometry(scene);
         let uniforms = EngineFrame {
             clip_from_world: scene.camera.clip_from_world(settings.width, settings.height).to_cols_array(),
             camera_position: scene.camera.position().extend(1.0).to_array(),
             ambient_beta: settings.ambient.extend(settings.beta).to_array(),
-            counts: [scene.lights.len() as u32, terms.times_occlusion as u32, terms.occluded_direct as u32, 0],
+            counts: [scene.lights.len() as u32, terms.times_occlusion as u32, terms.occluded_direct as u32, settings.shadows as u32],
+            shadow: [settings.min_variance, settings.bleeding_reduction, 0.0, 0.0],
         };
+        // A storage buffer is never empty.
+        let layers: Vec<[f32; 16]> = views.iter().map(|v| v.clip_from_world.to_cols_array()).chain([[0.0; 16]]).collect();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Geometry {
             vertices: Buffer::with_data(ctx, "engine vertices", vk::BufferUsageFlags::VERTEX_BUFFER, &vertices)?,
             indices: Buffer::with_data(ctx, "engine indices", vk::BufferUsageFlags::INDEX_BUFFER, &indices)?,
             draws,
-            lights: Buffer::with_data(ctx, "engine lights", vk::BufferUsageFlags::STORAGE_BUFFER, &engine_lights(scene))?,
+            lights: Buffer::with_data(ctx, "engine lights", storage, &engine_lights(scene, views))?,
             uniforms: Buffer::with_data(ctx, "engine frame", vk::BufferUsageFlags::UNIFORM_BUFFER, &[uniforms])?,
+            layers: Buffer::with_data(ctx, "engine shadow layers", storage, &layers)?,
         })
     }
 
-    /// Renders every mesh into `colors` and `depth` (cleared; both new each frame, so taken from
-    /// UNDEFINED) with `pipeline`, pushing each mesh's `push`; returns the colours' state.
+    /// Renders every mesh into `target` (its attachments already in their attachment states)
+    /// with `pipeline`, pushing each mesh's `push`.
     fn draw<P: bytemuck::NoUninit, const N: usize>(
         &self,
         rec: &CommandRecorder,
         (pipeline, set): (&Pipeline, &DescriptorSet),
-        (colors, depth): ([&Image; N], &Image),
+        (extent, colors, clear, depth): Target<N>,
         push: impl Fn(usize) -> P,
-    ) -> ImageState {
-        let undefined = Access::Undefined.state();
-        let drawn = colors.map(|image| transition(rec, image.into(), undefined, Access::ColorAttachmentWrite))[0];
-        transition(rec, depth.into(), undefined, Access::DepthAttachmentWrite);
+    ) {
         rec.bind_graphics(pipeline.raw, pipeline.layout, set.set);
-        rec.begin_rendering(colors[0].desc.extent(), colors.map(|image| image.view), [0.0; 4], depth.view);
+        rec.begin_rendering(extent, colors, clear, depth);
         rec.bind_geometry(self.vertices.raw, self.indices.raw);
         for (mesh, (first_index, index_count, _)) in self.draws.iter().enumerate() {
             rec.push_constants(pipeline.layout, &push(mesh));
             rec.draw_indexed(*first_index, *index_count);
         }
         rec.end_rendering();
-        drawn
     }
 }
 
-/// The engine's pipeline of `shaders` (vertex, fragment) over its geometry into RGBA32F colours.
+/// Brings the engine's new-each-frame `images` into `access`, from UNDEFINED; the state left.
+fn fresh(rec: &CommandRecorder, images: &[&Image], access: Access) -> ImageState {
+    images.iter().map(|image| transition(rec, (*image).into(), Access::Undefined.state(), access)).last().unwrap_or(access.state())
+}
+
+/// The engine's pipeline of `shaders` (vertex, fragment) over its geometry into colours of
+/// `formats`.
 fn pipeline(
     ctx: &Arc<Context>,
     name: &str,
     shaders: [&[u8]; 2],
     set: &DescriptorSet,
-    colors: usize,
+    formats: &[vk::Format],
     push_bytes: usize,
 ) -> Result<Pipeline, Box<dyn Error>> {
     let attribute = |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
-    let formats = vec![vk::Format::R32G32B32A32_SFLOAT; colors];
     Ok(Pipeline::graphics(
         ctx,
         &GraphicsPipelineDesc {
@@ -251,7 +286,7 @@ fn pipeline(
                 attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
                 attribute(2, vk::Format::R32G32_SFLOAT, 24),
             ],
-            color_formats: &formats,
+            color_formats: formats,
             depth_format: vk::Format::D32_SFLOAT,
             cull_mode: vk::CullModeFlags::NONE,
             set,
@@ -276,12 +311,15 @@ impl SurfacesPass {
             compile(include_str!("engine_shaders/surfaces.vert"), shaderc::ShaderKind::Vertex, &[])?,
             compile(include_str!("engine_shaders/surfaces.frag"), shaderc::ShaderKind::Fragment, &[])?,
         ];
-        let pipeline = pipeline(ctx, "engine.surfaces", [&shaders[0], &shaders[1]], &descriptors, 2, 4)?;
+        let pipeline = pipeline(ctx, "engine.surfaces", [&shaders[0], &shaders[1]], &descriptors, &[RGBA32F; 2], 4)?;
         Ok(SurfacesPass { pipeline, descriptors, ids: ids.to_vec() })
     }
 
     fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (surfaces, depth): (&[Image; 2], &Image)) {
-        geometry.draw(rec, (&self.pipeline, &self.descriptors), ([&surfaces[0], &surfaces[1]], depth), |mesh| self.ids[mesh]);
+        fresh(rec, &[&surfaces[0], &surfaces[1]], Access::ColorAttachmentWrite);
+        fresh(rec, &[depth], Access::DepthAttachmentWrite);
+        let target = (depth.desc.extent(), [surfaces[0].view, surfaces[1].view], [0.0; 4], depth.view);
+        geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |mesh| self.ids[mesh]);
     }
 }
 
@@ -295,11 +333,17 @@ struct Forward {
     readback: Buffer,
     variant: String,
     // Named by the descriptor set, so kept as long as it.
-    _held: (Buffer, Sampler),
+    _held: (Buffer, Sampler, Sampler),
 }
 
 impl Forward {
-    fn new(ctx: &Arc<Context>, geometry: &Geometry, terms: &Terms, settings: &RenderSettings) -> Result<Forward, Box<dyn Error>> {
+    fn new(
+        ctx: &Arc<Context>,
+        geometry: &Geometry,
+        terms: &Terms,
+        settings: &RenderSettings,
+        moments: &Image,
+    ) -> Result<Forward, Box<dyn Error>> {
         let (w, h) = (settings.width, settings.height);
         let stand_in_values = Buffer::with_data(ctx, "engine stand-in", vk::BufferUsageFlags::STORAGE_BUFFER, &[0.0f32; 4])?;
         use vk::ImageUsageFlags as U;
@@ -315,6 +359,8 @@ impl Forward {
         let stand_in = Image::new(ctx, "engine stand-in", desc(1, 1, U::SAMPLED, vk::ImageViewType::TYPE_2D_ARRAY))?;
         let readback = Buffer::with_data(ctx, "engine readback", vk::BufferUsageFlags::TRANSFER_DST, &vec![0.0f32; (w * h * 4) as usize])?;
         let sampler = Sampler::new(ctx, false, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
+        // Moments are filtered as relume filters them where the device can.
+        let moments_sampler = Sampler::new(ctx, ctx.info.linear_moments, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let sampled = |image: Option<&Image>| Binding::SampledImage { view: image.unwrap_or(&stand_in).view, sampler: sampler.raw };
         let descriptors = DescriptorSet::new(
             ctx,
@@ -326,6 +372,8 @@ impl Forward {
                 sampled(terms.texels()),
                 sampled(terms.pixels()),
                 Binding::StorageBuffer(terms.vertex_values().unwrap_or(&stand_in_values).raw),
+                Binding::StorageBuffer(geometry.layers.raw),
+                Binding::SampledImage { view: moments.view, sampler: moments_sampler.raw },
             ],
         )?;
         let defines = variant(terms);
@@ -334,21 +382,92 @@ impl Forward {
             compile(include_str!("engine_shaders/forward.frag"), shaderc::ShaderKind::Fragment, &defines)?,
         ];
         let push_bytes = std::mem::size_of::<EngineMaterial>();
-        let pipeline = pipeline(ctx, "engine.forward", [&shaders[0], &shaders[1]], &descriptors, 1, push_bytes)?;
+        let pipeline = pipeline(ctx, "engine.forward", [&shaders[0], &shaders[1]], &descriptors, &[RGBA32F], push_bytes)?;
         let variant = defines.iter().map(|(name, value)| format!("{name}={value}")).collect::<Vec<_>>().join(" ");
-        Ok(Forward { pipeline, descriptors, color, stand_in, readback, variant, _held: (stand_in_values, sampler) })
+        Ok(Forward { pipeline, descriptors, color, stand_in, readback, variant, _held: (stand_in_values, sampler, moments_sampler) })
     }
 
     /// Draws every mesh, reading the effect's terms from the state relume left its images in
-    /// (`images`), then copies the colour to the read-back buffer. The engine's barriers, by
-    /// hand: its targets and stand-in are new each frame (from UNDEFINED).
-    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, depth: &Image, images: ImageState) {
+    /// (`images`) and the shadow maps from theirs (`shadows`), then copies the colour to the
+    /// read-back buffer. The engine's barriers, by hand: its targets and stand-in are new each
+    /// frame (from UNDEFINED).
+    fn record(
+        &self,
+        rec: &CommandRecorder,
+        geometry: &Geometry,
+        (moments, depth): (&Image, &Image),
+        (images, shadows): (ImageState, ImageState),
+    ) {
         debug_assert_eq!(images, Access::FragmentSampled.state(), "the engine asked relume for fragment-shader reads");
-        transition(rec, (&self.stand_in).into(), Access::Undefined.state(), Access::FragmentSampled);
-        let drawn = geometry.draw(rec, (&self.pipeline, &self.descriptors), ([&self.color], depth), |mesh| geometry.draws[mesh].2);
+        transition(rec, moments.into(), shadows, Access::FragmentSampled);
+        fresh(rec, &[&self.stand_in], Access::FragmentSampled);
+        let drawn = fresh(rec, &[&self.color], Access::ColorAttachmentWrite);
+        fresh(rec, &[depth], Access::DepthAttachmentWrite);
+        let target = (depth.desc.extent(), [self.color.view], [0.0; 4], depth.view);
+        geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |mesh| geometry.draws[mesh].2);
         transition(rec, (&self.color).into(), drawn, Access::TransferSource);
         rec.copy_image_to_buffer(&self.color, self.readback.raw);
         rec.transfer_to_host_barrier();
+    }
+}
+
+/// The engine's shadow maps: the moments of the light depth of every layer of relume's shadow
+/// views, which it shades its direct light with and hands the effect.
+struct ShadowPass {
+    pipeline: Pipeline,
+    descriptors: DescriptorSet,
+    layer_views: Vec<ImageView>,
+    pushes: Vec<EngineShadowView>,
+}
+
+/// One shadow view as the engine's shadow-map shaders take it (engine_shaders/moments.*).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct EngineShadowView {
+    clip_from_world: [f32; 16],
+    depth: [f32; 4],
+    origin: [f32; 4],
+}
+
+impl ShadowPass {
+    fn new(ctx: &Arc<Context>, moments: &Image, views: &[ShadowMapView]) -> Result<ShadowPass, Box<dyn Error>> {
+        let descriptors = DescriptorSet::new(ctx, vk::ShaderStageFlags::VERTEX, &[])?;
+        let shaders = [
+            compile(include_str!("engine_shaders/moments.vert"), shaderc::ShaderKind::Vertex, &[])?,
+            compile(include_str!("engine_shaders/moments.frag"), shaderc::ShaderKind::Fragment, &[])?,
+        ];
+        let push_bytes = std::mem::size_of::<EngineShadowView>();
+        let pipeline = pipeline(ctx, "engine.shadows", [&shaders[0], &shaders[1]], &descriptors, &[moments.desc.format], push_bytes)?;
+        let layer_views = (0..views.len() as u32).map(|layer| moments.layer_view(layer)).collect::<Result<Vec<_>, _>>()?;
+        let pushes = views
+            .iter()
+            .map(|v| {
+                let (depth, origin) = match v.depth {
+                    LightDepth::Distance { from } => (from.extend(0.0), 0.0),
+                    LightDepth::Along { direction, origin } => (direction.extend(1.0), origin),
+                };
+                EngineShadowView {
+                    clip_from_world: v.clip_from_world.to_cols_array(),
+                    depth: depth.to_array(),
+                    origin: [origin, 0.0, 0.0, v.far],
+                }
+            })
+            .collect();
+        Ok(ShadowPass { pipeline, descriptors, layer_views, pushes })
+    }
+
+    /// Every layer cleared to its far depth and drawn; `moments` left as colour attachment
+    /// written.
+    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (moments, depth): (&Image, &Image)) {
+        fresh(rec, &[moments], Access::ColorAttachmentWrite);
+        let mut depth_state = fresh(rec, &[depth], Access::DepthAttachmentWrite);
+        for (view, push) in self.layer_views.iter().zip(&self.pushes) {
+            // One depth buffer serves every layer: each clear waits for the layer before.
+            depth_state = transition(rec, depth.into(), depth_state, Access::DepthAttachmentWrite);
+            let far = push.origin[3];
+            let target = (moments.desc.extent(), [view.raw], [far, far * far, 0.0, 0.0], depth.view);
+            geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |_| *push);
+        }
     }
 }
 
@@ -371,8 +490,15 @@ fn geometry(scene: &Scene) -> (Vec<[f32; 8]>, Vec<u32>, Vec<(u32, u32, EngineMat
     (vertices, indices, draws)
 }
 
-fn engine_lights(scene: &Scene) -> Vec<EngineLight> {
-    let lights = scene.lights.iter().map(|l| {
+/// The engine's lights, each with its first layer of `views` and a directional light's depth
+/// origin.
+fn engine_lights(scene: &Scene, views: &[ShadowMapView]) -> Vec<EngineLight> {
+    let lights = scene.lights.iter().enumerate().map(|(index, l)| {
+        let first = views.iter().position(|v| v.light == index).unwrap_or(0);
+        let origin = match views.get(first).map(|v| v.depth) {
+            Some(LightDepth::Along { origin, .. }) => origin,
+            _ => 0.0,
+        };
         let (kind, cone) = match l.kind {
             LightKind::Point => (0.0, [0.0; 4]),
             LightKind::Spot { inner_cone, outer_cone } => {
@@ -385,11 +511,14 @@ fn engine_lights(scene: &Scene) -> Vec<EngineLight> {
             direction_range: l.direction.extend(l.range.unwrap_or(0.0)).to_array(),
             intensity: l.intensity.extend(0.0).to_array(),
             cone,
+            shadow: [first as f32, origin, 0.0, 0.0],
         }
     });
     // A storage buffer is never empty.
     lights.chain(std::iter::once(EngineLight::zeroed())).collect()
 }
+
+const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// The shader variant of the effect's terms (engine_shaders/engine.glsl).
 fn variant(terms: &Terms) -> Vec<(&'static str, String)> {

@@ -9,11 +9,11 @@
 //! (`crate::Renderer`) is one user of an effect: its lighting pass reads the same terms.
 
 use crate::atlas_image::check_uv1;
-use crate::gpu_scene::{FrameUniforms, GpuScene};
+use crate::gpu_scene::{FrameUniforms, GpuScene, ShadowMapView};
 use crate::passes::vsm::VsmPass;
 use crate::passes::vsm_blur::VsmBlurPass;
 use crate::technique::{MakeTechnique, Resource, Shared, Surfaces, Technique, Terms};
-use crate::vk::{Access, CommandRecorder, Context, Image, ImageRef, ImageState, Tracker, Use, VkError, VkResult};
+use crate::vk::{vk, Access, CommandRecorder, Context, Image, ImageRef, ImageState, Tracker, Use, VkError, VkResult};
 use crate::RenderSettings;
 use glam::{Vec3, Vec4};
 use relume_bake::scene::{Camera, Light, Scene};
@@ -28,11 +28,18 @@ pub struct EngineInputs<'i> {
     /// the engine draws them each frame before the effect, writing into each normal's w the id
     /// `Effect::surface_ids` gives the mesh.
     pub surfaces: Option<Surfaces<'i>>,
+    /// Its variance shadow maps, for the techniques that shadow their direct light (light path
+    /// maps, mrt), which then read them instead of relume's: an RG32F 2D-array image with
+    /// sampled usage, layer l holding the first two moments (d, d^2) of the light depth d that
+    /// `Effect::shadow_map_views()[l]` sees (cleared to (far, far^2)), drawn each frame before
+    /// the effect. The effect then renders no shadow maps of its own.
+    pub shadows: Option<&'i Image>,
 }
 
 /// How the engine uses what an effect reads and writes in a frame: it will read the terms'
 /// `images` as FragmentSampled or ComputeSampled and their `buffers` as GraphicsStorageRead or
-/// ComputeStorageRead; the images it handed over (`EngineInputs`) were last used as `inputs`.
+/// ComputeStorageRead; the images it handed over (`EngineInputs`) were last used as `inputs`
+/// (its own passes that drew them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TermReads {
     pub images: Access,
@@ -55,9 +62,10 @@ pub struct EffectOutput<'e> {
     pub images: ImageState,
     /// The access every buffer of `terms` was made ready for.
     pub buffers: Access,
-    /// The state the images the engine handed over are left in (as it gave it when no
-    /// technique read them).
-    pub inputs: ImageState,
+    /// The state the engine's surfaces and shadow maps (`EngineInputs`) are left in: as it
+    /// gave it when no technique read them.
+    pub surfaces: ImageState,
+    pub shadows: ImageState,
 }
 
 /// The scene uploaded, the shadow maps and the techniques, with what a frame needs of them.
@@ -66,12 +74,12 @@ pub struct Effect {
     settings: RenderSettings,
     camera: Camera,
     pub(crate) scene: GpuScene,
-    vsm: VsmPass,
-    blur: VsmBlurPass,
+    /// relume's shadow maps (moments, blur), unless the engine hands over its own.
+    shadow_maps: Option<(VsmPass, VsmBlurPass)>,
     techniques: Vec<Box<dyn Technique>>,
-    /// The engine's images the techniques read (`EngineInputs`): their state comes with each
-    /// frame.
-    inputs: Vec<ImageRef>,
+    /// The engine's images the techniques read (`EngineInputs`: surfaces, shadow maps): their
+    /// state comes with each frame.
+    inputs: [Option<ImageRef>; 3],
     tracker: Tracker,
     /// The scene's environment's radiance in spherical harmonics (zero without one).
     environment_sh: [Vec4; 9],
@@ -94,20 +102,34 @@ impl Effect {
     ) -> VkResult<Effect> {
         settings.validate().map_err(VkError::Invalid)?;
         let gpu_scene = GpuScene::upload_blocking(ctx, scene)?;
-        let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
-        let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
-        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments: &vsm.moments, settings, surfaces: inputs.surfaces };
+        let shadow_maps = match inputs.shadows {
+            Some(moments) => {
+                check_shadow_maps(moments, gpu_scene.shadow_views.len().max(1) as u32)?;
+                None
+            }
+            None => {
+                let vsm = VsmPass::new(ctx, &gpu_scene, settings.shadow_map_size)?;
+                let blur = VsmBlurPass::new(ctx, &vsm.moments, settings.blur_radius)?;
+                Some((vsm, blur))
+            }
+        };
+        let moments = inputs.shadows.or(shadow_maps.as_ref().map(|(vsm, _)| &vsm.moments)).expect("one or the other");
+        let shared = Shared { ctx, scene, gpu_scene: &gpu_scene, moments, settings, surfaces: inputs.surfaces };
         let techniques = techniques.iter().map(|t| t.make_blocking(&shared)).collect::<VkResult<Vec<_>>>()?;
         let read_surfaces = techniques.iter().any(|t| t.surface_ids().is_some());
+        let read_shadows = techniques.iter().any(|t| t.reads_shadows());
         let surfaces = inputs.surfaces.filter(|_| read_surfaces);
-        let inputs = surfaces.iter().flat_map(|s| [ImageRef::from(s.positions), ImageRef::from(s.normals)]).collect();
+        let inputs = [
+            surfaces.map(|s| ImageRef::from(s.positions)),
+            surfaces.map(|s| ImageRef::from(s.normals)),
+            inputs.shadows.filter(|_| read_shadows).map(ImageRef::from),
+        ];
         let mut effect = Effect {
             ctx: Arc::clone(ctx),
             settings: settings.clone(),
             camera: scene.camera,
             scene: gpu_scene,
-            vsm,
-            blur,
+            shadow_maps,
             techniques,
             inputs,
             tracker: Tracker::default(),
@@ -140,9 +162,16 @@ impl Effect {
         self.techniques.iter().find_map(|t| t.surface_ids())
     }
 
-    /// The blurred variance shadow maps (one layer per shadow view of every light).
-    pub(crate) fn moments(&self) -> &Image {
-        &self.vsm.moments
+    /// relume's blurred variance shadow maps (one layer per shadow view of every light); None
+    /// when the engine hands over its own.
+    pub(crate) fn moments(&self) -> Option<&Image> {
+        self.shadow_maps.as_ref().map(|(vsm, _)| &vsm.moments)
+    }
+
+    /// Every layer of the shadow maps an engine that hands over its own draws
+    /// (`EngineInputs::shadows`), as the lights stand now: ask again after `set_lights`.
+    pub fn shadow_map_views(&self) -> Vec<ShadowMapView> {
+        self.scene.shadow_map_views()
     }
 
     /// Passes the techniques record per frame.
@@ -232,7 +261,7 @@ impl Effect {
             )));
         }
         let mut tracker = std::mem::take(&mut self.tracker);
-        self.inputs.iter().for_each(|image| tracker.assume(*image, reads.inputs));
+        self.inputs.iter().flatten().for_each(|image| tracker.assume(*image, reads.inputs));
         let shadows = self.techniques.iter().any(|t| t.reads_shadows());
         self.record_passes(rec, &mut tracker, shadows, &mut |_, _| {});
         let terms = self.terms()?;
@@ -240,9 +269,10 @@ impl Effect {
         let images = terms.images().map(|image| Use::image(image, reads.images));
         let buffers = terms.vertex_values().into_iter().map(|buffer| Use::buffer(buffer, reads.buffers));
         tracker.pass(rec, images.chain(buffers), |_| {});
-        let inputs = self.inputs.first().map_or(reads.inputs, |image| tracker.state(*image)).state();
+        let state = |input: Option<ImageRef>| input.map_or(reads.inputs, |image| tracker.state(image)).state();
+        let (surfaces, shadows) = (state(self.inputs[0]), state(self.inputs[2]));
         self.tracker = tracker;
-        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers, inputs })
+        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers, surfaces, shadows })
     }
 
     /// The frame's uniforms, lights and shadow layers, the shadow maps when `shadows` (and a
@@ -255,11 +285,12 @@ impl Effect {
         stamp: &mut dyn FnMut(&CommandRecorder, &'static str),
     ) {
         self.scene.record_updates(rec, &self.frame_uniforms());
-        if shadows && self.settings.shadows && !self.scene.shadow_views.is_empty() {
-            self.vsm.record(rec, tracker, &self.scene);
+        let drawn = self.shadow_maps.as_ref().filter(|_| shadows && self.settings.shadows && !self.scene.shadow_views.is_empty());
+        if let Some((vsm, blur)) = drawn {
+            vsm.record(rec, tracker, &self.scene);
             stamp(rec, "vsm_moments");
             if self.settings.blur_radius > 0 {
-                self.blur.record(rec, tracker);
+                blur.record(rec, tracker);
                 stamp(rec, "vsm_blur");
             }
         }
@@ -326,5 +357,21 @@ impl Effect {
             _pad: 0,
             environment_sh: self.environment_sh,
         }
+    }
+}
+
+/// Refuses, naming what it must be, an engine's shadow maps the techniques cannot read.
+fn check_shadow_maps(moments: &Image, layers: u32) -> VkResult<()> {
+    let d = &moments.desc;
+    let fits = d.format == vk::Format::R32G32_SFLOAT
+        && d.usage.contains(vk::ImageUsageFlags::SAMPLED)
+        && d.view_type == vk::ImageViewType::TYPE_2D_ARRAY
+        && d.layers == layers;
+    match fits {
+        true => Ok(()),
+        false => Err(VkError::Invalid(format!(
+            "the engine's shadow maps are a {}-layer {:?} {:?} image with usage {:?}; the techniques read an RG32F 2D array with sampled usage of {layers} layers, one per Effect::shadow_map_views()",
+            d.layers, d.format, d.view_type, d.usage
+        ))),
     }
 }

@@ -179,7 +179,8 @@ impl Renderer {
         use vk::ImageUsageFlags as U;
         let radiance = target("radiance", RADIANCE_FORMAT, U::COLOR_ATTACHMENT | U::STORAGE | U::TRANSFER_SRC)?;
         let depth = target("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
-        let lighting = LightingPass::new(ctx, &effect.scene, effect.moments(), &effect.terms()?, (&radiance, &depth))?;
+        let moments = effect.moments().ok_or_else(|| VkError::Invalid("relume's frame renders its own shadow maps".into()))?;
+        let lighting = LightingPass::new(ctx, &effect.scene, moments, &effect.terms()?, (&radiance, &depth))?;
         let display = target("display", DISPLAY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?;
         let tonemap = TonemapPass::new(ctx, &radiance, &display)?;
         Ok(Renderer {

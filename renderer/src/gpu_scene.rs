@@ -109,6 +109,29 @@ pub struct ShadowView {
     pub far: f32,
 }
 
+/// One layer of the variance shadow maps as an engine that draws them renders it (000 §3.4):
+/// the layer's clip-from-world, the light it belongs to (an index into the lights), the depth
+/// the layer is cleared to (nothing there), and the light depth whose first two moments it
+/// stores. A point light owns six layers, the cube's faces +X, -X, +Y, -Y, +Z, -Z in that order;
+/// a point is read from the face of its offset's major axis.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowMapView {
+    pub clip_from_world: Mat4,
+    pub light: usize,
+    pub far: f32,
+    pub depth: LightDepth,
+}
+
+/// How a light's depth is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightDepth {
+    /// A point or spot light: the distance from it.
+    Distance { from: Vec3 },
+    /// A directional light: the distance along its direction, from `origin` (dot(p, direction)
+    /// - origin).
+    Along { direction: Vec3, origin: f32 },
+}
+
 pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
@@ -309,6 +332,21 @@ impl GpuScene {
                 (self.layers.raw, bytemuck::cast_slice(&self.layer_data)),
             ]),
         }
+    }
+
+    /// Every layer of the shadow maps as the lights stand now (they refit at `set_lights`).
+    pub fn shadow_map_views(&self) -> Vec<ShadowMapView> {
+        self.shadow_views
+            .iter()
+            .map(|view| {
+                let light = &self.light_data[view.light as usize];
+                let depth = match self.light_kinds[view.light as usize] {
+                    LightKind::Directional => LightDepth::Along { direction: light.direction_range.truncate(), origin: light.cone_depth.z },
+                    _ => LightDepth::Distance { from: light.position_kind.truncate() },
+                };
+                ShadowMapView { clip_from_world: self.layer_data[view.layer as usize], light: view.light as usize, far: view.far, depth }
+            })
+            .collect()
     }
 
     /// Tells a frame's tracker that the texture array is ready for FragmentSampled reads, as

@@ -22,6 +22,7 @@ pub mod vk;
 pub use atlas_image::AtlasImage;
 pub use effect::{Effect, EffectOutput, EngineInputs, TermReads};
 pub use frame::{CallerImage, FrameTimings, RenderSettings, Renderer};
+pub use gpu_scene::{LightDepth, ShadowMapView};
 pub use headless::Headless;
 pub use technique::{MakeTechnique, Technique};
 

@@ -8,6 +8,7 @@ struct EngineLight {
     vec4 direction_range;   // xyz unit direction the light points, w range (0: none)
     vec4 intensity;         // rgb colour times intensity
     vec4 cone;              // x cos(outer), y 1 / (cos(inner) - cos(outer))
+    vec4 shadow;            // x its first shadow-map layer, y a directional light's depth origin
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer EngineLights { EngineLight lights[]; };
@@ -18,6 +19,9 @@ layout(set = 0, binding = 2) uniform sampler2DArray relume_occlusion;
 layout(set = 0, binding = 3) uniform sampler2DArray relume_texels;
 layout(set = 0, binding = 4) uniform sampler2DArray relume_pixels;
 layout(std430, set = 0, binding = 5) readonly buffer RelumeValues { vec4 relume_values[]; };
+// The engine's own shadow maps (moments of the light depth), which it also hands relume.
+layout(std430, set = 0, binding = 6) readonly buffer EngineShadowLayers { mat4 shadow_layers[]; };
+layout(set = 0, binding = 7) uniform sampler2DArray shadow_moments;
 #define RELUME_VERTEX_VALUES relume_values
 #include "include/relume.glsl"
 

@@ -1,8 +1,8 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 // The engine's forward pass, fragment stage: its own Lambertian-plus-Phong materials lit by
-// its own punctual lights (KHR_lights_punctual's falloff, unshadowed), its ambient light, and
-// relume's term sampled with include/relume.glsl.
+// its own punctual lights (KHR_lights_punctual's falloff, shadowed by its own variance shadow
+// maps), its ambient light, and relume's term sampled with include/relume.glsl.
 #include "engine.glsl"
 
 layout(location = 0) in vec3 world_position;
@@ -38,6 +38,29 @@ vec3 light_irradiance(EngineLight l, vec3 p, out vec3 to_light) {
         cone = t * t;
     }
     return l.intensity.rgb * window / (distance * distance) * cone;
+}
+
+// The lit fraction of p from light `l` of kind `kind`: Chebyshev's bound on its variance shadow
+// map (point lights read the cube face of the offset's major axis: +X, -X, +Y, -Y, +Z, -Z).
+float visibility(EngineLight l, uint kind, vec3 p) {
+    if (frame.counts.w == 0u) return 1.0;
+    uint layer = uint(l.shadow.x);
+    if (kind == 0u) {
+        vec3 d = p - l.position_kind.xyz;
+        vec3 a = abs(d);
+        if (a.x >= a.y && a.x >= a.z) layer += d.x > 0.0 ? 0u : 1u;
+        else if (a.y >= a.z) layer += d.y > 0.0 ? 2u : 3u;
+        else layer += d.z > 0.0 ? 4u : 5u;
+    }
+    vec4 clip = shadow_layers[layer] * vec4(p, 1.0);
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    vec2 m = textureLod(shadow_moments, vec3(uv, float(layer)), 0.0).xy;
+    float depth = kind == 2u ? dot(p, l.direction_range.xyz) - l.shadow.y : length(p - l.position_kind.xyz);
+    if (depth <= m.x) return 1.0;
+    float variance = max(m.y - m.x * m.x, frame.shadow.x);
+    float t = depth - m.x;
+    float lit = variance / (variance + t * t);
+    return clamp((lit - frame.shadow.y) / (1.0 - frame.shadow.y), 0.0, 1.0);
 }
 
 // The normalised modified Phong lobe: rho_s (e + 2) / 2 pi max(0, wi . reflect(wo))^e.
@@ -76,8 +99,9 @@ void main() {
         unshadowed += irradiance;
         float cos_theta = dot(n, to_light);
         if (cos_theta <= 0.0) continue;
-        result += (albedo / PI + glossy(n, to_camera, to_light)) * irradiance * cos_theta;
-        direct += irradiance * cos_theta;
+        float v = visibility(lights[i], uint(lights[i].position_kind.w), world_position);
+        result += (albedo / PI + glossy(n, to_camera, to_light)) * irradiance * cos_theta * v;
+        direct += irradiance * cos_theta * v;
     }
 #ifdef OCCLUSION
     vec3 o = relume_atlas(relume_occlusion, uv1);

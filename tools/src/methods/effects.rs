@@ -5,10 +5,12 @@
 //! the least effort on a scene that gives its term each kind it comes in (occlusion, texel,
 //! vertex, pixel, texel or vertex, radiance); the engine's image must equal relume's own frame
 //! of the same scene, lights and term within 1e-4 of its largest value, with validation and
-//! synchronization validation clean on both. The lighting models agree where the engine's
-//! takes no part of relume's frame it does not model: both frames are unshadowed (the engine's
-//! direct light is its own; relume's variance shadow maps are not), and the scenes are
-//! untextured.
+//! synchronization validation clean on both. The engine draws its own shadow maps for
+//! relume's shadow views and shades its direct light with them, and hands them to the effect
+//! (light path maps and mrt shadow their direct light with the engine's); relume's frame draws
+//! its own. The lighting models agree where the engine models what relume's frame does: shadow
+//! maps without a blur (the engine blurs none), untextured scenes, no environment in the
+//! ambient light.
 //!
 //!     cargo test -p relume-tools --bin relume every_technique_as_an_effect -- --nocapture
 
@@ -43,7 +45,7 @@ fn every_technique_as_an_effect_in_an_engine_equals_relumes_frame() {
         let scene = shipped(scene_name);
         let loaded = least_effort_loaded(method, &scene, &dir).unwrap_or_else(|e| panic!("{name} on {scene_name}: {e}"));
         let (ambient, beta) = frame_ambient(method.ambient(&scene), None, None);
-        let settings = RenderSettings { width: 64, height: 48, shadows: false, ambient, beta, ..RenderSettings::default() };
+        let settings = RenderSettings { width: 64, height: 48, blur_radius: 0, ambient, beta, ..RenderSettings::default() };
 
         let ctx = Context::headless(&ContextOptions { validation: true, device: None }).expect("Vulkan");
         let log = ctx.message_log();
