@@ -24,13 +24,13 @@ use std::sync::Arc;
 /// technique that can reads instead of drawing its own.
 #[derive(Clone, Copy, Default)]
 pub struct EngineInputs<'i> {
-    /// Its view's surfaces, for a pixel term (fiv reads them instead of its surfaces pass):
+    /// Its view's surfaces, for a pixel term (read instead of the technique's surfaces pass):
     /// the engine draws them each frame before the effect, writing into each normal's w the id
     /// `Effect::surface_ids` gives the mesh.
     pub surfaces: Option<Surfaces<'i>>,
-    /// Its variance shadow maps, for the techniques that shadow their direct light (light path
-    /// maps, mrt), which then read them instead of relume's: an RG32F 2D-array image with
-    /// sampled usage, layer l holding the first two moments (d, d^2) of the light depth d that
+    /// Its variance shadow maps, for the techniques that shadow their direct light
+    /// (`Technique::reads_shadows`), which then read them instead of relume's: an RG32F 2D-array
+    /// image with sampled usage, layer l holding the first two moments (d, d^2) of the light depth d that
     /// `Effect::shadow_map_views()[l]` sees (cleared to (far, far^2)), drawn each frame before
     /// the effect. The effect then renders no shadow maps of its own.
     pub shadows: Option<&'i Image>,
@@ -168,6 +168,11 @@ impl Effect {
         self.shadow_maps.as_ref().map(|(vsm, _)| &vsm.moments)
     }
 
+    /// Whether a technique reads shadow maps: the engine's when it handed them over.
+    pub fn reads_shadow_maps(&self) -> bool {
+        self.techniques.iter().any(|t| t.reads_shadows())
+    }
+
     /// Every layer of the shadow maps an engine that hands over its own draws
     /// (`EngineInputs::shadows`), as the lights stand now: ask again after `set_lights`.
     pub fn shadow_map_views(&self) -> Vec<ShadowMapView> {
@@ -262,8 +267,7 @@ impl Effect {
         }
         let mut tracker = std::mem::take(&mut self.tracker);
         self.inputs.iter().flatten().for_each(|image| tracker.assume(*image, reads.inputs));
-        let shadows = self.techniques.iter().any(|t| t.reads_shadows());
-        self.record_passes(rec, &mut tracker, shadows, &mut |_, _| {});
+        self.record_passes(rec, &mut tracker, self.reads_shadow_maps(), &mut |_, _| {});
         let terms = self.terms()?;
         // The engine's read is a pass of its own: what it uses is declared here, for it.
         let images = terms.images().map(|image| Use::image(image, reads.images));

@@ -202,7 +202,7 @@ pub trait Technique: Any + Send {
     }
 
     /// When it reads the engine's surfaces (`Shared::surfaces`) instead of drawing its own: the
-    /// id each of the scene's meshes carries in the w of the normals (fiv: its occluder + 1).
+    /// id each of the scene's meshes carries in the w of the normals.
     fn surface_ids(&self) -> Option<&[u32]> {
         None
     }

@@ -12,8 +12,11 @@ const METHOD_NAMES: [&str; 8] = ["obscurance", "light-path-maps", "light_path_ma
 /// Files that must stay method-agnostic, relative to the repository root; besides these,
 /// every file of `tools/src` outside the registry (`methods/`) and the scene generator
 /// (`scenegen/`, which writes each method's block of the scene settings), and of `viewer/src`.
-const AGNOSTIC: [&str; 11] = [
+const AGNOSTIC: [&str; 14] = [
     "renderer/src/frame.rs",
+    "renderer/src/effect.rs",
+    "renderer/src/passes/graphics.rs",
+    "shaders/include/relume.glsl",
     "renderer/src/technique.rs",
     "renderer/src/headless.rs",
     "renderer/src/passes/lighting.rs",
