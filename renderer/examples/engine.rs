@@ -1,10 +1,12 @@
 //! An engine that is not relume, using relume's techniques as effects. The engine owns its
 //! instance, device, queue and submissions (common/engine_device.rs), its geometry, its
-//! lights, its forward pass and its shaders (engine_shaders/, compiled by the engine at start
-//! with shaderc); relume's `Effect` records the technique's passes into the engine's command
-//! buffer and hands back the term, which the engine's fragment shader samples with
-//! `shaders/include/relume.glsl`. relume's lighting pass, shadow maps for the engine's direct
-//! light and tonemap take no part: the engine shades, unshadowed, in its own pass.
+//! lights, its passes (shadow maps, surfaces, forward) and its shaders (engine_shaders/,
+//! compiled by the engine at start with shaderc); relume's `Effect` records the technique's
+//! passes into the engine's command buffer, reading the engine's shadow maps and surfaces, and
+//! hands back the term, which the engine's fragment shader samples with
+//! `shaders/include/relume.glsl`. relume's lighting pass, shadow maps and tonemap take no part.
+//! The engine records two frames into one command buffer, each pass's barriers starting from
+//! where the frame before (or relume) left its images.
 //!
 //!     cargo run -p relume-renderer --example engine -- SCENE.gltf OBSCURANCE_BAKE [--validation]
 //!
@@ -19,6 +21,7 @@ use ash::vk;
 use bytemuck::Zeroable;
 use engine_device::Engine;
 use relume_bake::scene::{LightKind, Scene};
+use relume_renderer::gpu_scene::shadow_layer_count;
 use relume_renderer::technique::{MakeTechnique, Surfaces, Terms};
 use relume_renderer::vk::{transition, Access, Binding, Buffer, CommandBuffer, CommandRecorder, Context, DescriptorSet, Fence};
 use relume_renderer::vk::{GraphicsPipelineDesc, Image, ImageDesc, ImageState, ImageView, Pipeline, Sampler};
@@ -121,7 +124,7 @@ fn frame(
         target("engine normals", RGBA32F, U::COLOR_ATTACHMENT | U::STORAGE)?,
     ];
     // Its shadow maps: one layer per shadow view relume names, six for a point light.
-    let layers = scene.lights.iter().map(|l| if l.kind == LightKind::Point { 6 } else { 1 }).sum::<u32>().max(1);
+    let layers = scene.lights.iter().map(|l| shadow_layer_count(l.kind)).sum::<u32>().max(1);
     let size = settings.shadow_map_size;
     let moments = image(
         "engine moments",
@@ -132,7 +135,7 @@ fn frame(
     )?;
     let inputs = EngineInputs { surfaces: Some(Surfaces { positions: &surfaces[0], normals: &surfaces[1] }), shadows: Some(&moments) };
     let mut effect = Effect::new_blocking(ctx, scene, settings, techniques, &inputs)?;
-    let views = effect.shadow_map_views();
+    let views: Vec<ShadowMapView> = effect.shadow_map_views().collect();
     let terms = effect.terms()?;
     let geometry = Geometry::new(ctx, scene, settings, &terms, &views)?;
     // A depth buffer for each pass: each clears its own.
@@ -150,16 +153,26 @@ fn frame(
     drop(terms);
     let (cmd, fence) = (CommandBuffer::new(ctx)?, Fence::new(ctx)?);
     let rec = ctx.begin(cmd.raw)?;
-    shadow_pass.record(&rec, &geometry, (&moments, &depths[2]));
-    if let Some(pass) = &surfaces_pass {
-        pass.record(&rec, &geometry, (&surfaces, &depths[0]));
+    let mut states = States::default();
+    for frame in 0..FRAMES {
+        shadow_pass.record(&rec, &geometry, (&moments, &depths[2]), &mut states);
+        if let Some(pass) = &surfaces_pass {
+            pass.record(&rec, &geometry, (&surfaces, &depths[0]), &mut states);
+        }
+        // The default: terms read by its fragment shaders, its surfaces and shadow maps last
+        // drawn by its own passes.
+        let output = effect.record(&rec, TermReads::default())?;
+        (states.surfaces, states.moments) = (output.surfaces, output.shadows);
+        forward.record(&rec, &geometry, (&moments, &depths[1]), output.images, &mut states, frame + 1 == FRAMES);
     }
-    let output = effect.record(&rec, TermReads::default())?;
-    forward.record(&rec, &geometry, (&moments, &depths[1]), (output.images, output.shadows));
     engine.end_submit_and_wait(cmd.raw, fence.raw)?;
     let bytes = forward.readback.mapped_bytes(forward.color.desc.texel_count() as usize * 16)?;
     Ok((bytemuck::pod_collect_to_vec(bytes), forward.variant, surfaces_pass.is_some()))
 }
+
+/// Frames the engine records, one after the other in one command buffer: the second starts
+/// from where the first left every image and buffer.
+const FRAMES: usize = 2;
 
 /// The engine's lights as its shader reads them (engine_shaders/engine.glsl).
 #[repr(C)]
@@ -257,9 +270,26 @@ impl Geometry {
     }
 }
 
-/// Brings the engine's new-each-frame `images` into `access`, from UNDEFINED; the state left.
-fn fresh(rec: &CommandRecorder, images: &[&Image], access: Access) -> ImageState {
-    images.iter().map(|image| transition(rec, (*image).into(), Access::Undefined.state(), access)).last().unwrap_or(access.state())
+/// Brings `image` from where it stands (`state`) into `access`, and remembers it there.
+fn bring(rec: &CommandRecorder, image: &Image, state: &mut ImageState, access: Access) {
+    *state = transition(rec, image.into(), *state, access);
+}
+
+/// Where each of the engine's images stands between its passes and frames.
+struct States {
+    moments: ImageState,
+    surfaces: ImageState,
+    /// The surfaces, forward and shadow passes' depth buffers.
+    depths: [ImageState; 3],
+    color: ImageState,
+    stand_in: ImageState,
+}
+
+impl Default for States {
+    fn default() -> Self {
+        let undefined = Access::Undefined.state();
+        States { moments: undefined, surfaces: undefined, depths: [undefined; 3], color: undefined, stand_in: undefined }
+    }
 }
 
 /// The engine's pipeline of `shaders` (vertex, fragment) over its geometry into colours of
@@ -315,9 +345,11 @@ impl SurfacesPass {
         Ok(SurfacesPass { pipeline, descriptors, ids: ids.to_vec() })
     }
 
-    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (surfaces, depth): (&[Image; 2], &Image)) {
-        fresh(rec, &[&surfaces[0], &surfaces[1]], Access::ColorAttachmentWrite);
-        fresh(rec, &[depth], Access::DepthAttachmentWrite);
+    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (surfaces, depth): (&[Image; 2], &Image), states: &mut States) {
+        let mut normals = states.surfaces;
+        bring(rec, &surfaces[0], &mut states.surfaces, Access::ColorAttachmentWrite);
+        bring(rec, &surfaces[1], &mut normals, Access::ColorAttachmentWrite);
+        bring(rec, depth, &mut states.depths[0], Access::DepthAttachmentWrite);
         let target = (depth.desc.extent(), [surfaces[0].view, surfaces[1].view], [0.0; 4], depth.view);
         geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |mesh| self.ids[mesh]);
     }
@@ -388,26 +420,29 @@ impl Forward {
     }
 
     /// Draws every mesh, reading the effect's terms from the state relume left its images in
-    /// (`images`) and the shadow maps from theirs (`shadows`), then copies the colour to the
-    /// read-back buffer. The engine's barriers, by hand: its targets and stand-in are new each
-    /// frame (from UNDEFINED).
+    /// (`images`) and the shadow maps from theirs (`states.moments`, as relume handed them
+    /// back); with `read_back`, then copies the colour to the read-back buffer.
     fn record(
         &self,
         rec: &CommandRecorder,
         geometry: &Geometry,
         (moments, depth): (&Image, &Image),
-        (images, shadows): (ImageState, ImageState),
+        images: ImageState,
+        states: &mut States,
+        read_back: bool,
     ) {
         debug_assert_eq!(images, Access::FragmentSampled.state(), "the engine asked relume for fragment-shader reads");
-        transition(rec, moments.into(), shadows, Access::FragmentSampled);
-        fresh(rec, &[&self.stand_in], Access::FragmentSampled);
-        let drawn = fresh(rec, &[&self.color], Access::ColorAttachmentWrite);
-        fresh(rec, &[depth], Access::DepthAttachmentWrite);
+        bring(rec, moments, &mut states.moments, Access::FragmentSampled);
+        bring(rec, &self.stand_in, &mut states.stand_in, Access::FragmentSampled);
+        bring(rec, &self.color, &mut states.color, Access::ColorAttachmentWrite);
+        bring(rec, depth, &mut states.depths[1], Access::DepthAttachmentWrite);
         let target = (depth.desc.extent(), [self.color.view], [0.0; 4], depth.view);
         geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |mesh| geometry.draws[mesh].2);
-        transition(rec, (&self.color).into(), drawn, Access::TransferSource);
-        rec.copy_image_to_buffer(&self.color, self.readback.raw);
-        rec.transfer_to_host_barrier();
+        if read_back {
+            bring(rec, &self.color, &mut states.color, Access::TransferSource);
+            rec.copy_image_to_buffer(&self.color, self.readback.raw);
+            rec.transfer_to_host_barrier();
+        }
     }
 }
 
@@ -458,12 +493,11 @@ impl ShadowPass {
 
     /// Every layer cleared to its far depth and drawn; `moments` left as colour attachment
     /// written.
-    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (moments, depth): (&Image, &Image)) {
-        fresh(rec, &[moments], Access::ColorAttachmentWrite);
-        let mut depth_state = fresh(rec, &[depth], Access::DepthAttachmentWrite);
+    fn record(&self, rec: &CommandRecorder, geometry: &Geometry, (moments, depth): (&Image, &Image), states: &mut States) {
+        bring(rec, moments, &mut states.moments, Access::ColorAttachmentWrite);
         for (view, push) in self.layer_views.iter().zip(&self.pushes) {
             // One depth buffer serves every layer: each clear waits for the layer before.
-            depth_state = transition(rec, depth.into(), depth_state, Access::DepthAttachmentWrite);
+            bring(rec, depth, &mut states.depths[2], Access::DepthAttachmentWrite);
             let far = push.origin[3];
             let target = (moments.desc.extent(), [view.raw], [far, far * far, 0.0, 0.0], depth.view);
             geometry.draw(rec, (&self.pipeline, &self.descriptors), target, |_| *push);

@@ -38,20 +38,32 @@ pub struct EngineInputs<'i> {
 
 /// How the engine uses what an effect reads and writes in a frame: it will read the terms'
 /// `images` as FragmentSampled or ComputeSampled and their `buffers` as GraphicsStorageRead or
-/// ComputeStorageRead; the images it handed over (`EngineInputs`) were last used as `inputs`
-/// (its own passes that drew them).
+/// ComputeStorageRead; the images it handed over (`EngineInputs`) were last used as `surfaces`
+/// and `shadows` (by its own passes that drew them: never Undefined, which would discard them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TermReads {
     pub images: Access,
     pub buffers: Access,
-    pub inputs: Access,
+    pub surfaces: Access,
+    pub shadows: Access,
 }
 
 impl Default for TermReads {
-    /// Read in the engine's own graphics pass; its surfaces drawn by its own graphics pass.
+    /// Read in the engine's own graphics pass; its surfaces and shadow maps drawn by its own
+    /// graphics passes.
     fn default() -> Self {
-        TermReads { images: Access::FragmentSampled, buffers: Access::GraphicsStorageRead, inputs: Access::ColorAttachmentWrite }
+        let drawn = Access::ColorAttachmentWrite;
+        TermReads { images: Access::FragmentSampled, buffers: Access::GraphicsStorageRead, surfaces: drawn, shadows: drawn }
     }
+}
+
+/// The engine's images the techniques read (`EngineInputs`, those no technique reads left
+/// out): their states come with each frame.
+#[derive(Clone, Copy, Default)]
+struct EngineImages {
+    positions: Option<ImageRef>,
+    normals: Option<ImageRef>,
+    shadows: Option<ImageRef>,
 }
 
 /// What one frame of an effect hands the engine: its terms, borrowed until the next frame is
@@ -77,9 +89,7 @@ pub struct Effect {
     /// relume's shadow maps (moments, blur), unless the engine hands over its own.
     shadow_maps: Option<(VsmPass, VsmBlurPass)>,
     techniques: Vec<Box<dyn Technique>>,
-    /// The engine's images the techniques read (`EngineInputs`: surfaces, shadow maps): their
-    /// state comes with each frame.
-    inputs: [Option<ImageRef>; 3],
+    inputs: EngineImages,
     tracker: Tracker,
     /// The scene's environment's radiance in spherical harmonics (zero without one).
     environment_sh: [Vec4; 9],
@@ -119,11 +129,11 @@ impl Effect {
         let read_surfaces = techniques.iter().any(|t| t.surface_ids().is_some());
         let read_shadows = techniques.iter().any(|t| t.reads_shadows());
         let surfaces = inputs.surfaces.filter(|_| read_surfaces);
-        let inputs = [
-            surfaces.map(|s| ImageRef::from(s.positions)),
-            surfaces.map(|s| ImageRef::from(s.normals)),
-            inputs.shadows.filter(|_| read_shadows).map(ImageRef::from),
-        ];
+        let inputs = EngineImages {
+            positions: surfaces.map(|s| ImageRef::from(s.positions)),
+            normals: surfaces.map(|s| ImageRef::from(s.normals)),
+            shadows: inputs.shadows.filter(|_| read_shadows).map(ImageRef::from),
+        };
         let mut effect = Effect {
             ctx: Arc::clone(ctx),
             settings: settings.clone(),
@@ -152,7 +162,7 @@ impl Effect {
 
     /// The terms the techniques hand over (checked at creation: at most one of each role).
     pub fn terms(&self) -> VkResult<Terms<'_>> {
-        Terms::gather(self.techniques.iter().map(|t| (t.name(), t.term())))
+        gather_terms(&self.techniques)
     }
 
     /// Per mesh of the scene, the id the engine writes into the w of its surfaces' normals,
@@ -174,8 +184,9 @@ impl Effect {
     }
 
     /// Every layer of the shadow maps an engine that hands over its own draws
-    /// (`EngineInputs::shadows`), as the lights stand now: ask again after `set_lights`.
-    pub fn shadow_map_views(&self) -> Vec<ShadowMapView> {
+    /// (`EngineInputs::shadows`), as the lights stand now: ask again after `set_lights` (the
+    /// views follow the lights; reading them allocates nothing).
+    pub fn shadow_map_views(&self) -> impl Iterator<Item = ShadowMapView> + '_ {
         self.scene.shadow_map_views()
     }
 
@@ -252,10 +263,11 @@ impl Effect {
     /// Records one frame of the techniques into the engine's command buffer (begun, ended and
     /// submitted by the engine, which must not submit two frames of one effect at once): the
     /// frame's uniforms and lights, the shadow maps when a technique reads them, every
-    /// technique's passes, which read the engine's images from the state `reads.inputs`; then
-    /// the barriers that make every term's image ready for `reads.images` and every buffer for
-    /// `reads.buffers`. Nothing is allocated, submitted or waited on. Refused before anything is
-    /// recorded: a read that is not a sampled image read or a storage buffer read.
+    /// technique's passes, which read the engine's images from the states `reads.surfaces` and
+    /// `reads.shadows`; then the barriers that make every term's image ready for `reads.images`
+    /// and every buffer for `reads.buffers`. Nothing is allocated, submitted or waited on.
+    /// Refused before anything is recorded: a read that is not a sampled image read or a storage
+    /// buffer read, and engine images said to be Undefined.
     pub fn record(&mut self, rec: &CommandRecorder, reads: TermReads) -> VkResult<EffectOutput<'_>> {
         let image_reads = [Access::FragmentSampled, Access::ComputeSampled];
         let buffer_reads = [Access::GraphicsStorageRead, Access::ComputeStorageRead];
@@ -265,18 +277,24 @@ impl Effect {
                 reads.images, reads.buffers
             )));
         }
+        if reads.surfaces == Access::Undefined || reads.shadows == Access::Undefined {
+            return Err(VkError::Invalid(
+                "the engine's surfaces and shadow maps are read as its passes left them; Undefined would discard them: give the access of the pass that drew them".into(),
+            ));
+        }
         let mut tracker = std::mem::take(&mut self.tracker);
-        self.inputs.iter().flatten().for_each(|image| tracker.assume(*image, reads.inputs));
+        let given = [(self.inputs.positions, reads.surfaces), (self.inputs.normals, reads.surfaces), (self.inputs.shadows, reads.shadows)];
+        given.iter().for_each(|(image, access)| image.iter().for_each(|image| tracker.assume(*image, *access)));
         self.record_passes(rec, &mut tracker, self.reads_shadow_maps(), &mut |_, _| {});
-        let terms = self.terms()?;
+        let left = |image: Option<ImageRef>, given: Access| image.map_or(given, |image| tracker.state(image)).state();
+        let (surfaces, shadows) = (left(self.inputs.positions, reads.surfaces), left(self.inputs.shadows, reads.shadows));
+        self.tracker = tracker;
+        let terms = gather_terms(&self.techniques)?;
         // The engine's read is a pass of its own: what it uses is declared here, for it.
         let images = terms.images().map(|image| Use::image(image, reads.images));
         let buffers = terms.vertex_values().into_iter().map(|buffer| Use::buffer(buffer, reads.buffers));
-        tracker.pass(rec, images.chain(buffers), |_| {});
-        let state = |input: Option<ImageRef>| input.map_or(reads.inputs, |image| tracker.state(image)).state();
-        let (surfaces, shadows) = (state(self.inputs[0]), state(self.inputs[2]));
-        self.tracker = tracker;
-        Ok(EffectOutput { terms: self.terms()?, images: reads.images.state(), buffers: reads.buffers, surfaces, shadows })
+        self.tracker.pass(rec, images.chain(buffers), |_| {});
+        Ok(EffectOutput { terms, images: reads.images.state(), buffers: reads.buffers, surfaces, shadows })
     }
 
     /// The frame's uniforms, lights and shadow layers, the shadow maps when `shadows` (and a
@@ -362,6 +380,11 @@ impl Effect {
             environment_sh: self.environment_sh,
         }
     }
+}
+
+/// The terms `techniques` hand over (a borrow of them alone, so the tracker stays free).
+fn gather_terms(techniques: &[Box<dyn Technique>]) -> VkResult<Terms<'_>> {
+    Terms::gather(techniques.iter().map(|t| (t.name(), t.term())))
 }
 
 /// Refuses, naming what it must be, an engine's shadow maps the techniques cannot read.

@@ -203,17 +203,6 @@ impl Renderer {
         self.effect.settings()
     }
 
-    /// The effect the frame is built on (its techniques, lights and meshes).
-    pub fn effect(&self) -> &Effect {
-        &self.effect
-    }
-
-    /// The effect, to change what it holds: lights, meshes, ambient, camera, its techniques'
-    /// own settings (`Effect::technique_mut`).
-    pub fn effect_mut(&mut self) -> &mut Effect {
-        &mut self.effect
-    }
-
     /// The technique of type `T`, if the renderer has one (to change its own settings).
     pub fn technique_mut<T: Technique>(&mut self) -> Option<&mut T> {
         self.effect.technique_mut()

@@ -335,18 +335,15 @@ impl GpuScene {
     }
 
     /// Every layer of the shadow maps as the lights stand now (they refit at `set_lights`).
-    pub fn shadow_map_views(&self) -> Vec<ShadowMapView> {
-        self.shadow_views
-            .iter()
-            .map(|view| {
-                let light = &self.light_data[view.light as usize];
-                let depth = match self.light_kinds[view.light as usize] {
-                    LightKind::Directional => LightDepth::Along { direction: light.direction_range.truncate(), origin: light.cone_depth.z },
-                    _ => LightDepth::Distance { from: light.position_kind.truncate() },
-                };
-                ShadowMapView { clip_from_world: self.layer_data[view.layer as usize], light: view.light as usize, far: view.far, depth }
-            })
-            .collect()
+    pub fn shadow_map_views(&self) -> impl Iterator<Item = ShadowMapView> + '_ {
+        self.shadow_views.iter().map(|view| {
+            let light = &self.light_data[view.light as usize];
+            let depth = match self.light_kinds[view.light as usize] {
+                LightKind::Directional => LightDepth::Along { direction: light.direction_range.truncate(), origin: light.cone_depth.z },
+                _ => LightDepth::Distance { from: light.position_kind.truncate() },
+            };
+            ShadowMapView { clip_from_world: self.layer_data[view.layer as usize], light: view.light as usize, far: view.far, depth }
+        })
     }
 
     /// Tells a frame's tracker that the texture array is ready for FragmentSampled reads, as

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 /// What a technique is created from besides its own data: the device, the scene as loaded
 /// (with the atlas's uv1 when a bake gave one) and as uploaded (its buffers, among them the
-/// frame's uniforms), the blurred shadow moments, the frame's settings, and the surfaces of
+/// frame's uniforms), the shadow moments (relume's, blurred, or an engine's), the frame's settings, and the surfaces of
 /// the view an engine draws itself, when it hands them over (`crate::effect::EngineInputs`).
 pub struct Shared<'s> {
     pub ctx: &'s Arc<Context>,
@@ -196,7 +196,7 @@ pub trait Technique: Any + Send {
     fn term(&self) -> Option<Term<'_>>;
 
     /// Whether its passes read the variance shadow maps (`Shared::moments`): an effect then
-    /// renders them before its passes (`crate::effect`).
+    /// renders them before its passes, unless the engine handed over its own (`crate::effect`).
     fn reads_shadows(&self) -> bool {
         false
     }

@@ -2,7 +2,8 @@
 //! while frames are rendered, lights are moved, the ambient term (and the composition of the
 //! light path maps) changes, occluders move and timings are read, without obscurance, with
 //! it, with light path maps, with FIV, and with a light cloud (whose weights follow the lights
-//! on the CPU). (Its own test binary, so no other test shares the allocator.)
+//! on the CPU); and an effect's frames as an engine records them. (Its own test binary, so no
+//! other test shares the allocator.)
 
 use glam::{Vec3, Vec4};
 use relume_bake::atlas::{Atlas, AtlasSettings};
@@ -16,7 +17,8 @@ use relume_renderer::techniques::fiv::FivData;
 use relume_renderer::techniques::light_cloud::LightCloudData;
 use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsData};
 use relume_renderer::techniques::obscurance::ObscuranceData;
-use relume_renderer::{Headless, RenderSettings};
+use relume_renderer::vk::{CommandBuffer, Fence};
+use relume_renderer::{Effect, EngineInputs, Headless, MakeTechnique, RenderSettings, TermReads};
 use relume_tests::synthetic_light_path_maps::{atlas_scene, constant_obscurance, synthetic_transfer};
 use relume_tests::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -206,4 +208,36 @@ fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
     drop(renderer);
     assert_clean(ctx);
     assert_eq!(during, 0, "10 frames with a light cloud made {during} heap allocations");
+}
+
+#[test]
+fn effect_frames_for_an_engine_allocate_nothing() {
+    // Light path maps as an effect: relume's shadow maps, the technique's four passes and the
+    // barriers to the engine's reads, recorded as an engine records them.
+    let (atlas, scene) = atlas_scene(&load_scene("cornell"), 16.0);
+    let texels = constant_obscurance(&atlas, Vec3::new(0.7, 0.6, 0.5));
+    let transfer = synthetic_transfer(&atlas, vec![0, 20, 40, 64], 2, 1);
+    let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
+    let maps = LightPathMapsData { transfer: &transfer, atlas: atlas_image(&atlas, &texels), composition: Composition::default() };
+    let ctx = validated_context();
+    let techniques: [&dyn MakeTechnique; 2] = [&obscurance, &maps];
+    let mut effect = Effect::new_blocking(&ctx, &scene, &settings(), &techniques, &EngineInputs::default()).expect("effect");
+    let (cmd, fence) = (CommandBuffer::new(&ctx).expect("command buffer"), Fence::new(&ctx).expect("fence"));
+    let frame = |effect: &mut Effect| {
+        let rec = ctx.begin(cmd.raw).expect("begin");
+        effect.record(&rec, TermReads::default()).expect("the effect's frame");
+        ctx.submit_and_wait(rec, &fence).expect("submitted");
+    };
+    frame(&mut effect);
+    let mut lights = scene.lights.clone();
+    let before = allocations();
+    for k in 0..10 {
+        lights[0].position += Vec3::new(0.001 * k as f32, 0.0, 0.0);
+        effect.set_lights(&lights).expect("same kinds");
+        frame(&mut effect);
+    }
+    let during = allocations() - before;
+    drop((effect, cmd, fence));
+    assert_clean(ctx);
+    assert_eq!(during, 0, "10 effect frames made {during} heap allocations");
 }

@@ -38,6 +38,11 @@ fn a_pass_that_disagrees_with_its_shader_is_refused_naming_the_pass_and_the_bind
     let why = refusal(ComputePass::<u16>::new(&ctx, "tonemap", shaders::TONEMAP_COMP, &right));
     says(&why, &["pass tonemap", "push block is 4 bytes", "pushes 2"]);
 
+    // A ping-pong pass's sets bind the same kinds in the same places.
+    let other = [Slot::Buffer(&buffer, read), Slot::StorageImage(&display, write)];
+    let why = refusal(ComputePass::<f32>::with_sets(&ctx, "tonemap", shaders::TONEMAP_COMP, &[&right, &other]));
+    says(&why, &["pass tonemap", "set 1 binds", "set 0 binds"]);
+
     // vsm_moments: binding 0 the lights' storage buffer, binding 1 the layers'; an 8-byte push.
     let scene = relume_renderer::gpu_scene::GpuScene::upload_blocking(&ctx, &load_scene("cornell")).expect("scene");
     let moments = image(&ctx, vk::Format::R32G32_SFLOAT, vk::ImageUsageFlags::COLOR_ATTACHMENT);
@@ -54,7 +59,21 @@ fn a_pass_that_disagrees_with_its_shader_is_refused_naming_the_pass_and_the_bind
 }
 
 /// Calls that record a barrier, or bring a resource into a use, by hand.
-const BY_HAND: [&str; 6] = ["use_image(", "use_buffer(", ".declare(", "image_barrier(", "buffer_barrier(", "cmd_pipeline_barrier"];
+const BY_HAND: [&str; 8] = [
+    "use_image(",
+    "use_buffer(",
+    ".declare(",
+    "image_barrier(",
+    "buffer_barrier(",
+    "cmd_pipeline_barrier",
+    "transition(",
+    "barrier_between(",
+];
+
+/// The one exception: the caller's own image, which no tracker knows, taken from the state the
+/// caller gives (`Renderer::record_to`, inside the pass that copies into it).
+const CALLERS_IMAGE: (&str, &str) =
+    ("renderer/src/frame.rs", "state = transition(rec, target_ref, target.state, Access::TransferDestination);");
 
 #[test]
 fn no_pass_outside_the_backend_records_a_barrier_by_hand() {
@@ -71,6 +90,9 @@ fn no_pass_outside_the_backend_records_a_barrier_by_hand() {
             }
             let text = std::fs::read_to_string(&path).expect("a source file");
             for (n, line) in text.lines().enumerate() {
+                if path.ends_with(CALLERS_IMAGE.0) && line.trim() == CALLERS_IMAGE.1 {
+                    continue;
+                }
                 if let Some(call) = BY_HAND.iter().find(|call| line.contains(*call)) {
                     offenders.push(format!("{}:{}: {call}", path.display(), n + 1));
                 }

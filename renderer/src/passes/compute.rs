@@ -7,7 +7,7 @@
 //! A pass with several descriptor sets of one layout (ping-pong passes) picks one per dispatch.
 
 use crate::vk::{vk, Access, Binding, CommandRecorder, Context, DescriptorSet, Image, Pipeline, Sampler, Tracker};
-use crate::vk::{Buffer, Use, VkResult};
+use crate::vk::{Buffer, Use, VkError, VkResult};
 use bytemuck::NoUninit;
 use std::marker::PhantomData;
 use std::sync::Arc;
@@ -75,16 +75,26 @@ impl<P: NoUninit> ComputePass<P> {
     }
 
     /// Pass `name`, whose dispatches each bind one of `sets` (all with the same kinds of
-    /// bindings). Refused, naming the pass and the binding: a shader that binds another kind
-    /// at a slot's binding, binds what no slot gives, or whose push block is not a `P`.
+    /// bindings). Refused, naming the pass and the binding: no set, sets of other kinds, a
+    /// shader that binds another kind at a slot's binding, binds what no slot gives, or whose
+    /// push block is not a `P`.
     pub fn with_sets(ctx: &Arc<Context>, name: &str, spirv: &[u8], sets: &[&[Slot]]) -> VkResult<Self> {
-        let mut made = Vec::with_capacity(sets.len());
-        for slots in sets {
+        let mut made: Vec<(DescriptorSet, Vec<Use>)> = Vec::with_capacity(sets.len());
+        for (i, slots) in sets.iter().enumerate() {
             let bindings: Vec<Binding> = slots.iter().map(Slot::binding).collect();
             let set = DescriptorSet::new(ctx, vk::ShaderStageFlags::COMPUTE, &bindings)?;
+            if let Some((first, _)) = made.first().filter(|(first, _)| first.kinds != set.kinds) {
+                return Err(VkError::Invalid(format!(
+                    "pass {name}: set {i} binds {:?}, but set 0 binds {:?}; every set of a pass binds the same kinds",
+                    set.kinds, first.kinds
+                )));
+            }
             made.push((set, slots.iter().filter_map(|s| s.tracked(Sampling::Compute)).collect()));
         }
-        let pipeline = Pipeline::compute(ctx, name, spirv, &made[0].0, std::mem::size_of::<P>() as u32)?;
+        let Some((first, _)) = made.first() else {
+            return Err(VkError::Invalid(format!("pass {name}: no descriptor set to bind")));
+        };
+        let pipeline = Pipeline::compute(ctx, name, spirv, first, std::mem::size_of::<P>() as u32)?;
         Ok(ComputePass { pipeline, sets: made, push: PhantomData })
     }
 

@@ -98,7 +98,8 @@ impl Image {
     }
 
     /// An image and a view over all its layers that the caller made and owns (an engine's
-    /// G-buffer), lent to relume: `desc` must describe them. relume binds and barriers it like its
+    /// G-buffer), lent to relume: `desc` must describe them, and the image has one mip level
+    /// (relume's barriers cover level 0). relume binds and barriers it like its
     /// own, and never destroys it; the caller keeps both alive as long as relume uses them.
     pub fn borrowed(ctx: &Arc<Context>, raw: vk::Image, view: vk::ImageView, desc: ImageDesc) -> Image {
         Image { ctx: Arc::clone(ctx), raw, view, desc, allocation: None, owned: false }

@@ -20,6 +20,12 @@ pub(super) struct Interface {
 /// Reads `spirv`'s declarations; refused, naming `pass`: SPIR-V that does not parse, and a
 /// descriptor set other than 0.
 pub(super) fn reflect(pass: &str, spirv: &[u8]) -> VkResult<Interface> {
+    // rspirv-reflect asserts on some malformed modules; a caller's shader is refused instead.
+    std::panic::catch_unwind(|| read(pass, spirv))
+        .unwrap_or_else(|_| Err(VkError::Invalid(format!("pass {pass}: its SPIR-V cannot be reflected (malformed)"))))
+}
+
+fn read(pass: &str, spirv: &[u8]) -> VkResult<Interface> {
     let fail = |e: rspirv_reflect::ReflectError| VkError::Invalid(format!("pass {pass}: its SPIR-V cannot be reflected: {e}"));
     let reflection = rspirv_reflect::Reflection::new_from_spirv(spirv).map_err(fail)?;
     let mut bindings = BTreeMap::new();
@@ -43,9 +49,16 @@ pub fn workgroup_size(pass: &str, spirv: &[u8]) -> VkResult<[u32; 3]> {
 }
 
 /// Refuses, naming `pass` and the binding, a pass whose descriptor set (binding i of kind
-/// `kinds[i]`) or push block (`push_bytes`) disagrees with what any of its `stages` declares.
-/// A binding no stage declares is allowed (a stand-in the variant never reads).
+/// `kinds[i]`) or push block (`push_bytes`) disagrees with what any of its `stages` declares:
+/// another kind or nothing where a stage binds, fewer bytes than a stage's push block (it would
+/// read past them) or more than the block padded to 16 (another struct), a push block no stage
+/// declares. A binding no stage declares is allowed (a stand-in the variant never reads).
 pub(super) fn check(pass: &str, stages: &[&Interface], kinds: &[vk::DescriptorType], push_bytes: u32) -> VkResult<()> {
+    if push_bytes > 0 && stages.iter().all(|stage| stage.push_bytes == 0) {
+        return Err(VkError::Invalid(format!(
+            "pass {pass}: it pushes {push_bytes} bytes, but no stage of its shaders declares a push block"
+        )));
+    }
     for stage in stages {
         for (&binding, &declared) in &stage.bindings {
             let bound = kinds.get(binding as usize);
@@ -56,7 +69,7 @@ pub(super) fn check(pass: &str, stages: &[&Interface], kinds: &[vk::DescriptorTy
                 )));
             }
         }
-        if stage.push_bytes != 0 && stage.push_bytes != push_bytes {
+        if stage.push_bytes != 0 && (push_bytes < stage.push_bytes || push_bytes > stage.push_bytes.next_multiple_of(16)) {
             return Err(VkError::Invalid(format!(
                 "pass {pass}: its shader's push block is {} bytes, but the pass pushes {push_bytes}",
                 stage.push_bytes

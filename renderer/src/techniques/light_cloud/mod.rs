@@ -271,9 +271,9 @@ fn check(ctx: &Context, cloud: &LightCloud, vertex_count: usize) -> VkResult<()>
         ));
     }
     // 65,535 workgroups: the least maxComputeWorkGroupCount Vulkan allows.
-    let groups = |spirv, invocations: u64| Ok::<u64, VkError>(invocations.div_ceil(workgroup_size("light cloud", spirv)?[0] as u64));
-    let sums = groups(shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, terms)?;
-    let vertices = groups(shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, cloud.vertex_count() as u64)?;
+    let groups = |pass, spirv, invocations: u64| Ok::<u64, VkError>(invocations.div_ceil(workgroup_size(pass, spirv)?[0] as u64));
+    let sums = groups("light_cloud.cluster_sums", shaders::LIGHT_CLOUD_CLUSTER_SUMS_COMP, terms)?;
+    let vertices = groups("light_cloud.reconstruct", shaders::LIGHT_CLOUD_RECONSTRUCT_COMP, cloud.vertex_count() as u64)?;
     if sums.max(vertices) > 65_535 {
         return refuse(format!(
             "{terms} cluster terms and {} vertices take {sums} and {vertices} workgroups; at most 65,535 fit one dispatch: use fewer clusters or vectors, or split the scene",
