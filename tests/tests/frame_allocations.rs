@@ -10,6 +10,7 @@ use relume_bake::atlas::{Atlas, AtlasSettings};
 use relume_bake::bvh::SceneBvh;
 use relume_bake::fiv::{self, FivBakeSettings, Grid, SumOptions};
 use relume_bake::light_cloud::{self, LightCloudBakeSettings, LightCloudSceneSettings};
+use relume_bake::light_path_maps::ClusteredTransfer;
 use relume_bake::scene::{Light, Scene};
 use relume_bake::testing;
 use relume_bake::work::WorkOptions;
@@ -128,11 +129,18 @@ fn frames_with_obscurance_and_changing_ambient_allocate_nothing() {
     assert_eq!(during, 0, "10 frames made {during} heap allocations");
 }
 
-#[test]
-fn frames_with_light_path_maps_allocate_nothing() {
+/// Cornell on an atlas, a constant obscurance on it and a synthetic transfer: the light path
+/// maps' data (with the obscurance they hand over beside their own term).
+fn light_path_maps_data() -> (Atlas, Scene, Vec<Vec4>, ClusteredTransfer) {
     let (atlas, scene) = atlas_scene(&load_scene("cornell"), 16.0);
     let texels = constant_obscurance(&atlas, Vec3::new(0.7, 0.6, 0.5));
     let transfer = synthetic_transfer(&atlas, vec![0, 20, 40, 64], 2, 1);
+    (atlas, scene, texels, transfer)
+}
+
+#[test]
+fn frames_with_light_path_maps_allocate_nothing() {
+    let (atlas, scene, texels, transfer) = light_path_maps_data();
     let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let maps = LightPathMapsData { transfer: &transfer, atlas: atlas_image(&atlas, &texels), composition: Composition::default() };
     let ctx = validated_context();
@@ -214,9 +222,7 @@ fn frames_with_a_light_cloud_and_moving_lights_allocate_nothing() {
 fn effect_frames_for_an_engine_allocate_nothing() {
     // Light path maps as an effect: relume's shadow maps, the technique's four passes and the
     // barriers to the engine's reads, recorded as an engine records them.
-    let (atlas, scene) = atlas_scene(&load_scene("cornell"), 16.0);
-    let texels = constant_obscurance(&atlas, Vec3::new(0.7, 0.6, 0.5));
-    let transfer = synthetic_transfer(&atlas, vec![0, 20, 40, 64], 2, 1);
+    let (atlas, scene, texels, transfer) = light_path_maps_data();
     let obscurance = ObscuranceData { obscurance: atlas_image(&atlas, &texels) };
     let maps = LightPathMapsData { transfer: &transfer, atlas: atlas_image(&atlas, &texels), composition: Composition::default() };
     let ctx = validated_context();
