@@ -393,6 +393,9 @@ fn a_fifo_or_a_device_as_an_input_is_refused_without_blocking() {
     assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo").success());
     assert_refused(&fifo, &["pipe.gltf", "not a regular file"]);
     let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    // The viewer's script too: refused before any window opens, not read until killed.
+    let view = relume(&["view", scene.to_str().unwrap(), "--script", fifo.to_str().unwrap()], &dir);
+    assert_one_error(&view, &["pipe.gltf", "not a regular file"]);
     let endless = std::fs::read_to_string(&scene).unwrap().replace("\"uri\": \"scene.bin\"", "\"uri\": \"/dev/zero\"");
     std::fs::write(&scene, endless).unwrap();
     // Outside the scene's folder: refused as such, and, allowed, as no regular file.

@@ -39,6 +39,8 @@ pub enum Step {
 
 /// Reads a script file; every bad line is refused with its number and what it should be.
 pub fn read(path: &Path) -> Result<Vec<Step>> {
+    // A FIFO would block the read until killed, a device be read without end.
+    relume_bake::image::refuse_irregular_input(path).map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
     let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read the script", path.display()))?;
     parse(&text).with_context(|| format!("{}: not a viewer script (see `relume view --help`)", path.display()))
 }
