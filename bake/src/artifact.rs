@@ -277,6 +277,7 @@ fn write_json(path: &Path, value: &Value) -> Result<(), ArtifactError> {
 /// anything else in it (a user's file, a folder) refuses the bake, by name.
 pub fn refuse_foreign_folder(dir: &Path) -> Result<(), ArtifactError> {
     const FIX: &str = "choose an empty or new --out folder";
+    crate::inputs::refuse_output_folder(dir).map_err(|e| fail(dir, e, FIX))?;
     match std::fs::symlink_metadata(dir) {
         Err(_) => return Ok(()),
         Ok(m) if !m.is_dir() => return Err(fail(dir, "exists and is not a folder", FIX)),
@@ -366,6 +367,7 @@ impl Artifact {
     /// sections' shape, and every file's checksum.
     pub fn read(dir: &Path) -> Result<Artifact, ArtifactError> {
         let manifest_path = dir.join("manifest.json");
+        crate::inputs::admit(&manifest_path).map_err(|e| fail(&manifest_path, e, GIVE_ARTIFACT))?;
         let text =
             std::fs::read_to_string(&manifest_path).map_err(|e| fail(&manifest_path, format!("cannot read ({e})"), GIVE_ARTIFACT))?;
         let manifest: Value = serde_json::from_str(&text).map_err(|e| fail(&manifest_path, format!("not valid JSON ({e})"), REBAKE))?;
@@ -397,8 +399,9 @@ impl Artifact {
         self.sections.iter().any(|s| s.name == name)
     }
 
-    /// Section `name` at `version`, after checking its key against `scene` (needed for a
-    /// section keyed to the scene or a mesh; a scene-independent one is read without).
+    /// Section `name` at `version`, after checking its key against `scene`: a section keyed
+    /// to the scene, a mesh or its environment is read with the scene (and one keyed to
+    /// nothing is then refused); a scene-independent one is read without.
     pub fn section(&self, name: &str, version: u32, scene: Option<&Scene>) -> Result<SectionData<'_>, ArtifactError> {
         let manifest_path = self.dir.join("manifest.json");
         let Some(section) = self.sections.iter().find(|s| s.name == name) else {
@@ -425,6 +428,7 @@ fn read_section(dir: &Path, manifest_path: &Path, entry: &Value) -> Result<Store
             return Err(fail(manifest_path, format!("section {name} names a file outside the folder: {file}"), REBAKE));
         }
         let path = dir.join(file);
+        crate::inputs::admit(&path).map_err(|e| fail(&path, e, REBAKE))?;
         let size = std::fs::metadata(&path).map_err(|e| fail(&path, format!("cannot read ({e})"), REBAKE))?.len();
         if facts["bytes"].as_u64() != Some(size) {
             let problem =
@@ -443,8 +447,18 @@ fn read_section(dir: &Path, manifest_path: &Path, entry: &Value) -> Result<Store
 
 fn check_key(manifest_path: &Path, section: &str, key: &Value, scene: Option<&Scene>) -> Result<(), ArtifactError> {
     let kind = key["kind"].as_str().unwrap_or("");
-    if kind == "none" {
-        return Ok(());
+    // A section read for a scene is keyed to it (its surfaces, a mesh, its environment): one
+    // keyed to nothing would skip the check of what it was baked for.
+    match (kind, scene) {
+        ("none", None) => return Ok(()),
+        ("none", Some(_)) => {
+            return Err(fail(
+                manifest_path,
+                format!("section {section} is keyed to no scene, where it must be keyed to the scene it was baked for"),
+                REBAKE,
+            ))
+        }
+        _ => {}
     }
     let Some(scene) = scene else {
         return Err(fail(

@@ -62,8 +62,8 @@ impl EnvironmentSettings {
             rotation_y_degrees: read("rotation_y_degrees", 0.0)?,
             cube_face,
         };
-        if !(settings.intensity.is_finite() && settings.intensity >= 0.0) {
-            return Err(format!("{KEY}.intensity must be finite and >= 0"));
+        if !(settings.intensity.is_finite() && (0.0..=crate::scene::MAX_LIGHT).contains(&settings.intensity)) {
+            return Err(format!("{KEY}.intensity must be in 0..=1e9"));
         }
         if !settings.rotation_y_degrees.is_finite() {
             return Err(format!("{KEY}.rotation_y_degrees must be finite"));
@@ -168,9 +168,12 @@ impl Environment {
         let finite_mean =
             image.pixels.iter().filter(|p| p.is_finite()).map(|p| p.max_element().max(0.0) as f64).sum::<f64>() / image.pixels.len() as f64;
         let tolerance = -(NEGATIVE_TOLERANCE * finite_mean) as f32;
-        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < tolerance) {
+        let too_bright = |p: &Vec3| p.max_element() * settings.intensity > crate::scene::MAX_LIGHT;
+        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < tolerance || too_bright(p)) {
             let (x, y) = (i as u32 % image.width, i as u32 / image.width);
-            return Err(bad(format!("texel ({x}, {y}) is {} (radiance must be finite and >= 0)", image.pixels[i])));
+            let problem =
+                format!("texel ({x}, {y}) is {} (radiance times the intensity must be finite, >= 0 and at most 1e9)", image.pixels[i]);
+            return Err(bad(problem));
         }
         let clamped_texels = image.pixels.iter().filter(|p| p.min_element() < 0.0).count();
         let n = settings.cube_face;

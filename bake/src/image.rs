@@ -41,15 +41,6 @@ fn io_error(path: &Path, message: impl std::fmt::Display) -> ImageError {
     ImageError::Io { path: path.to_path_buf(), message: message.to_string() }
 }
 
-/// Inputs are regular files: a FIFO would block the read for ever, a device such as
-/// /dev/zero read without end. Err names what the path is not, for the caller's message.
-pub fn refuse_irregular_input(path: &Path) -> Result<(), String> {
-    match std::fs::metadata(path) {
-        Ok(m) if !m.is_file() => Err("is not a regular file (a folder, a device, a FIFO or a socket); give a file".into()),
-        _ => Ok(()),
-    }
-}
-
 /// Pixels, row by row, `width` to a row: an image's or a slice's, written without a copy.
 #[derive(Clone, Copy)]
 struct LayerPixels<'a> {
@@ -105,7 +96,7 @@ fn encode(layers: &[(&str, LayerPixels)], size: (usize, usize)) -> Result<Vec<u8
 /// Reads every RGB layer of an EXR file, by name (an unnamed layer is called "rgb"),
 /// streaming it from the file.
 pub fn read_exr_layers(path: &Path) -> Result<Vec<(String, Image)>, ImageError> {
-    refuse_irregular_input(path).map_err(|e| io_error(path, e))?;
+    crate::inputs::admit(path).map_err(|e| io_error(path, e))?;
     let open = || std::fs::File::open(path).map(std::io::BufReader::new).map_err(|e| io_error(path, format!("cannot read ({e})")));
     check_exr_size(open()?).map_err(|e| io_error(path, e))?;
     decode_exr_layers(open()?).map_err(|e| io_error(path, e))

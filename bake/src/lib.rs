@@ -11,6 +11,7 @@ pub mod binary;
 pub mod environment;
 pub mod gltf_load;
 pub mod image;
+pub mod inputs;
 pub mod lights_file;
 pub mod methods;
 pub mod metrics;

@@ -24,7 +24,7 @@ const FIX: &str = "fix the lights file (docs/FORMATS.md, \"Lights file\")";
 /// The lights of the file at `path`, each checked as a glTF light is.
 pub fn read(path: &Path) -> Result<Vec<Light>, LightsFileError> {
     let fail = |item: &str, problem: String| LightsFileError { path: path.to_path_buf(), item: item.to_string(), problem };
-    crate::image::refuse_irregular_input(path).map_err(|e| fail("the file", e))?;
+    crate::inputs::admit(path).map_err(|e| fail("the file", e))?;
     let text = std::fs::read_to_string(path).map_err(|e| fail("the file", format!("cannot be read ({e})")))?;
     let file: Value = serde_json::from_str(&text).map_err(|e| fail("the file", format!("is not valid JSON ({e})")))?;
     if file["format"] != FORMAT || file["version"] != VERSION {
@@ -46,8 +46,8 @@ fn light(entry: &Value, k: usize) -> Result<Light, String> {
         }
     };
     let intensity = vector("intensity")?;
-    if intensity.min_element() < 0.0 {
-        return Err(format!("intensity {intensity} is negative"));
+    if intensity.min_element() < 0.0 || intensity.max_element() > crate::scene::MAX_LIGHT {
+        return Err(format!("intensity {intensity} is negative or exceeds 1e9 (candela, or lux for a directional light)"));
     }
     let direction = || {
         let d = vector("direction")?;

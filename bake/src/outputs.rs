@@ -7,6 +7,8 @@
 //! work) removes them and holds back any commit from starting, and one that a killed run left
 //! behind (its process id no longer running) is removed by the next run that writes the same
 //! output.
+//!
+//! No output may be a file the run has read ([`crate::inputs`]): staging refuses it.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -65,6 +67,7 @@ impl Outputs {
         if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
             return Err(fail(path, "exists and is not a regular file (a folder, a device, a FIFO or a socket); relume writes only regular files: choose a file path"));
         }
+        crate::inputs::refuse_output_file(path).map_err(|why| fail(path, why))?;
         let temporary = self.stage(path)?;
         let mut file = {
             // Created under the lock, so an interrupt either removes it or finds it not yet made.
@@ -97,6 +100,7 @@ impl Outputs {
     /// Stages the folder `path` (which the caller has checked may be replaced): returns the
     /// empty temporary folder to fill.
     pub fn folder(&mut self, path: &Path) -> Result<PathBuf, OutputError> {
+        crate::inputs::refuse_output_folder(path).map_err(|why| fail(path, format!("{why}; write it elsewhere")))?;
         let temporary = self.stage(path)?;
         if let Some(parent) = temporary.parent() {
             std::fs::create_dir_all(parent).map_err(|e| fail(parent, format!("cannot create the folder ({e})")))?;

@@ -6,6 +6,12 @@
 //! relume treats photometric units as radiometric ones one to one (1 cd is 1 W/sr of
 //! linear radiance units), so the path tracer and the renderer agree by construction.
 
+/// The largest light value relume takes where it enters (a light's intensity, an emission, an
+/// environment texel and its intensity, a baked light map's value): sums and squares of such
+/// values over a bake stay finite in f32 (1e18 against 3.4e38), where 1e38 turned a bake's
+/// tables into NaN; the brightest real lights (the sun, about 1e5 lux) are far below it.
+pub const MAX_LIGHT: f32 = 1e9;
+
 use crate::environment::Environment;
 use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3, Vec4};

@@ -64,7 +64,10 @@ impl SceneSettings {
     /// Refuses values the model has no meaning for, naming the setting and what is allowed.
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
-            (self.ambient.is_finite() && self.ambient.min_element() >= 0.0, "ambient must be three finite values >= 0 (lux)"),
+            (
+                self.ambient.is_finite() && self.ambient.min_element() >= 0.0 && self.ambient.max_element() <= crate::scene::MAX_LIGHT,
+                "ambient must be three values in 0..=1e9 (lux)",
+            ),
             (self.beta.is_finite() && (0.0..1.0).contains(&self.beta), "beta must be in [0, 1)"),
             (self.texel_density.is_finite() && self.texel_density > 0.0, "texel_density must be finite and > 0 (texels per metre)"),
         ];
@@ -112,6 +115,68 @@ impl SceneSettings {
 /// The length of the bounds' diagonal, at least a millimetre.
 pub fn diagonal(bounds: (Vec3, Vec3)) -> f32 {
     (bounds.1 - bounds.0).length().max(1e-3)
+}
+
+/// The values a setting accepts: the one definition its `validate` checks and the command
+/// line's parameter registry shows and enforces, so that the two never disagree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ValueRange {
+    /// Whole numbers in `min..=max` that are multiples of `step`.
+    Count { min: u64, max: u64, step: u64 },
+    /// Finite numbers from `min` to `max`, each end left out when open.
+    Number { min: f64, max: f64, min_open: bool, max_open: bool },
+}
+
+impl ValueRange {
+    /// Whole numbers in `min..=max`.
+    pub const fn count(min: u64, max: u64) -> ValueRange {
+        ValueRange::Count { min, max, step: 1 }
+    }
+
+    /// Even numbers in `min..=max`.
+    pub const fn even(min: u64, max: u64) -> ValueRange {
+        ValueRange::Count { min, max, step: 2 }
+    }
+
+    /// Finite numbers in `min..=max`, above `min` when `min_open`.
+    pub const fn number(min: f64, max: f64, min_open: bool) -> ValueRange {
+        ValueRange::Number { min, max, min_open, max_open: false }
+    }
+
+    /// Finite numbers strictly between `min` and `max`.
+    pub const fn between(min: f64, max: f64) -> ValueRange {
+        ValueRange::Number { min, max, min_open: true, max_open: true }
+    }
+
+    pub fn admits_count(&self, v: u64) -> bool {
+        match *self {
+            ValueRange::Count { min, max, step } => (min..=max).contains(&v) && v.is_multiple_of(step),
+            ValueRange::Number { .. } => self.admits(v as f64),
+        }
+    }
+
+    pub fn admits(&self, v: f64) -> bool {
+        match *self {
+            ValueRange::Count { .. } => v.fract() == 0.0 && v >= 0.0 && self.admits_count(v as u64),
+            ValueRange::Number { min, max, min_open, max_open } => {
+                v.is_finite() && if min_open { v > min } else { v >= min } && if max_open { v < max } else { v <= max }
+            }
+        }
+    }
+
+    /// As `--help`, `relume methods` and the refusals show it: `1..=64`, `8..=1024, even`,
+    /// `>0..=1000`, `>0..<90`.
+    pub fn text(&self) -> String {
+        match *self {
+            ValueRange::Count { min, max, step: 1 } => format!("{min}..={max}"),
+            ValueRange::Count { min, max, step: 2 } => format!("{min}..={max}, even"),
+            ValueRange::Count { min, max, step } => format!("{min}..={max}, a multiple of {step}"),
+            ValueRange::Number { min, max, min_open, max_open } => {
+                let upper = if max.is_finite() { format!("{max}") } else { "inf".into() };
+                format!("{}{min}..{}{upper}", if min_open { ">" } else { "" }, if max_open { "<" } else { "=" })
+            }
+        }
+    }
 }
 
 /// The message of the first check that fails, or Ok: every `validate` of relume's settings.
@@ -162,6 +227,22 @@ mod tests {
             SceneSettings::from_extras(&json!({"relume": {"beta": 0.5, "obscurance": {"l_max": 2.0}}}), defaults(), &SCENE_BLOCKS).unwrap();
         assert_eq!(s.beta, 0.5);
         assert_eq!(s.block("obscurance"), Some(&json!({"l_max": 2.0})));
+    }
+
+    /// What a range admits is what its text says, ends open or closed, steps kept.
+    #[test]
+    fn a_value_range_admits_what_its_text_says() {
+        let angle = ValueRange::between(0.0, 90.0);
+        assert_eq!(angle.text(), ">0..<90");
+        assert!(angle.admits(89.9) && angle.admits(1e-6) && !angle.admits(90.0) && !angle.admits(0.0) && !angle.admits(f64::NAN));
+        let width = ValueRange::even(8, 1024);
+        assert_eq!(width.text(), "8..=1024, even");
+        assert!(width.admits_count(8) && width.admits_count(1024) && !width.admits_count(9) && !width.admits_count(1026));
+        assert!(width.admits(10.0) && !width.admits(10.5) && !width.admits(-2.0));
+        let distance = ValueRange::number(0.0, 1e6, true);
+        assert_eq!(distance.text(), ">0..=1000000");
+        assert!(distance.admits(1e6) && !distance.admits(1e6 + 1.0) && !distance.admits(f64::INFINITY));
+        assert_eq!(ValueRange::count(1, 64).text(), "1..=64");
     }
 
     #[test]

@@ -24,7 +24,7 @@ pub struct WorkOptions {
     /// Draw a progress bar on stderr (hidden when stderr is not a terminal).
     pub progress: bool,
     /// Refuse, before its long work, a bake whose peak memory is estimated above this many
-    /// bytes (`admit`); None: no limit.
+    /// bytes (`admit`); None: the machine's memory.
     pub memory_limit: Option<u64>,
     /// When the job began (`begun`): its time limit counts from here over all its stages;
     /// None: each stage's own start.
@@ -52,22 +52,28 @@ impl WorkOptions {
         self.time_limit.is_some_and(|limit| self.started.unwrap_or(stage_start).elapsed() >= limit)
     }
 
-    /// Refuses a bake whose `estimate` is over the memory limit, naming the lever's value that
+    /// Refuses a bake whose `estimate` is over the memory limit (without --memory-limit: the
+    /// machine's memory, which the bake could not finish in), naming the lever's value that
     /// would fit; prints the estimate first when progress is shown.
     pub fn admit(&self, stage: &str, estimate: &Estimate) -> Result<(), String> {
         if self.progress {
             eprintln!("{stage}: peak memory estimate {}", estimate.describe());
         }
-        let Some(limit) = self.memory_limit.filter(|&limit| estimate.bytes() > limit) else { return Ok(()) };
+        let (limit, what, raise) = match self.memory_limit {
+            Some(limit) => (limit, "--memory-limit", ", or raise --memory-limit"),
+            None => match machine_memory_bytes() {
+                Some(machine) => (machine, "this machine's memory", ", or bake on a larger machine (or in shards: `relume bake plan`)"),
+                None => return Ok(()),
+            },
+        };
+        if estimate.bytes() <= limit {
+            return Ok(());
+        }
         let fits = match estimate.fitting(limit) {
             0 => format!("even {} 1 would not fit", estimate.lever),
             n => format!("{} {n} or less would fit", estimate.lever),
         };
-        Err(format!(
-            "{stage}: the peak memory is estimated at {}, over --memory-limit {:.0} MiB: {fits}, or raise --memory-limit",
-            estimate.describe(),
-            mib(limit)
-        ))
+        Err(format!("{stage}: the peak memory is estimated at {}, over {what} {:.0} MiB: {fits}{raise}", estimate.describe(), mib(limit)))
     }
 
     /// Makes the rows of a bake's long work, `items`: `make(chunk, range)` makes the rows of a

@@ -147,13 +147,35 @@ fn decoded_values_out_of_range_are_refused() {
         let error = refusal(&dir, &scene);
         assert!(error.contains("atlas.bin") && error.contains(&format!("texel {covered}")) && error.contains(words), "{error}");
     }
-    let mut values = vec![Vec3::ONE; atlas.texels.len()];
-    values[7] = Vec3::new(0.0, f32::INFINITY, 0.0);
-    let section = obscurance::section(&values, atlas.layout(), json!({})).unwrap();
-    let output = BakeOutput { method: "obscurance", scene: Some(&scene), parameters: json!({}), sections: vec![section], stats: json!({}) };
-    output.write(&dir).unwrap();
-    let error = obscurance::read(&Artifact::read(&dir).unwrap(), &scene, atlas.layout()).err().unwrap().to_string();
-    assert!(error.contains("obscurance.exr") && error.contains("texel 7") && error.contains("finite"), "{error}");
+    // A v of 1e6 (u was always checked) and a u past the pages.
+    for (uv, words) in [(glam::Vec2::new(0.5, 1e6), "1000000"), (glam::Vec2::new(3.5, 0.5), "3.5")] {
+        let mut section = atlas.to_section();
+        section.meshes[0].uv1[0] = uv;
+        let output = BakeOutput {
+            method: "obscurance",
+            scene: Some(&scene),
+            parameters: json!({}),
+            sections: vec![section.section(json!({}))],
+            stats: json!({}),
+        };
+        output.write(&dir).unwrap();
+        let error = refusal(&dir, &scene);
+        assert!(
+            error.contains("atlas.bin") && error.contains("mesh 0: uv1") && error.contains(words) && error.contains("outside the atlas"),
+            "{error}"
+        );
+    }
+    // Not finite, and finite but past any light (3e38 made a render's pixels infinite).
+    for bad in [f32::INFINITY, 3e38] {
+        let mut values = vec![Vec3::ONE; atlas.texels.len()];
+        values[7] = Vec3::new(0.0, bad, 0.0);
+        let section = obscurance::section(&values, atlas.layout(), json!({})).unwrap();
+        let output =
+            BakeOutput { method: "obscurance", scene: Some(&scene), parameters: json!({}), sections: vec![section], stats: json!({}) };
+        output.write(&dir).unwrap();
+        let error = obscurance::read(&Artifact::read(&dir).unwrap(), &scene, atlas.layout()).err().unwrap().to_string();
+        assert!(error.contains("obscurance.exr") && error.contains("texel 7") && error.contains("0..=1e9"), "{error}");
+    }
     let manifest_path = dir.join("manifest.json");
     let manifest = std::fs::read_to_string(&manifest_path).unwrap();
     let bytes = std::fs::metadata(dir.join("obscurance.exr")).unwrap().len();
@@ -201,14 +223,16 @@ fn keyed_artifact(scene: &Scene, dir: &Path) {
 }
 
 #[test]
-fn a_scene_independent_section_is_read_without_a_scene_and_a_mesh_keyed_one_only_for_its_mesh() {
+fn a_scene_independent_section_is_read_only_without_a_scene_and_a_mesh_keyed_one_only_for_its_mesh() {
     let scene = test_scene(2.0);
     let dir = temp_dir("keys");
     keyed_artifact(&scene, &dir);
     let artifact = Artifact::read(&dir).unwrap();
     let dictionary = artifact.section("dictionary", 3, None).expect("no scene needed");
     assert_eq!(dictionary.file("dictionary.bin").unwrap().0, b"dictionary");
-    assert!(artifact.section("dictionary", 3, Some(&test_scene(9.0))).is_ok(), "any scene will do");
+    // Read as a section keyed to a scene, a key to nothing would skip the scene's check.
+    let error = artifact.section("dictionary", 3, Some(&scene)).err().expect("keyed to nothing, read for a scene").to_string();
+    assert!(error.contains("section dictionary is keyed to no scene") && error.contains("manifest.json"), "{error}");
 
     // The same mesh in another scene (more meshes, no lights) is the same mesh.
     let mut bigger = test_scene(2.0);

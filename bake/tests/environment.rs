@@ -73,6 +73,10 @@ fn refuses_images_that_are_not_lat_long_or_not_radiance() {
     image.set(3, 4, Vec3::new(0.0, -1.0, 0.0));
     let error = Environment::from_lat_long(&image, Path::new("e.exr"), &settings(8, 0.0)).unwrap_err().to_string();
     assert!(error.contains(">= 0"), "{error}");
+    // Finite but past any light: 1e38 turned FIV's tables into NaN.
+    image.set(3, 4, Vec3::new(0.0, 1e38, 0.0));
+    let error = Environment::from_lat_long(&image, Path::new("e.exr"), &settings(8, 0.0)).unwrap_err().to_string();
+    assert!(error.contains("texel (3, 4)") && error.contains("at most 1e9"), "{error}");
     // Compression ringing a hair below zero (Blender's probes go down to -0.0018) reads as 0.
     let mut noisy = lat_long_image(64, |_| Vec3::ONE);
     noisy.set(5, 5, Vec3::new(1.0, -4.5e-6, 1.0));

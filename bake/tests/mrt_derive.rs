@@ -85,3 +85,17 @@ fn cornell_is_one_block_on_its_walls() {
         assert!(c.cmpge(lo - 0.01).all() && c.cmple(hi + 0.01).all(), "{c} off the room {lo} .. {hi}");
     }
 }
+
+/// A flat scene (one floor, no height: a downloaded ground plane) is refused as a flat block,
+/// not counted into a lattice of cells past `usize` (its rooms' height of 0 divided the floor).
+#[test]
+fn a_flat_scene_is_refused_as_one_flat_block() {
+    use glam::Vec3;
+    use relume_bake::testing;
+    let floor = testing::square(Vec3::ZERO, Vec3::X, Vec3::Z, 2, 0);
+    let camera = testing::look_at(Vec3::new(0.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y, 0.8);
+    let light = testing::point_light(Vec3::Y, Vec3::splat(10.0));
+    let scene = testing::scene("flat", vec![floor], vec![testing::material("floor", Vec3::splat(0.5), Vec3::ZERO)], vec![light], camera);
+    let Err(error) = derive(&scene, &SceneBvh::new(&scene)) else { panic!("a flat scene derived blocks") };
+    assert!(error.contains("cell (0, 0)") && error.contains("flat") && error.contains("declare extras.relume.mrt"), "{error}");
+}

@@ -2,7 +2,7 @@
 //! an image size), the frame's settings (shadow maps, the ambient light, the device), and the
 //! reference path tracer's settings.
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{Context as _, Result};
 use clap::Args;
 use glam::Vec3;
 use relume_bake::bvh::RayBackend;
@@ -75,8 +75,8 @@ pub(crate) struct GpuArgs {
     /// Ambient irradiance I_A of the frame's ambient light (001 eq. 5), lux: "r,g,b" or one
     /// value (default: the method's; the scene's extras.relume.ambient where the method
     /// models ambient light).
-    #[arg(long)]
-    pub ambient: Option<String>,
+    #[arg(long, value_parser = ambient)]
+    pub ambient: Option<Vec3>,
     /// beta of the ambient light's share of every light (001 eq. 7), in [0, 1) (default: as
     /// --ambient).
     #[arg(long, value_parser = fraction)]
@@ -210,20 +210,6 @@ fn load_noting(path: &Path, lights_file: Option<&Path>, options: LoadOptions) ->
     Ok((loaded.scene, loaded.warnings))
 }
 
-/// `--ambient`: "r,g,b" or one value for all three channels.
-fn parse_ambient(text: &str) -> Result<Vec3> {
-    let values: Vec<f32> = text
-        .split(',')
-        .map(|v| v.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("--ambient {text}: give \"r,g,b\" or one number (lux)"))?;
-    match values[..] {
-        [v] => Ok(Vec3::splat(v)),
-        [r, g, b] => Ok(Vec3::new(r, g, b)),
-        _ => bail!("--ambient {text}: give \"r,g,b\" or one number (lux)"),
-    }
-}
-
 /// The frame's settings from the flags, with a method's ambient light: `defaults` its I_A and
 /// beta (None: it models no ambient light), `environment` whether it adds the scene's
 /// environment to them (`Method::environment_ambient`); `--direct-only` drops all three.
@@ -234,8 +220,7 @@ pub(crate) fn render_settings(
     environment: bool,
 ) -> Result<RenderSettings> {
     let defaults = defaults.filter(|_| !gpu.direct_only);
-    let given = gpu.ambient.as_deref().map(parse_ambient).transpose()?;
-    let (ambient, beta) = crate::methods::frame_ambient(defaults, given, gpu.beta);
+    let (ambient, beta) = crate::methods::frame_ambient(defaults, gpu.ambient, gpu.beta);
     let settings = RenderSettings {
         width: scene.width,
         height: scene.height,
@@ -299,6 +284,18 @@ pub(crate) fn bytes(text: &str) -> Result<u64, String> {
     }
 }
 
+/// `--ambient`: "r,g,b" or one value for all three channels, each in 0..=1e9 lux (a light's
+/// bound, `scene::MAX_LIGHT`).
+fn ambient(text: &str) -> Result<Vec3, String> {
+    let admitted = |v: &f32| (0.0..=relume_bake::scene::MAX_LIGHT).contains(v);
+    let values: Option<Vec<f32>> = text.split(',').map(|v| v.trim().parse::<f32>().ok().filter(admitted)).collect();
+    match values.as_deref() {
+        Some(&[v]) => Ok(Vec3::splat(v)),
+        Some(&[r, g, b]) => Ok(Vec3::new(r, g, b)),
+        _ => Err("give \"r,g,b\" or one number, each in 0..=1e9 (lux)".into()),
+    }
+}
+
 /// A finite number >= 0.
 fn at_least_zero(text: &str) -> Result<f32, String> {
     number(text, |v| v >= 0.0).ok_or_else(|| "give a finite number >= 0".into())
@@ -321,28 +318,23 @@ pub(crate) fn threads(text: &str) -> Result<usize, String> {
 /// Timed frames: at least one, at most a number that cannot exhaust memory.
 pub(crate) const FRAMES: std::ops::RangeInclusive<i64> = 1..=100_000;
 
-/// Refuses a command whose outputs would replace one of its inputs (`reference --out
-/// scene.gltf`, `compare --error-image` on its image): the paths are compared after
-/// resolving links and `..`, an output that does not exist yet by its folder.
-pub(crate) fn refuse_writing_over(outputs: &[PathBuf], inputs: &[&Path]) -> Result<()> {
-    let resolved = |p: &Path| -> Option<PathBuf> {
-        std::fs::canonicalize(p).ok().or_else(|| {
-            let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            Some(std::fs::canonicalize(parent).ok()?.join(p.file_name()?))
-        })
-    };
-    for output in outputs {
-        let Some(target) = resolved(output) else { continue };
-        if let Some(input) = inputs.iter().find(|i| resolved(i).as_ref() == Some(&target)) {
-            bail!("{}: this output would replace the input {}; write it elsewhere", output.display(), input.display());
-        }
-    }
-    Ok(())
+/// Refuses, before the work starts, a command's output (or a companion such as the PNG
+/// beside an EXR) that is a file the command has read: call it after the inputs are loaded.
+pub(crate) fn refuse_writing_over(outputs: &[PathBuf]) -> Result<()> {
+    relume_bake::inputs::refuse_outputs(outputs.iter().map(PathBuf::as_path)).map_err(|e| anyhow::anyhow!(e))
 }
 
-/// The files a scene's command reads by name: the scene and the environment it is given.
-pub(crate) fn scene_inputs(scene: &SceneArgs) -> Vec<&Path> {
-    [Some(scene.scene.as_path()), scene.environment.as_deref(), scene.lights.as_deref()].into_iter().flatten().collect()
+/// [`refuse_writing_over`] for an EXR output `out` and the tonemapped PNG written beside it.
+pub(crate) fn refuse_exr_and_png_over(out: &Path) -> Result<()> {
+    refuse_writing_over(&[out.to_path_buf(), out.with_extension("png")])
+        .with_context(|| format!("--out {} (an EXR and the PNG beside it)", out.display()))
+}
+
+/// The text of the file `path` a command is given (a sweep, a recommended.toml), admitted as
+/// an input first; Err says why it cannot be read.
+pub(crate) fn read_input(path: &Path) -> std::result::Result<String, String> {
+    relume_bake::inputs::admit(path)?;
+    std::fs::read_to_string(path).map_err(|e| format!("cannot read it ({e})"))
 }
 
 #[cfg(test)]

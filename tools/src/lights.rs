@@ -1,7 +1,7 @@
 //! `relume lights`: the lights a scene is lit by, as a lights file to edit and give back with
 //! `--lights` (the format: docs/FORMATS.md, "Lights file").
 
-use crate::args::{load_scene, refuse_writing_over, scene_inputs, SceneArgs};
+use crate::args::{load_scene, refuse_writing_over, SceneArgs};
 use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::lights_file;
@@ -18,8 +18,8 @@ pub(crate) struct LightsArgs {
 }
 
 pub(crate) fn lights_command(args: &LightsArgs) -> Result<()> {
-    refuse_writing_over(args.out.as_slice(), &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
+    refuse_writing_over(args.out.as_slice())?;
     if scene.lights.is_empty() {
         bail!("{}: has no punctual light (it is lit by emission or its environment alone); nothing to write", args.scene.scene.display());
     }

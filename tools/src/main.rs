@@ -87,6 +87,8 @@ enum Command {
 fn main() -> ExitCode {
     end_quietly_when_stdout_closes();
     remove_unfinished_outputs_when_interrupted();
+    // Every file the command reads is refused as one of its outputs.
+    let _inputs = relume_bake::inputs::track();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {

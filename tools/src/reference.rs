@@ -1,7 +1,7 @@
 //! `relume reference` (the CPU path tracer's ground truth) and `relume compare` (RMSE and
 //! NRMSE of one EXR against another, with a false-colour error image).
 
-use crate::args::{load_scene, positive, reference_settings, refuse_writing_over, scene_inputs, PathTracerArgs, SceneArgs};
+use crate::args::{load_scene, positive, reference_settings, refuse_exr_and_png_over, refuse_writing_over, PathTracerArgs, SceneArgs};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use relume_bake::bvh::SceneBvh;
@@ -70,28 +70,32 @@ pub(crate) fn write_reference(outputs: &mut Outputs, path: &Path, run: &Referenc
 }
 
 pub(crate) fn reference_command(args: &ReferenceArgs) -> Result<()> {
-    refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
+    refuse_exr_and_png_over(&args.out)?;
     let settings = reference_settings(&args.scene, &args.trace, !args.no_shadows)?;
     let run = trace_reference(&scene, &settings)?;
+    if run.images.nonfinite_samples > 0 {
+        bail!(
+            "{}: {} samples were NaN or infinite, so nothing was written (under --out too); the scene holds degenerate data: check its lights' intensities, emission and environment for huge values",
+            args.scene.scene.display(),
+            run.images.nonfinite_samples
+        );
+    }
     let mut outputs = Outputs::new();
     write_reference(&mut outputs, &args.out, &run, args.exposure)?;
     outputs.commit()?;
     println!("wrote {} and {}", args.out.display(), args.out.with_extension("png").display());
     println!("{} samples per pixel in {:.2} s, {:.0} paths/s", run.images.samples_per_pixel, run.seconds, run.images.paths_per_second);
-    if run.images.nonfinite_samples > 0 {
-        bail!("{} samples were NaN or infinite; the scene holds degenerate data", run.images.nonfinite_samples);
-    }
     Ok(())
 }
 
 pub(crate) fn compare_command(args: &CompareArgs) -> Result<()> {
-    refuse_writing_over(args.error_image.as_slice(), &[&args.image, &args.reference])?;
     let image = image::read_exr_layer(&args.image, args.layer.as_deref())?;
     let reference = match &args.reference_layer {
         Some(layer) => image::read_exr_layer(&args.reference, Some(layer))?,
         None => image::read_exr_layer(&args.reference, Some("combined")).or_else(|_| image::read_exr_layer(&args.reference, None))?,
     };
+    refuse_writing_over(args.error_image.as_slice())?;
     let stats =
         metrics::compare(&image, &reference).with_context(|| format!("{} against {}", args.image.display(), args.reference.display()))?;
     let unusable = reference.pixels.iter().filter(|p| !p.is_finite()).count();

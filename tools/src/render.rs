@@ -1,11 +1,11 @@
 //! `relume render`: one scene through the Vulkan renderer, headless, to EXR and PNG, with the
 //! techniques of the method that baked `--bake` (or none: constant ambient light).
 
-use crate::args::{load_scene, refuse_writing_over, render_settings, scene_inputs, GpuArgs, SceneArgs, FRAMES};
+use crate::args::{load_scene, refuse_exr_and_png_over, render_settings, GpuArgs, SceneArgs, FRAMES};
 use crate::gpu::{print_timings, render_on_gpu, write_render_outputs, GpuJob};
 use crate::methods;
 use crate::methods::params::{RenderParams, Stage};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use clap::Args;
 use relume_bake::artifact::Artifact;
 use relume_bake::outputs::Outputs;
@@ -33,15 +33,12 @@ pub(crate) struct RenderArgs {
 }
 
 pub(crate) fn render_command(args: &RenderArgs) -> Result<()> {
-    refuse_writing_over(&[args.out.clone(), args.out.with_extension("png")], &scene_inputs(&args.scene))?;
     let scene = load_scene(&args.scene)?;
     let frames = args.frames;
     let artifact = args.bake.as_deref().map(Artifact::read).transpose()?;
+    refuse_exr_and_png_over(&args.out)?;
     let method = match &artifact {
-        Some(artifact) => methods::find(artifact.method()).with_context(|| {
-            let manifest = args.bake.as_deref().unwrap_or(Path::new("")).join("manifest.json");
-            format!("{}: the bake names a method this relume lacks; bake it again with `relume bake`", manifest.display())
-        })?,
+        Some(artifact) => methods::of_bake(artifact, args.bake.as_deref().unwrap_or(Path::new("")))?,
         None => {
             if let Some((name, _)) = args.params.pairs.first() {
                 bail!("--{name}: a run-time parameter of {}; render a bake of it (--bake)", methods::takers(name).join(", "));

@@ -65,6 +65,11 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     };
     // A bad recommended file is refused before anything is written.
     let chosen = chosen_methods(args, &scene)?;
+    let files =
+        chosen.iter().flat_map(|(m, ..)| [format!("{}.exr", m.name()), format!("{}.png", m.name()), format!("error_{}.png", m.name())]);
+    let files: Vec<PathBuf> =
+        files.chain(["reference.exr", "reference.png", "report.md"].map(String::from)).map(|f| args.out.join(f)).collect();
+    crate::args::refuse_writing_over(&files)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
     let mut models = Vec::new();
@@ -123,14 +128,18 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
         image::write_png_rgb8(&mut outputs, &args.out.join(format!("error_{name}.png")), args.scene.width, args.scene.height, &rgb)?;
     }
     let report = report_text(args, &device, &models, renders, &rows, &reference, &bake_summary);
+    if let Some(row) = rows.iter().find(|r| r.combined.non_finite_pixels > 0) {
+        bail!(
+            "the {} image has {} NaN or infinite pixel(s), so no image or report was written; render that method alone (`relume render`) to see where",
+            row.method,
+            row.combined.non_finite_pixels
+        );
+    }
     let report_path = args.out.join("report.md");
     outputs.bytes(&report_path, report.as_bytes())?;
     outputs.commit()?;
     print!("{report}");
     println!("wrote the images, the reference and {} in {}", report_path.display(), args.out.display());
-    if let Some(row) = rows.iter().find(|r| r.combined.non_finite_pixels > 0) {
-        bail!("the {} image has {} NaN or infinite pixel(s)", row.method, row.combined.non_finite_pixels);
-    }
     Ok(())
 }
 

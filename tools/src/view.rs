@@ -2,7 +2,7 @@
 //! the bakes given into the methods the window switches between: every method that needs no
 //! bake and suits the scene, then each bake's method; the viewer itself knows no method.
 
-use crate::args::{load_scene_noting, render_settings, GpuArgs, SceneArgs};
+use crate::args::{load_scene_noting, refuse_writing_over, render_settings, GpuArgs, SceneArgs};
 use crate::methods::{self, Loaded, Method};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
@@ -10,7 +10,7 @@ use relume_bake::artifact::Artifact;
 use relume_bake::scene::Scene;
 use relume_renderer::MakeTechnique;
 use relume_viewer::{MethodSource, ViewMethod, ViewOptions};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub(crate) struct ViewArgs {
@@ -54,8 +54,7 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
     }
     for bake in &args.bake {
         let artifact = Artifact::read(bake)?;
-        let method = methods::find(artifact.method())
-            .with_context(|| format!("{}: the bake names a method this relume lacks; bake it again with `relume bake`", bake.display()))?;
+        let method = methods::of_bake(&artifact, bake)?;
         let values = methods::parse_values(method, &[], Some(methods::params::Stage::Render))?;
         let loaded = methods::load(method, Some(&artifact), &scene, &values).with_context(|| format!("--bake {}", bake.display()))?;
         methods.push(view_method(method, loaded, &scene, args)?);
@@ -63,6 +62,9 @@ pub(crate) fn view_command(args: &ViewArgs) -> Result<()> {
     if methods.is_empty() {
         bail!("{}: no method renders this scene without a bake; give one with --bake", args.scene.scene.display());
     }
+    // Script steps that would write over an input are refused before any window opens.
+    let script_outputs: Vec<PathBuf> = script.iter().flatten().filter_map(|s| s.output()).map(Path::to_path_buf).collect();
+    refuse_writing_over(&script_outputs).with_context(|| format!("{}", args.script.as_deref().unwrap_or(Path::new("")).display()))?;
     let settings = render_settings(&args.scene, &args.gpu, None, false)?;
     let options = ViewOptions {
         settings,

@@ -318,8 +318,8 @@ fn outputs_never_replace_inputs_devices_or_a_users_folder() {
     let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
     let scene_bytes = std::fs::read(&scene).unwrap();
     // The scene itself as the output, also by another spelling of its path.
-    assert_one_error(&reference_into(&scene, &scene), &["would replace the input", "scene.gltf"]);
-    assert_one_error(&reference_into(&scene, &dir.join("../").join(dir.file_name().unwrap()).join("scene.gltf")), &["would replace"]);
+    assert_one_error(&reference_into(&scene, &scene), &["is the input", "scene.gltf"]);
+    assert_one_error(&reference_into(&scene, &dir.join("../").join(dir.file_name().unwrap()).join("scene.gltf")), &["is the input"]);
     assert_eq!(std::fs::read(&scene).unwrap(), scene_bytes);
     // A device (run as root, /dev/null was replaced by a regular file).
     assert_one_error(&reference_into(&scene, Path::new("/dev/null")), &["/dev/null", "not a regular file"]);
@@ -331,7 +331,7 @@ fn outputs_never_replace_inputs_devices_or_a_users_folder() {
         let args = ["compare", image, reference, "--error-image", error_image];
         Command::new(env!("CARGO_BIN_EXE_relume")).args(args).current_dir(&dir).output().unwrap()
     };
-    assert_one_error(&compare("a.exr", "a.exr", "a.exr"), &["a.exr", "would replace the input"]);
+    assert_one_error(&compare("a.exr", "a.exr", "a.exr"), &["a.exr", "is the input"]);
     assert_eq!(std::fs::read(dir.join("a.exr")).unwrap(), a_bytes);
     // A bake into a folder holding a user's file is refused before any work.
     let mine = dir.join("bake-out");
@@ -420,12 +420,42 @@ fn every_value_that_cannot_be_read_exits_with_2() {
         vec!["methods", "foo"],
         vec!["reference", scene, "--camera", "eye=1"],
         vec!["bake", scene, "--method", "fiv", "--grid", "7x7"],
+        // Ranges the bake's own check gave and the help did not (issue 35): one source now.
+        vec!["bake", scene, "--method", "obscurance", "--discontinuity-angle", "90"],
+        vec!["bake", scene, "--method", "fiv", "--difmap-width", "9"],
     ] {
         let result = relume(&args, &dir);
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(2), "{args:?}: {stderr}");
         assert!(stderr.contains(args[args.len() - 1]), "{args:?}: {stderr}");
     }
+}
+
+/// Values past what the maths downstream keeps finite are refused where they enter: a lights
+/// file's intensity of 1e38 (exit 1, naming the file and the light), `--ambient 1e38` (a
+/// usage error); and a bake whose manifest names a method that makes no bake.
+#[test]
+fn huge_values_and_a_bakeless_method_in_a_manifest_are_refused() {
+    let dir = temp_dir("huge");
+    let scene = write_scene(&dir, GOOD, [0, 1, 2], true);
+    let scene = scene.to_str().unwrap();
+    let lights =
+        r#"{"format": "relume-lights", "version": 1, "lights": [{"type": "point", "position": [0, 1, 0], "intensity": [1e38, 1, 1]}]}"#;
+    std::fs::write(dir.join("lights.json"), lights).unwrap();
+    let result =
+        relume(&["reference", scene, "--lights", "lights.json", "--spp", "1", "--width", "8", "--height", "8", "--out", "r.exr"], &dir);
+    assert_one_error(&result, &["lights.json", "lights[0]", "exceeds 1e9"]);
+    let result = relume(&["render", scene, "--ambient", "1e38", "--out", "r.exr"], &dir);
+    assert_eq!(result.status.code(), Some(2), "{}", String::from_utf8_lossy(&result.stderr));
+    assert!(String::from_utf8_lossy(&result.stderr).contains("0..=1e9"));
+    assert!(!dir.join("r.exr").exists());
+
+    let bake = relume(&["bake", scene, "--method", "obscurance", "--rays", "1", "--out", "bk"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let manifest = std::fs::read_to_string(dir.join("bk/manifest.json")).unwrap();
+    std::fs::write(dir.join("bk/manifest.json"), manifest.replace("\"method\": \"obscurance\"", "\"method\": \"direct\"")).unwrap();
+    let result = relume(&["render", scene, "--bake", "bk", "--out", "r.exr"], &dir);
+    assert_one_error(&result, &["manifest.json", "names direct", "makes no bake"]);
 }
 
 /// The light cloud bakes a spot-lit, flat-shaded scene with what it derives named in warning

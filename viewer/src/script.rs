@@ -40,9 +40,19 @@ pub enum Step {
 /// Reads a script file; every bad line is refused with its number and what it should be.
 pub fn read(path: &Path) -> Result<Vec<Step>> {
     // A FIFO would block the read until killed, a device be read without end.
-    relume_bake::image::refuse_irregular_input(path).map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
+    relume_bake::inputs::admit(path).map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
     let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read the script", path.display()))?;
     parse(&text).with_context(|| format!("{}: not a viewer script (see `relume view --help`)", path.display()))
+}
+
+impl Step {
+    /// The file the step writes, if it writes one.
+    pub fn output(&self) -> Option<&Path> {
+        match self {
+            Step::Screenshot(path) | Step::SaveLights(path) => Some(path),
+            _ => None,
+        }
+    }
 }
 
 pub fn parse(text: &str) -> Result<Vec<Step>> {

@@ -11,7 +11,7 @@ use super::unfold::{unfold, ChartCost, Layout};
 use super::{AtlasMesh, AtlasSection, Texel, EMPTY};
 use crate::artifact::{PageLayout, Section};
 use crate::scene::{Mesh, Scene};
-use crate::settings::first_failed_check;
+use crate::settings::{first_failed_check, ValueRange};
 use glam::{UVec2, Vec2, Vec3, Vec4};
 use serde_json::Value;
 use std::collections::HashMap;
@@ -37,13 +37,20 @@ impl Default for AtlasSettings {
 }
 
 impl AtlasSettings {
+    /// Texels per metre: past a million, one metre of a scene needs more texels than a page holds.
+    pub const TEXEL_DENSITY: ValueRange = ValueRange::number(0.0, 1e6, true);
+    pub const GUTTER: ValueRange = ValueRange::count(1, 64);
+    pub const MAX_SIZE: ValueRange = ValueRange::count(16, 16384);
+    /// In degrees: at 90 a chart could fold onto its projection plane edge-on.
+    pub const DISCONTINUITY_DEGREES: ValueRange = ValueRange::between(0.0, 90.0);
+
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
-            (self.texel_density.is_finite() && self.texel_density > 0.0, "texel density must be finite and > 0 texels per metre"),
-            ((1..=64).contains(&self.gutter), "gutter must be 1..=64 texels"),
-            ((16..=16384).contains(&self.max_size), "atlas maximum size must be 16..=16384 texels"),
+            (Self::TEXEL_DENSITY.admits(self.texel_density.into()), "texel density must be in >0..=1e6 texels per metre"),
+            (Self::GUTTER.admits_count(self.gutter.into()), "gutter must be 1..=64 texels"),
+            (Self::MAX_SIZE.admits_count(self.max_size.into()), "atlas maximum size must be 16..=16384 texels"),
             (
-                self.discontinuity_angle > 0.0 && self.discontinuity_angle < std::f32::consts::FRAC_PI_2,
+                Self::DISCONTINUITY_DEGREES.admits(self.discontinuity_angle.to_degrees().into()),
                 "discontinuity angle must be in (0, 90) degrees",
             ),
         ];

@@ -129,8 +129,8 @@ impl AtlasSection {
     }
 
     /// The atlas of `artifact`, checked against `scene` (as loaded, before any atlas was
-    /// applied to it): mesh and index counts, indices and source vertices in range, finite uv1,
-    /// a possible page layout.
+    /// applied to it): mesh and index counts, indices and source vertices in range, uv1 on the
+    /// pages, a possible page layout.
     pub fn read(artifact: &Artifact, scene: &Scene) -> Result<AtlasSection, ArtifactError> {
         Self::read_for(artifact, scene, scene)
     }
@@ -154,6 +154,15 @@ impl AtlasSection {
         let layout = PageLayout { width, height, pages };
         if width == 0 || height == 0 || pages == 0 || width > 16384 || height > 16384 || layout.texel_count() > 1 << 28 {
             return Err(fail(&path, format!("impossible atlas size {width} x {height} x {pages} pages"), REBAKE));
+        }
+        // A page's u is its number plus the place on it; v is the place alone.
+        let outside = |uv: &&Vec2| !((0.0..=pages as f32).contains(&uv.x) && (0.0..=1.0).contains(&uv.y));
+        if let Some((m, uv)) = meshes.iter().enumerate().find_map(|(m, mesh)| mesh.uv1.iter().find(outside).map(|uv| (m, uv))) {
+            return Err(fail(
+                &path,
+                format!("mesh {m}: uv1 {uv} lies outside the atlas's {pages} page(s) (u in 0..={pages}, v in 0..=1)"),
+                REBAKE,
+            ));
         }
         let floats = r.f32s(layout.texel_count() * 8, "the texels")?;
         let texels = floats

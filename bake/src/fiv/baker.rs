@@ -7,7 +7,7 @@ use super::{bounding_sphere, occluder_types, EnvironmentTerms, FivBake, FivScene
 use crate::bvh::SceneBvh;
 use crate::environment::{face_point, lat_long_direction, Environment};
 use crate::scene::{Camera, Mesh, Scene};
-use crate::settings::SceneSettings;
+use crate::settings::{SceneSettings, ValueRange};
 use crate::shards::Items;
 use crate::work::{with_threads, Progress, WorkOptions};
 use glam::{Mat4, Vec3};
@@ -43,12 +43,22 @@ impl Default for FivBakeSettings {
 }
 
 impl FivBakeSettings {
+    /// In bounding radii; the farthest distance also lies beyond the nearest.
+    pub const DISTANCE_MIN: ValueRange = ValueRange::number(0.0, 1e3, true);
+    pub const DISTANCE_MAX: ValueRange = ValueRange::number(0.0, 1e4, true);
+    pub const MASK_SUPERSAMPLE: ValueRange = ValueRange::count(1, 16);
+    /// Even: the DifMap is a lat-long grid half as high as it is wide.
+    pub const DIFMAP_WIDTH: ValueRange = ValueRange::even(8, 1024);
+
     pub fn validate(&self) -> Result<(), String> {
         crate::settings::first_failed_check(&[
-            (self.distance_min.is_finite() && self.distance_min > 0.0, "distance_min must be finite and > 0 (bounding radii)"),
-            (self.distance_max.is_finite() && self.distance_max > self.distance_min, "distance_max must be finite and > distance_min"),
-            ((1..=16).contains(&self.mask_supersample), "mask_supersample must be 1..=16"),
-            ((8..=1024).contains(&self.difmap_width) && self.difmap_width.is_multiple_of(2), "difmap_width must be even, 8..=1024"),
+            (Self::DISTANCE_MIN.admits(self.distance_min.into()), "distance_min must be in >0..=1000 (bounding radii)"),
+            (
+                Self::DISTANCE_MAX.admits(self.distance_max.into()) && self.distance_max > self.distance_min,
+                "distance_max must be in >0..=10000 and > distance_min",
+            ),
+            (Self::MASK_SUPERSAMPLE.admits_count(self.mask_supersample.into()), "mask_supersample must be 1..=16"),
+            (Self::DIFMAP_WIDTH.admits_count(self.difmap_width.into()), "difmap_width must be even, 8..=1024"),
         ])
     }
 }
@@ -159,11 +169,12 @@ fn tables(
     let starts: Vec<u64> = std::iter::once(0).chain(items.chunks.iter().copied()).collect();
     let mut progress = Progress::new(items.count, "fiv tables", work.progress);
     let mut tables: Vec<OccluderTable> = shapes.iter().map(|s| s.table.clone()).collect();
+    let per_pass = samples_per_pass(environment, settings);
     let make = |chunk: usize, range: Range<u64>| {
         let start = starts[chunk];
         let shape = &shapes[chunk / 2];
         let samples = (range.start - start) as u32..(range.end - start) as u32;
-        let sums = every_sample(work, samples, &progress, |s| shape.sample(environment, settings, chunk % 2 == 1, s))?;
+        let sums = every_sample(work, samples, per_pass, &progress, |s| shape.sample(environment, settings, chunk % 2 == 1, s))?;
         Ok(sums.iter().flat_map(|(sum, valid)| sum.iter().flat_map(|v| v.to_array()).chain([*valid as u32 as f32])).collect())
     };
     let mut next = 0;
@@ -183,20 +194,29 @@ fn tables(
     Ok(tables)
 }
 
-/// Table samples a pass takes before the time limit is looked at.
-const SAMPLES_PER_PASS: u32 = 1024;
+/// Mask rays a pass casts before the time limit is looked at: 1,024 samples of a 32-texel
+/// cube face unsupersampled.
+const RAYS_PER_PASS: u64 = 1024 * 6 * 32 * 32;
+
+/// Table samples a pass takes: each casts a ray per environment texel and supersample, so a
+/// fixed count of samples (1,024) let `--mask-supersample 16` run 24 s past a 3 s limit.
+fn samples_per_pass(environment: &Environment, settings: &FivBakeSettings) -> u32 {
+    let rays = 6 * (environment.face as u64).pow(2) * (settings.mask_supersample as u64).pow(2);
+    (RAYS_PER_PASS / rays.max(1)).clamp(1, 1 << 16) as u32
+}
 
 /// `sample(s)` for every s of `samples`, in passes that the time limit stops: a table needs
 /// every sample, so a cut one is refused.
 fn every_sample(
     work: &WorkOptions,
     samples: Range<u32>,
+    per_pass: u32,
     progress: &Progress,
     sample: impl Fn(u32) -> ([Vec3; 3], bool) + Sync,
 ) -> Result<Vec<([Vec3; 3], bool)>, String> {
     let total = samples.len() as u32;
     let mut values = Vec::with_capacity(total as usize);
-    let taken = work.in_passes(total, SAMPLES_PER_PASS, |range| {
+    let taken = work.in_passes(total, per_pass, |range| {
         values.par_extend(range.into_par_iter().map(|s| {
             progress.inc(1);
             sample(samples.start + s)

@@ -142,8 +142,7 @@ pub(super) fn read_uri(ctx: Ctx, item: &str, uri: &str) -> Result<Vec<u8>, Scene
     let relative = String::from_utf8_lossy(&decoded).into_owned();
     refuse_outside(ctx, item, &relative)?;
     let file = ctx.path.parent().unwrap_or(Path::new("")).join(&relative);
-    crate::image::refuse_irregular_input(&file)
-        .map_err(|e| ctx.fail(ErrorKind::Io, item, format!("{} {e}", file.display()), "point the uri at a file"))?;
+    crate::inputs::admit(&file).map_err(|e| ctx.fail(ErrorKind::Io, item, format!("{} {e}", file.display()), "point the uri at a file"))?;
     std::fs::read(&file).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
             ctx.fail(ErrorKind::NotFound, item, format!("{} not found", file.display()), "put the file next to the .gltf, or fix the uri")

@@ -1,7 +1,7 @@
 //! KHR_lights_punctual lights in world space: point, spot (with its cone) and directional.
 
 use super::{quoted_name, ErrorKind, Loader, SceneError};
-use crate::scene::{Light, LightKind};
+use crate::scene::{Light, LightKind, MAX_LIGHT};
 use glam::{Mat4, Vec3};
 
 impl Loader<'_> {
@@ -22,6 +22,14 @@ impl Loader<'_> {
                 item,
                 format!("color {color} or intensity {intensity} is negative or not finite"),
                 "use a finite, non-negative color and intensity",
+            ));
+        }
+        if (color * intensity).max_element() > MAX_LIGHT {
+            return Err(ctx.fail(
+                ErrorKind::Invalid,
+                item,
+                format!("color {color} times intensity {intensity} exceeds {MAX_LIGHT:e}"),
+                "give a light at most 1e9 (candela, or lux for a directional light)",
             ));
         }
         let kind = match light.kind() {

@@ -8,9 +8,13 @@ use crate::scene::{Material, Phong, Texture};
 use glam::{Vec3, Vec4};
 use std::borrow::Cow;
 
+/// The largest Phong exponent: the lobe's normalisation (n + 2) / 2 pi times cos^n is then
+/// still finite (at 1e30 it was infinity times zero), and a lobe of 1e6 is a mirror already.
+const MAX_EXPONENT: f32 = 1e6;
+
 /// The material's glossy lobe, `extras.relume.phong {specular, exponent}` (specular one number
 /// or rgb), refused unless rho_d + rho_s <= 1 per channel (rho_d the base colour factor: a
-/// texture, at most 1, only lowers it) and the exponent is finite and >= 0.
+/// texture, at most 1, only lowers it) and the exponent is in 0..=1e6.
 fn phong(ctx: Ctx, item: &str, extras: &gltf::json::Extras, base: Vec3) -> Result<Option<Phong>, SceneError> {
     let Some(raw) = extras else { return Ok(None) };
     let value: serde_json::Value = serde_json::from_str(raw.get()).unwrap_or_default();
@@ -19,7 +23,7 @@ fn phong(ctx: Ctx, item: &str, extras: &gltf::json::Extras, base: Vec3) -> Resul
         return Ok(None);
     }
     let item = format!("{item} extras.relume.phong");
-    let fix = "give {\"specular\": rho_s (a number or [r, g, b]), \"exponent\": e >= 0} with base colour + specular <= 1";
+    let fix = "give {\"specular\": rho_s (a number or [r, g, b]), \"exponent\": e in 0..=1e6} with base colour + specular <= 1";
     let number = |v: &serde_json::Value| v.as_f64().map(|v| v as f32).filter(|v| v.is_finite());
     let specular = match &block["specular"] {
         serde_json::Value::Array(a) if a.len() == 3 => a.iter().map(number).collect::<Option<Vec<f32>>>().map(|v| Vec3::from_slice(&v)),
@@ -28,8 +32,10 @@ fn phong(ctx: Ctx, item: &str, extras: &gltf::json::Extras, base: Vec3) -> Resul
     let (Some(specular), Some(exponent)) = (specular, number(&block["exponent"])) else {
         return Err(ctx.fail(ErrorKind::Invalid, item, "needs a finite specular and exponent", fix));
     };
-    if specular.min_element() < 0.0 || exponent < 0.0 || (base + specular).max_element() > 1.0 {
-        let problem = format!("specular {specular} with base colour {base} and exponent {exponent} would make light or is negative");
+    if specular.min_element() < 0.0 || !(0.0..=MAX_EXPONENT).contains(&exponent) || (base + specular).max_element() > 1.0 {
+        let problem = format!(
+            "specular {specular} with base colour {base} and exponent {exponent} would make light, is negative or is an exponent past 1e6"
+        );
         return Err(ctx.fail(ErrorKind::Invalid, item, problem, fix));
     }
     Ok(Some(Phong { specular, exponent }))
@@ -61,9 +67,24 @@ impl Loader<'_> {
                 "use finite, non-negative factors",
             ));
         }
-        if gm.emissive_texture().is_some() {
-            self.warnings.push(ctx.warning(&mat_item, "emissiveTexture ignored (relume uses emissiveFactor only)"));
+        if emission.max_element() > crate::scene::MAX_LIGHT {
+            return Err(ctx.fail(
+                ErrorKind::Invalid,
+                mat_item,
+                format!("emission {emission} (emissiveFactor times KHR_materials_emissive_strength) exceeds 1e9"),
+                "give an emission of at most 1e9",
+            ));
         }
+        // The factor alone would make the texture's dark parts glow as its bright ones do.
+        let emission = match gm.emissive_texture() {
+            Some(_) if emission != Vec3::ZERO => {
+                let message =
+                    "emissiveTexture is not read, so the material's emission is left out (a scene it alone lit takes the default rig)";
+                self.warnings.push(ctx.warning(&mat_item, message));
+                Vec3::ZERO
+            }
+            _ => emission,
+        };
         let base_color_texture = match pbr.base_color_texture() {
             None => None,
             Some(info) => {

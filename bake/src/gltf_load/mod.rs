@@ -158,7 +158,7 @@ pub fn load_with_options(path: &Path, options: &LoadOptions) -> Result<Loaded, S
         outside_files: options.outside_files,
         max_texture_pixels: options.max_texture_pixels.unwrap_or(DEFAULT_MAX_TEXTURE_PIXELS),
     };
-    crate::image::refuse_irregular_input(path).map_err(|e| ctx.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
+    crate::inputs::admit(path).map_err(|e| ctx.fail(ErrorKind::Io, "", e, "give the scene's .gltf or .glb file"))?;
     let bytes = std::fs::read(path).map_err(|e| {
         let err = ctx;
         if e.kind() == std::io::ErrorKind::NotFound {

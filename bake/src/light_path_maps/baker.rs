@@ -16,7 +16,7 @@ use crate::bvh::SceneBvh;
 use crate::cpca;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::scene::{Light, Scene};
-use crate::settings::first_failed_check;
+use crate::settings::{first_failed_check, ValueRange};
 use crate::shards::Items;
 use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
@@ -54,11 +54,16 @@ impl LightPathMapSettings {
         LightPathMapSettings { entry_points, walks: 1, threshold, max_depth: 64, work: WorkOptions::default() }
     }
 
+    pub const ENTRY_POINTS: ValueRange = ValueRange::count(1, 1 << 20);
+    pub const WALKS: ValueRange = ValueRange::count(1, 1 << 16);
+    /// Metres; 0 keeps every connection.
+    pub const THRESHOLD: ValueRange = ValueRange::number(0.0, 1e6, false);
+
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
-            ((1..=1 << 20).contains(&self.entry_points), "entry points must be 1..=1048576"),
-            ((1..=1 << 16).contains(&self.walks), "walks per entry point must be 1..=65536"),
-            (self.threshold.is_finite() && self.threshold >= 0.0, "the short-connection threshold must be finite and >= 0 metres"),
+            (Self::ENTRY_POINTS.admits_count(self.entry_points.into()), "entry points must be 1..=1048576"),
+            (Self::WALKS.admits_count(self.walks.into()), "walks per entry point must be 1..=65536"),
+            (Self::THRESHOLD.admits(self.threshold.into()), "the short-connection threshold must be in 0..=1e6 metres"),
             ((1..=1024).contains(&self.max_depth), "the walk depth must be 1..=1024"),
         ];
         first_failed_check(&checks)?;

@@ -114,7 +114,10 @@ impl MrtBaker {
                     eprintln!("mrt: the dictionary made with these parameters, from {}", dir.display());
                     return Ok(kept);
                 }
-                Err(e) => eprintln!("warning: mrt: the kept dictionary does not read, so it is made again: {e}"),
+                Err(e) => {
+                    crate::inputs::release(&dir);
+                    eprintln!("warning: mrt: the kept dictionary does not read, so it is made again: {e}")
+                }
             }
         }
         work.admit("mrt", &self.estimate(scene))?;

@@ -120,7 +120,13 @@ pub fn derive(scene: &Scene, bvh: &SceneBvh) -> Result<Derived, String> {
 
 /// Cells along an axis of `extent` metres for rooms `h` high: round(extent / h), at least 1.
 fn axis_cells(extent: f64, h: f64) -> usize {
-    ((extent / h).round() as usize).max(1)
+    // A flat scene (a height of 0) has no rooms to count along an axis: one cell.
+    let n = (extent / h).round();
+    if n.is_finite() {
+        (n as usize).clamp(1, MAX_CELLS)
+    } else {
+        1
+    }
 }
 
 /// The bounds' height, or the median floor-to-ceiling height over a 16 x 16 grid of points.

@@ -226,8 +226,9 @@ fn from_grid(grid: &Value) -> Result<Proxy, String> {
     known_keys(grid, key, &["origin", "cell", "rows"])?;
     let origin = grid.get("origin").map_or(Ok(Vec3::ZERO), |v| vec3(v, &format!("{key}.origin")))?;
     let cell = grid.get("cell").map_or(Ok(Vec3::splat(2.0)), |v| vec3(v, &format!("{key}.cell")))?;
-    if !origin.is_finite() || !cell.is_finite() || cell.min_element() <= 0.0 {
-        return Err(format!("{key}: origin must be finite and cell three sizes > 0 (metres)"));
+    let within = |v: Vec3| v.is_finite() && v.abs().max_element() <= MAX_COORDINATE;
+    if !within(origin) || !within(cell) || cell.min_element() <= 0.0 {
+        return Err(format!("{key}: origin must be finite and cell three sizes > 0 (metres), each within {MAX_COORDINATE} m"));
     }
     let rows =
         grid.get("rows").and_then(Value::as_array).ok_or_else(|| format!("{key}.rows must be an array of strings of '.' and '#'"))?;

@@ -13,7 +13,7 @@ use crate::atlas::Atlas;
 use crate::bvh::SceneBvh;
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, uniform_triangle, PathSampler};
 use crate::scene::Scene;
-use crate::settings::first_failed_check;
+use crate::settings::{first_failed_check, ValueRange};
 use crate::shards::Items;
 use crate::work::{Progress, WorkOptions};
 use glam::{Vec2, Vec3};
@@ -59,11 +59,15 @@ pub struct ObscuranceSettings {
 }
 
 impl ObscuranceSettings {
+    /// Metres, as tau and L_max.
+    pub const DISTANCE: ValueRange = ValueRange::number(0.0, 1e6, true);
+    pub const RAYS_PER_TEXEL: ValueRange = ValueRange::count(1, 1 << 20);
+
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
-            (self.tau.is_finite() && self.tau > 0.0, "tau must be finite and > 0 metres"),
-            (self.l_max.is_finite() && self.l_max > 0.0, "l_max must be finite and > 0 metres"),
-            ((1..=1 << 20).contains(&self.rays_per_texel), "rays per texel must be 1..=1048576"),
+            (Self::DISTANCE.admits(self.tau.into()), "tau must be in >0..=1e6 metres"),
+            (Self::DISTANCE.admits(self.l_max.into()), "l_max must be in >0..=1e6 metres"),
+            (Self::RAYS_PER_TEXEL.admits_count(self.rays_per_texel.into()), "rays per texel must be 1..=1048576"),
         ];
         first_failed_check(&checks)?;
         self.work.validate()

@@ -81,12 +81,13 @@ pub fn section(values: &[Vec3], layout: PageLayout, summary: Value) -> Result<Se
 }
 
 /// W of `artifact`, read for `scene`, on the atlas of `layout`; refused when its size is not
-/// the atlas's or a value is not finite and >= 0.
+/// the atlas's or a value is not in 0..=1e9.
 pub fn read(artifact: &Artifact, scene: &Scene, layout: PageLayout) -> Result<Vec<Vec3>, ArtifactError> {
     let data = artifact.section(SECTION, SECTION_VERSION, Some(scene))?;
     let (image, path) = data.exr_layer(FILE, LAYER, (layout.width, layout.height * layout.pages))?;
-    if let Some(t) = image.pixels.iter().position(|w| !(w.is_finite() && w.min_element() >= 0.0)) {
-        return Err(fail(&path, format!("texel {t} holds {}, not a finite value >= 0", image.pixels[t]), REBAKE));
+    let admitted = |w: &Vec3| w.is_finite() && w.min_element() >= 0.0 && w.max_element() <= crate::scene::MAX_LIGHT;
+    if let Some(t) = image.pixels.iter().position(|w| !admitted(w)) {
+        return Err(fail(&path, format!("texel {t} holds {}, not a value in 0..=1e9", image.pixels[t]), REBAKE));
     }
     Ok(image.pixels)
 }

@@ -113,6 +113,8 @@ pub(crate) fn bench_command(args: &BenchArgs) -> Result<()> {
     let sweep = Sweep::read(&args.sweep)?;
     let configs = configs(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
     check_scenes(&sweep).with_context(|| format!("{}", args.sweep.display()))?;
+    let outputs: Vec<PathBuf> = report::FILES.iter().map(|f| args.out.join(f)).chain(args.overview.clone()).collect();
+    crate::args::refuse_writing_over(&outputs)?;
     std::fs::create_dir_all(args.out.join("images")).with_context(|| format!("{}: cannot create the report folder", args.out.display()))?;
     let outcome = run_sweep(sweep, &configs, args)?;
     let failed: Vec<&Row> = outcome.rows.iter().filter(|r| r.accuracy.is_none()).collect();

@@ -41,6 +41,8 @@ impl ReferenceCache {
                 return Ok(Reference { indirect, combined });
             }
         }
+        // A cache entry that does not read is the cache's to replace.
+        relume_bake::inputs::release(&path);
         let images = render_reference(scene, bvh, settings);
         if images.nonfinite_samples > 0 {
             anyhow::bail!(

@@ -149,6 +149,9 @@ fn summary_csv(summaries: &[Summary], fronts: &[bool]) -> String {
     std::iter::once(results::csv_line(&header)).chain(lines).collect()
 }
 
+/// The files `write_all` writes under the output folder, whatever the sweep.
+pub(crate) const FILES: [&str; 6] = ["results.csv", "results.json", "summary.csv", "methods.csv", "recommended.toml", "report.md"];
+
 /// Writes the results, summary, charts and report, all or none.
 pub(crate) fn write_all(out: &Path, outcome: &Outcome, budget: Option<Budget>, overview: Option<&Overview>) -> Result<()> {
     let mut outputs = Outputs::new();

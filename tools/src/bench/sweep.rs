@@ -2,7 +2,7 @@
 //! configurations to measure (the scene's own lights, or one light moved along a path of K
 //! frames), times methods, each with its parameter sets.
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use glam::Vec3;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -169,7 +169,7 @@ impl SweepScene {
 impl Sweep {
     /// Reads and checks `path`; scene paths become relative to the current folder.
     pub fn read(path: &Path) -> Result<Sweep> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read the sweep file", path.display()))?;
+        let text = crate::args::read_input(path).map_err(|e| anyhow::anyhow!("{}: {e}; give a sweep file", path.display()))?;
         let mut sweep: Sweep = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim()))?;
         let folder = path.parent().unwrap_or(Path::new("."));
         for scene in &mut sweep.scenes {

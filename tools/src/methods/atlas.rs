@@ -9,10 +9,10 @@ use relume_bake::atlas::stage::AtlasStage;
 use relume_bake::atlas::{AtlasSection, AtlasSettings};
 use relume_bake::scene::Scene;
 
-pub(crate) const TEXEL_DENSITY: Param = Param::number(
+pub(crate) const TEXEL_DENSITY: Param = Param::within(
     "texel-density",
     "lightmap texels per metre (001 §3's patch grid)",
-    (0.0, 1e6, true),
+    AtlasSettings::TEXEL_DENSITY,
     Default::From("the scene's texel_density"),
 );
 pub(crate) const PATCHES: Param = Param::count(
@@ -22,18 +22,17 @@ pub(crate) const PATCHES: Param = Param::count(
     1 << 28,
     Default::From("none: the texel density decides"),
 );
-pub(crate) const GUTTER: Param = Param::count("gutter", "empty texels between charts", 1, 64, Default::Value("2"));
-pub(crate) const ATLAS_MAX: Param = Param::count(
+pub(crate) const GUTTER: Param = Param::within("gutter", "empty texels between charts", AtlasSettings::GUTTER, Default::Value("2"));
+pub(crate) const ATLAS_MAX: Param = Param::within(
     "atlas-max",
     "largest atlas page side in texels; more pages when the charts do not fit one",
-    16,
-    16384,
+    AtlasSettings::MAX_SIZE,
     Default::Value("4096"),
 );
-pub(crate) const DISCONTINUITY_ANGLE: Param = Param::number(
+pub(crate) const DISCONTINUITY_ANGLE: Param = Param::within(
     "discontinuity-angle",
     "largest angle between faces of one chart, degrees (001 §3)",
-    (0.0, 180.0, true),
+    AtlasSettings::DISCONTINUITY_DEGREES,
     Default::Value("60"),
 );
 

@@ -28,18 +28,21 @@ const GRID: Param = Param::choice(
     Default::Value("64x33x30"),
 );
 const DISTANCE_MIN: Param =
-    Param::number("distance-min", "the tables' nearest distance, in bounding radii", (0.0, 1e3, true), Default::Value("0.1"));
+    Param::within("distance-min", "the tables' nearest distance, in bounding radii", FivBakeSettings::DISTANCE_MIN, Default::Value("0.1"));
 const DISTANCE_MAX: Param =
-    Param::number("distance-max", "the tables' farthest distance, in bounding radii", (0.0, 1e4, true), Default::Value("16"));
-const MASK_SUPERSAMPLE: Param = Param::count(
+    Param::within("distance-max", "the tables' farthest distance, in bounding radii", FivBakeSettings::DISTANCE_MAX, Default::Value("16"));
+const MASK_SUPERSAMPLE: Param = Param::within(
     "mask-supersample",
     "k: k x k rays per environment texel for an occluder's mask (the paper: 1)",
-    1,
-    16,
+    FivBakeSettings::MASK_SUPERSAMPLE,
     Default::Value("1"),
 );
-const DIFMAP_WIDTH: Param =
-    Param::count("difmap-width", "DifMap's width in texels (a lat-long grid of normals, half as high)", 8, 1024, Default::Value("128"));
+const DIFMAP_WIDTH: Param = Param::within(
+    "difmap-width",
+    "DifMap's width in texels (a lat-long grid of normals, half as high)",
+    FivBakeSettings::DIFMAP_WIDTH,
+    Default::Value("128"),
+);
 const PARTIAL: Param = Param::choice(
     "partial",
     "case B (an occluder across the tangent plane): scaled by (d + R) / 2R, or whole",

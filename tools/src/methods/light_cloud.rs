@@ -37,7 +37,7 @@ const DIRECTIONS: Param = Param::count(
     "directions",
     "directions of a cloud of unit directional lights over the sphere, on which a directional light (the sun) stands by angle; 0: none",
     0,
-    1024,
+    lc::MAX_DIRECTIONS as u64,
     Default::From("0; 128 when the scene has a directional light"),
 );
 const MAX_EDGE: Param = Param::number(
@@ -74,7 +74,8 @@ const FADE: Param = Param::number(
 
 const CLUSTERS: Param =
     Param::count("clusters", "clusters of vertices of the transfer's clustered PCA (004 §5)", 1, 1 << 20, Default::Value("32"));
-const VECTORS: Param = Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, 1024, Default::Value("8"));
+const VECTORS: Param =
+    Param::count("vectors", "basis vectors per cluster, D (004 §5, Fig. 8)", 0, lc::MAX_VECTORS as u64, Default::Value("8"));
 const VARIABLE_VECTORS: Param = Param::flag(
     "variable-vectors",
     "share each zone's C x D basis vectors out among its clusters by eigenvalue (Sloan et al. 2003's variable allocation): D becomes the mean",
@@ -215,9 +216,15 @@ impl Method for LightCloudMethod {
         Models::LocalLights
     }
 
-    /// Lights it takes, and a grid declared or derivable (no light inside closed geometry).
+    /// Lights it takes, and a grid declared or derivable: no light inside closed geometry, and
+    /// a cloud light left outside it (a headlight outside a closed box derives a region whose
+    /// every grid point lies inside the box: the bake refused it after `run` had baked others).
     fn suits(&self, scene: &Scene) -> bool {
-        checked(scene).is_ok_and(|s| s.declared || !has_local_lights(scene) || lc::region::reachable(scene, &SceneBvh::new(scene)).is_ok())
+        let derivable = || {
+            let bvh = SceneBvh::new(scene);
+            lc::region::reachable(scene, &bvh).is_ok_and(|r| !lc::cloud_points(&bvh, &r.grid).is_empty())
+        };
+        checked(scene).is_ok_and(|s| s.declared || !has_local_lights(scene) || derivable())
     }
 
     /// It models all indirect light: an ambient term would count it twice.
@@ -251,5 +258,33 @@ impl Method for LightCloudMethod {
             nearest_directions: values.count(&NEAREST_DIRECTIONS) as usize,
             fade_seconds: values.number(&FADE) as f32,
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use relume_bake::contract::Stages;
+    use relume_bake::testing::{closed_box, look_at, material, point_light, scene, Facing};
+    use relume_bake::work::WorkOptions;
+
+    /// A light just outside a closed box derives a region whose every grid point lies inside
+    /// the box, which the bake refuses: the method does not suit the scene, so `run` skips it
+    /// (it baked the others first, then failed). A light farther out suits.
+    #[test]
+    fn a_scene_whose_derived_cloud_lies_inside_closed_geometry_is_not_suited() {
+        let lit_from = |z: f32| {
+            let camera = look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 0.8);
+            let cube = closed_box(Vec3::splat(-1.0), Vec3::ONE, 2, Facing::Outward, 0);
+            let grey = material("grey", Vec3::splat(0.5), Vec3::ZERO);
+            scene("cube", vec![cube], vec![grey], vec![point_light(Vec3::new(0.0, 0.0, z), Vec3::ONE)], camera)
+        };
+        let hidden = lit_from(1.05);
+        assert!(!LightCloudMethod.suits(&hidden));
+        let values = Values::parse("light-cloud", &LightCloudMethod.params(), &[("samples".into(), "1".into())]).unwrap();
+        let baker = LightCloudMethod.baker(&hidden, &values).unwrap();
+        let error = baker.bake(&hidden, &WorkOptions::default(), &mut Stages::default()).err().expect("the bake refuses it");
+        assert!(error.contains("lies inside closed geometry"), "{error}");
+        assert!(LightCloudMethod.suits(&lit_from(1.01)));
     }
 }

@@ -19,21 +19,24 @@ use relume_renderer::techniques::light_path_maps::{Composition, LightPathMapsDat
 use relume_renderer::techniques::obscurance::ObscuranceData;
 use relume_renderer::MakeTechnique;
 
-const ENTRY_POINTS: Param = Param::count(
+const ENTRY_POINTS: Param = Param::within(
     "entry-points",
     "entry points wanted, E (000 §3.2.1: whole rounds of one ray per test point until E hit)",
-    1,
-    1 << 20,
+    LightPathMapSettings::ENTRY_POINTS,
     Default::Value("4096"),
 );
 const TEST_POINTS: Param =
     Param::count("test-points", "test points re-sampling the scene's light region box, M", 1, 65536, Default::From("the scene's region"));
-const WALKS: Param =
-    Param::count("walks", "random walks per entry point (more entry points beat more walks)", 1, 65536, Default::Value("1"));
-const THRESHOLD: Param = Param::number(
+const WALKS: Param = Param::within(
+    "walks",
+    "random walks per entry point (more entry points beat more walks)",
+    LightPathMapSettings::WALKS,
+    Default::Value("1"),
+);
+const THRESHOLD: Param = Param::within(
     "threshold",
     "connections shorter than this are dropped, metres (000 §3.2.2; 0 keeps every one)",
-    (0.0, 1e6, false),
+    LightPathMapSettings::THRESHOLD,
     Default::From("L_max"),
 );
 const CLUSTERS: Param =

@@ -18,7 +18,7 @@ mod mrt;
 mod obscurance;
 pub(crate) mod params;
 
-use anyhow::{Context as _, Result};
+use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
 use params::{Param, Stage, Values};
 use relume_bake::artifact::Artifact;
@@ -220,6 +220,18 @@ pub(crate) fn refuse(method: &dyn Method, scene: &Scene) -> Result<()> {
         Some(why) => anyhow::bail!("{}: {why}", scene.source.display()),
         None => Ok(()),
     }
+}
+
+/// The method whose bake `artifact` (read from `dir`) is: refused, naming its manifest, when
+/// the manifest names a method this relume lacks or one that makes no bake.
+pub(crate) fn of_bake(artifact: &Artifact, dir: &std::path::Path) -> Result<&'static dyn Method> {
+    let manifest = dir.join("manifest.json");
+    let method = find(artifact.method())
+        .with_context(|| format!("{}: the bake names a method this relume lacks; bake it again with `relume bake`", manifest.display()))?;
+    if !method.bakes() {
+        bail!("{}: the bake names {}, a method that makes no bake; bake it again with `relume bake`", manifest.display(), method.name());
+    }
+    Ok(method)
 }
 
 /// The methods that take the parameter `name`.

@@ -22,19 +22,20 @@ pub(crate) const VARIANT: Param = Param::choice(
     &["obscurance", "ao", "spectral"],
     Default::From("obscurance; spectral for light-path-maps"),
 );
-pub(crate) const TAU: Param = Param::number(
+pub(crate) const TAU: Param = Param::within(
     "tau",
     "tau of rho(L) = 1 - exp(-L / tau), metres (001 eq. 2)",
-    (0.0, 1e6, true),
+    ObscuranceSettings::DISTANCE,
     Default::From("the scene's obscurance.tau"),
 );
-pub(crate) const L_MAX: Param = Param::number(
+pub(crate) const L_MAX: Param = Param::within(
     "l-max",
     "L_max, metres: rho is 1 from here on (001 §4.4)",
-    (0.0, 1e6, true),
+    ObscuranceSettings::DISTANCE,
     Default::From("the scene's obscurance.l_max"),
 );
-pub(crate) const RAYS: Param = Param::count("rays", "rays per texel, spread over the texel's patch", 1, 1 << 20, Default::Value("256"));
+pub(crate) const RAYS: Param =
+    Param::within("rays", "rays per texel, spread over the texel's patch", ObscuranceSettings::RAYS_PER_TEXEL, Default::Value("256"));
 
 pub(crate) const PARAMS: [&Param; 4] = [&VARIANT, &TAU, &L_MAX, &RAYS];
 

@@ -4,6 +4,7 @@
 //! keys (`name = value`), and the values a method's bake and techniques read.
 
 use anyhow::{bail, Result};
+use relume_bake::settings::ValueRange;
 use std::collections::BTreeMap;
 
 /// When a parameter is read.
@@ -18,10 +19,9 @@ pub(crate) enum Stage {
 /// What values a parameter takes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Kind {
-    /// A whole number in `min..=max`.
-    Count { min: u64, max: u64 },
-    /// A finite number in `min..=max` (above `min` when `above`).
-    Number { min: f64, max: f64, above: bool },
+    /// A whole number (`ValueRange::Count`) or a finite number (`ValueRange::Number`) in the range the
+    /// bake's own check accepts.
+    Range(ValueRange),
     /// One of these words.
     Choice(&'static [&'static str]),
     /// Given or not.
@@ -52,12 +52,18 @@ pub(crate) struct Param {
 impl Param {
     /// A bake parameter (the run time's: [`Param::at_render`]) taking a whole number.
     pub const fn count(name: &'static str, help: &'static str, min: u64, max: u64, default: Default) -> Param {
-        Param { name, help, kind: Kind::Count { min, max }, default, stage: Stage::Bake }
+        Param::within(name, help, ValueRange::count(min, max), default)
     }
 
     /// A bake parameter taking a finite number in `min..=max` (above `min` when `above`).
     pub const fn number(name: &'static str, help: &'static str, (min, max, above): (f64, f64, bool), default: Default) -> Param {
-        Param { name, help, kind: Kind::Number { min, max, above }, default, stage: Stage::Bake }
+        Param::within(name, help, ValueRange::number(min, max, above), default)
+    }
+
+    /// A bake parameter taking what `range` admits: a setting's own range, which its bake
+    /// checks.
+    pub const fn within(name: &'static str, help: &'static str, range: ValueRange, default: Default) -> Param {
+        Param { name, help, kind: Kind::Range(range), default, stage: Stage::Bake }
     }
 
     /// A bake parameter taking one of `choices`.
@@ -83,11 +89,7 @@ impl Param {
     /// The range or choices, as `--help` and `relume methods` show them.
     pub fn range(&self) -> String {
         match self.kind {
-            Kind::Count { min, max } => format!("{min}..={max}"),
-            Kind::Number { min, max, above } => {
-                let upper = if max.is_finite() { format!("{max}") } else { "inf".into() };
-                format!("{}{min}..={upper}", if above { ">" } else { "" })
-            }
+            Kind::Range(range) => range.text(),
             Kind::Choice(choices) => choices.join(", "),
             Kind::Flag => "a flag".into(),
             Kind::Path => "a path".into(),
@@ -105,12 +107,12 @@ impl Param {
     fn parse(&self, text: &str) -> Result<Value> {
         let name = self.name;
         Ok(match self.kind {
-            Kind::Count { min, max } => match text.parse::<u64>() {
-                Ok(v) if (min..=max).contains(&v) => Value::Count(v),
+            Kind::Range(range @ ValueRange::Count { .. }) => match text.parse::<u64>() {
+                Ok(v) if range.admits_count(v) => Value::Count(v),
                 _ => bail!("--{name} {text}: give a whole number in {}", self.range()),
             },
-            Kind::Number { min, max, above } => match text.parse::<f64>() {
-                Ok(v) if v.is_finite() && v <= max && if above { v > min } else { v >= min } => Value::Number(v),
+            Kind::Range(range) => match text.parse::<f64>() {
+                Ok(v) if range.admits(v) => Value::Number(v),
                 _ => bail!("--{name} {text}: give a finite number in {}", self.range()),
             },
             Kind::Choice(choices) => match choices.iter().find(|c| **c == text) {
