@@ -205,19 +205,30 @@ impl Key {
     }
 }
 
+fn unwritten(e: OutputError) -> ArtifactError {
+    fail(&e.path, e.message, "check the path, free space and permissions")
+}
+
 impl BakeOutput<'_> {
     /// Writes the artifact into `dir` (created if missing). Files are first written into a
     /// hidden sibling folder, which then replaces `dir` ([`Outputs::folder`]), so `dir` never
     /// holds a half-written artifact. A non-empty `dir` that is not an artifact is never
     /// replaced.
     pub fn write(&self, dir: &Path) -> Result<(), ArtifactError> {
+        let mut outputs = Outputs::new();
+        self.stage(&mut outputs, dir)?;
+        outputs.commit().map_err(unwritten)
+    }
+
+    /// Stages the artifact for `dir` among `outputs`, to be moved in place by their commit
+    /// with the command's other outputs; returns the staging folder, which reads as the
+    /// artifact until then.
+    pub fn stage(&self, outputs: &mut Outputs, dir: &Path) -> Result<PathBuf, ArtifactError> {
         refuse_foreign_folder(dir)?;
         let manifest = self.manifest(dir)?;
-        let unwritten = |e: OutputError| fail(&e.path, e.message, "check the path, free space and permissions");
-        let mut outputs = Outputs::new();
         let staging = outputs.folder(dir).map_err(unwritten)?;
         self.write_files(&staging, &manifest)?;
-        outputs.commit().map_err(unwritten)
+        Ok(staging)
     }
 
     fn manifest(&self, dir: &Path) -> Result<Value, ArtifactError> {

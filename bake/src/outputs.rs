@@ -53,6 +53,9 @@ fn remove(path: &Path) {
 pub struct Outputs {
     /// (temporary, final path), in staging order.
     staged: Vec<(PathBuf, PathBuf)>,
+    /// Folders made to hold a staged folder, innermost first: removed, when left empty, with
+    /// the temporaries of outputs that were never committed.
+    made: Vec<PathBuf>,
 }
 
 impl Outputs {
@@ -103,7 +106,10 @@ impl Outputs {
         crate::inputs::refuse_output_folder(path).map_err(|why| fail(path, format!("{why}; write it elsewhere")))?;
         let temporary = self.stage(path)?;
         if let Some(parent) = temporary.parent() {
+            let missing = parent.ancestors().take_while(|a| !a.as_os_str().is_empty() && !a.exists()).map(Path::to_path_buf);
+            let missing: Vec<PathBuf> = missing.collect();
             std::fs::create_dir_all(parent).map_err(|e| fail(parent, format!("cannot create the folder ({e})")))?;
+            self.made.extend(missing);
         }
         {
             let mut held = unfinished();
@@ -129,6 +135,7 @@ impl Outputs {
     pub fn commit(mut self) -> Result<(), OutputError> {
         let mut held = unfinished();
         let staged = std::mem::take(&mut self.staged);
+        self.made.clear();
         let failed = staged.iter().enumerate().find_map(|(k, (temporary, path))| move_in_place(temporary, path).err().map(|e| (k, e)));
         held.retain(|p| !staged.iter().any(|(temporary, _)| temporary == p));
         let Some((k, mut error)) = failed else { return Ok(()) };
@@ -150,6 +157,9 @@ impl Drop for Outputs {
         for (temporary, _) in &self.staged {
             remove(temporary);
             held.retain(|p| p != temporary);
+        }
+        for folder in &self.made {
+            let _ = std::fs::remove_dir(folder);
         }
     }
 }
@@ -284,6 +294,11 @@ mod tests {
         outputs.commit().unwrap();
         assert_eq!(entries(&out), ["new.bin"]);
         assert_eq!(entries(&dir), ["bake"], "no temporary or set-aside folder is left");
+        // A folder staged inside folders that did not exist, never committed: none is left.
+        let mut outputs = Outputs::new();
+        outputs.folder(&dir.join("run/bake/obscurance")).unwrap();
+        drop(outputs);
+        assert_eq!(entries(&dir), ["bake"], "the folders made to hold it are left");
     }
 
     #[test]

@@ -10,6 +10,7 @@ use clap::Args;
 use relume_bake::artifact::BakeOutput;
 use relume_bake::contract::Stages;
 use relume_bake::gltf_load::{LoadOptions, DEFAULT_MAX_TEXTURE_PIXELS};
+use relume_bake::outputs::Outputs;
 use relume_bake::scene::Scene;
 use relume_bake::work::{with_threads, WorkOptions};
 use serde_json::json;
@@ -183,6 +184,23 @@ pub(crate) fn bake_scene(
     work: WorkOptions,
     out: &Path,
 ) -> Result<String> {
+    let mut outputs = Outputs::new();
+    let (summary, _) = stage_bake(scene, method, values, work, out, &mut outputs)?;
+    outputs.commit()?;
+    Ok(summary)
+}
+
+/// As [`bake_scene`], the artifact staged among `outputs` (moved in place by their commit,
+/// with the command's other outputs); returns the summary and the staging folder, which reads
+/// as the artifact until then.
+pub(crate) fn stage_bake(
+    scene: &Scene,
+    method: &dyn Method,
+    values: &methods::params::Values,
+    work: WorkOptions,
+    out: &Path,
+    outputs: &mut Outputs,
+) -> Result<(String, PathBuf)> {
     // Refused before the work, not after it (the write checks again).
     relume_bake::artifact::refuse_foreign_folder(out)?;
     methods::refuse(method, scene)?;
@@ -204,8 +222,8 @@ pub(crate) fn bake_scene(
     // The two backends give equivalent bakes, not the same bytes.
     parameters["ray_backend"] = json!(work.ray_backend.name());
     let output = BakeOutput { method: method.name(), scene: Some(scene), parameters, sections: bake.sections, stats };
-    output.write(out)?;
-    Ok(format!("{}{}wrote {}\n", bake.summary, stages.summary(), out.display()))
+    let staging = output.stage(outputs, out)?;
+    Ok((format!("{}{}wrote {}\n", bake.summary, stages.summary(), out.display()), staging))
 }
 
 /// A bake's error naming the scene, once (an atlas's error names it already).

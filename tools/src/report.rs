@@ -4,7 +4,7 @@
 //! alone); the images and `report.md` written into one folder.
 
 use crate::args::{load_scene, reference_settings, render_settings, GpuArgs, PathTracerArgs, SceneArgs, FRAMES};
-use crate::bake::bake_scene;
+use crate::bake::stage_bake;
 use crate::bench::config::{self, FrameParams};
 use crate::gpu::{median_timings, render_on_gpu, write_render_outputs, GpuJob, GpuRender};
 use crate::methods::params::Values;
@@ -72,6 +72,8 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     crate::args::refuse_writing_over(&files)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the folder", args.out.display()))?;
 
+    // The bakes, images, reference and report move in together, or none does.
+    let mut outputs = Outputs::new();
     let mut models = Vec::new();
     let mut bake_summary = String::new();
     for (method, values, frame) in chosen {
@@ -79,10 +81,10 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
             true => {
                 println!("baking {} of {}", method.name(), args.scene.scene.display());
                 let dir = args.out.join("bake").join(method.name());
-                let summary = bake_scene(&scene, method, &values, work, &dir)?;
+                let (summary, staging) = stage_bake(&scene, method, &values, work, &dir, &mut outputs)?;
                 print!("{summary}");
                 let _ = write!(bake_summary, "{}:\n{summary}", method.name());
-                Some(Artifact::read(&dir)?)
+                Some(Artifact::read(&staging)?)
             }
             false => None,
         };
@@ -109,7 +111,6 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
     jobs.extend(models.iter().map(|m| GpuJob { loaded: m.loaded.as_ref(), settings: m.settings.clone(), frames }));
     let (renders, device) = render_on_gpu(&jobs, &args.gpu)?;
     let (direct, renders) = renders.split_first().expect("the direct-only job");
-    let mut outputs = Outputs::new();
     for (name, render) in names.iter().zip(renders) {
         write_render_outputs(&mut outputs, &args.out.join(format!("{name}.exr")), render)?;
     }

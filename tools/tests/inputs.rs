@@ -43,14 +43,15 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     files
 }
 
-/// `args` run in `dir` is refused with exit code 1 and one error line holding each of `words`,
+/// `args` run in `dir` is refused with exit code 1 and one `error:` line holding each of `words`,
 /// and every file under `dir` is as it was (none added, none changed, no temporary left).
 fn assert_refused_unchanged(dir: &Path, args: &[&str], words: &[&str]) {
     let before = snapshot(dir);
     let result = relume(args, dir);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
-    let lines: Vec<_> = stderr.lines().filter(|l| !l.trim().is_empty() && !l.starts_with("warning:")).collect();
+    // Progress and estimates aside (run prints its bakes'), one error line.
+    let lines: Vec<_> = stderr.lines().filter(|l| l.starts_with("error")).collect();
     assert_eq!(lines.len(), 1, "{args:?}: one error line expected, got:\n{stderr}");
     for word in words {
         assert!(lines[0].contains(word), "{args:?}: \"{word}\" missing from: {stderr}");
@@ -190,4 +191,16 @@ fn a_failed_reference_leaves_the_earlier_outputs_as_they_were() {
     std::fs::write(dir.join("huge.gltf"), huge.to_string()).unwrap();
     let args = [&["reference", "huge.gltf", "--out", "r.exr"][..], &trace].concat();
     assert_refused_unchanged(&dir, &args, &["huge.gltf", "light 0", "exceeds 1e9", "at most 1e9"]);
+}
+
+/// `run` moves its bakes in with its images and report, or nothing: an output it cannot write
+/// at the end (the reference's PNG path is a folder) leaves no bake folder behind.
+#[test]
+fn a_failed_run_leaves_no_bake_behind() {
+    let dir = temp_dir("failed-run");
+    textured_scene(&dir);
+    std::fs::create_dir_all(dir.join("d/reference.png")).unwrap();
+    let run = ["run", "scene.gltf", "--out", "d", "--spp", "1", "--rays", "1", "--frames", "1", "--width", "8", "--height", "8"];
+    assert_refused_unchanged(&dir, &run, &["reference.png", "not a regular file"]);
+    assert!(!dir.join("d/bake").exists(), "a bake folder was moved in");
 }
