@@ -205,6 +205,12 @@ impl Key {
     }
 }
 
+/// Whether a number read from a bake is one a bake makes: finite and within 1e9 either side
+/// (`scene::MAX_LIGHT`; a light map's 3e38, finite, made a render's pixels infinite).
+pub fn stored(v: f32) -> bool {
+    v.is_finite() && v.abs() <= crate::scene::MAX_LIGHT
+}
+
 fn unwritten(e: OutputError) -> ArtifactError {
     fail(&e.path, e.message, "check the path, free space and permissions")
 }

@@ -302,6 +302,11 @@ fn sections_round_trip_and_values_out_of_range_are_refused() {
     nan.tables[0].fiv[5][1].z = f32::NAN;
     let error = read(&nan).unwrap_err();
     assert!(error.contains("fiv_occluder_0.bin") && error.contains("not a finite number"), "{error}");
+    // Finite, but past what a bake makes: 3e38 made a render's pixels infinite.
+    let mut huge = fiv.clone();
+    huge.tables[0].fiv[5][1].z = 3e38;
+    let error = read(&huge).unwrap_err();
+    assert!(error.contains("fiv_occluder_0.bin") && error.contains("within 1e9"), "{error}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -423,6 +423,10 @@ fn every_value_that_cannot_be_read_exits_with_2() {
         // Ranges the bake's own check gave and the help did not (issue 35): one source now.
         vec!["bake", scene, "--method", "obscurance", "--discontinuity-angle", "90"],
         vec!["bake", scene, "--method", "fiv", "--difmap-width", "9"],
+        // More seconds than a clock counts panicked (exit 101) converting to a Duration.
+        vec!["bake", scene, "--method", "obscurance", "--time-limit", "1e20"],
+        vec!["reference", scene, "--time-limit", "1e20"],
+        vec!["run", scene, "--time-limit", "1e20"],
     ] {
         let result = relume(&args, &dir);
         let stderr = String::from_utf8_lossy(&result.stderr);

@@ -224,8 +224,8 @@ fn validity_words(valid: &[bool]) -> Vec<u32> {
 
 fn finite_vectors(reader: &mut Reader, count: usize, what: &str) -> Result<Vec<Vec3>, ArtifactError> {
     let values = reader.f32s(count.saturating_mul(3), what)?;
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(fail(reader.path(), format!("{what} holds {} at value {i}, not a finite number", values[i]), REBAKE));
+    if let Some(i) = values.iter().position(|v| !crate::artifact::stored(*v)) {
+        return Err(fail(reader.path(), format!("{what} holds {} at value {i}, not a finite number within 1e9", values[i]), REBAKE));
     }
     Ok(values.chunks_exact(3).map(Vec3::from_slice).collect())
 }

@@ -80,10 +80,10 @@ impl ClusteredTransfer {
             ));
         }
         let finite = self.entry_points.iter().all(|e| e.position.is_finite() && e.normal.is_finite())
-            && self.weights.iter().all(|w| w.is_finite())
-            && self.textures.iter().all(|t| t.is_finite());
+            && self.weights.iter().all(|w| crate::artifact::stored(*w))
+            && self.textures.iter().all(|t| t.to_array().into_iter().all(crate::artifact::stored));
         if !finite {
-            return Err("an entry point, weight or texture value is not finite".into());
+            return Err("an entry point, weight or texture value is not finite (or past 1e9)".into());
         }
         if !(self.light_area.is_finite() && self.light_area >= 0.0) {
             return Err(format!("light area {} must be finite and >= 0 square metres", self.light_area));

@@ -177,7 +177,7 @@ fn from_parameters(p: &[u64; 15]) -> Result<(BlockSettings, InterfaceSettings), 
 }
 
 fn finite(values: &[f32]) -> bool {
-    values.iter().all(|v| v.is_finite())
+    values.iter().all(|v| crate::artifact::stored(*v))
 }
 
 fn read_blocks(r: &mut Reader, wanted: &BlockSettings) -> Result<Vec<BlockData>, ArtifactError> {
@@ -201,7 +201,7 @@ fn read_blocks(r: &mut Reader, wanted: &BlockSettings) -> Result<Vec<BlockData>,
         let (u_b, t_d_b, l_imp) = (r.f32s(size, "U_b")?, r.f32s(size, "T_d->b")?, r.f32s(size, "L_imp")?);
         let u_bvol = r.f32s(volume::ROWS * modes, "U_bvol")?;
         if ![&u_b, &t_d_b, &l_imp, &u_bvol].iter().all(|m| finite(m)) {
-            return Err(fail(&path, "an operator holds a value that is not finite", REBAKE));
+            return Err(fail(&path, "an operator holds a value that is not finite (or past 1e9)", REBAKE));
         }
         blocks.push(BlockData { shape, samples, modes, u_b, t_d_b, l_imp, u_bvol });
     }
@@ -237,7 +237,7 @@ fn read_interfaces(
     let u_rvol = volume::SIDES.iter().map(|_| r.f32s(volume::ROWS * k_r, "U_rvol")).collect::<Result<Vec<_>, _>>()?;
     let all = from_blocks.iter().map(|f| &f.2).chain(&turns).chain([&u_r, &t_rlf_r]).chain(&u_rvol);
     if !all.into_iter().all(|m| finite(m)) {
-        return Err(fail(&path, "an interface operator holds a value that is not finite", REBAKE));
+        return Err(fail(&path, "an interface operator holds a value that is not finite (or past 1e9)", REBAKE));
     }
     Ok(InterfaceData { lightfield_modes: k_rlf, response_modes: k_r, from_blocks, turns, u_r, t_rlf_r, u_rvol })
 }

@@ -293,8 +293,8 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
             let source = r.u32("a source block")? as usize;
             let shape = blocks.get(source).ok_or_else(|| bad(format!("receiver {i} names source block {source} of {block_count}")))?.shape;
             let matrix = r.f32s(interfaces.response_modes * dictionary.blocks[shape as usize].modes, "a source's transfer")?;
-            if matrix.iter().any(|v| !v.is_finite()) {
-                return Err(bad(format!("receiver {i}'s transfer holds a value that is not finite")));
+            if matrix.iter().any(|v| !crate::artifact::stored(*v)) {
+                return Err(bad(format!("receiver {i}'s transfer holds a value that is not finite (or past 1e9)")));
             }
             from.push((source as u32, matrix));
         }
@@ -322,8 +322,8 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
             albedo: Vec3::from_slice(&f[6..9]),
             texel,
         };
-        if !f.iter().all(|v| v.is_finite()) || texel as usize >= layout.texel_count() {
-            return Err(bad(format!("sample {s} is not finite or names a texel past the light map's {}", layout.texel_count())));
+        if !f.iter().all(|v| crate::artifact::stored(*v)) || texel as usize >= layout.texel_count() {
+            return Err(bad(format!("sample {s} is not finite (or past 1e9) or names a texel past the light map's {}", layout.texel_count())));
         }
         samples.push(sample);
     }
@@ -336,8 +336,8 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
         return Err(bad(format!("{block_count} blocks of {} modes: a feedback past {MAX_FEEDBACK} coefficients", k_max(dictionary))));
     }
     let feedback = r.f32s(3 * d * d, "the feedback")?;
-    if feedback.iter().any(|v| !v.is_finite()) {
-        return Err(bad("the feedback holds a value that is not finite".into()));
+    if feedback.iter().any(|v| !crate::artifact::stored(*v)) {
+        return Err(bad("the feedback holds a value that is not finite (or past 1e9)".into()));
     }
     let mut corners = Vec::with_capacity(block_count.min(1 << 16));
     for b in 0..block_count {
