@@ -133,33 +133,22 @@ fn decoded_values_out_of_range_are_refused() {
         ("names triangle 4000000000", |t| t.triangle = 4_000_000_000),
         ("unit normal", |t| t.normal *= 3.0),
     ];
+    let refused_atlas = |section: AtlasSection| {
+        let sections = vec![section.section(json!({}))];
+        BakeOutput { method: "obscurance", scene: Some(&scene), parameters: json!({}), sections, stats: json!({}) }.write(&dir).unwrap();
+        refusal(&dir, &scene)
+    };
     for (words, spoil) in texel_errors {
         let mut section = atlas.to_section();
         spoil(&mut section.texels[covered]);
-        let output = BakeOutput {
-            method: "obscurance",
-            scene: Some(&scene),
-            parameters: json!({}),
-            sections: vec![section.section(json!({}))],
-            stats: json!({}),
-        };
-        output.write(&dir).unwrap();
-        let error = refusal(&dir, &scene);
+        let error = refused_atlas(section);
         assert!(error.contains("atlas.bin") && error.contains(&format!("texel {covered}")) && error.contains(words), "{error}");
     }
     // A v of 1e6 (u was always checked) and a u past the pages.
     for (uv, words) in [(glam::Vec2::new(0.5, 1e6), "1000000"), (glam::Vec2::new(3.5, 0.5), "3.5")] {
         let mut section = atlas.to_section();
         section.meshes[0].uv1[0] = uv;
-        let output = BakeOutput {
-            method: "obscurance",
-            scene: Some(&scene),
-            parameters: json!({}),
-            sections: vec![section.section(json!({}))],
-            stats: json!({}),
-        };
-        output.write(&dir).unwrap();
-        let error = refusal(&dir, &scene);
+        let error = refused_atlas(section);
         assert!(
             error.contains("atlas.bin") && error.contains("mesh 0: uv1") && error.contains(words) && error.contains("outside the atlas"),
             "{error}"

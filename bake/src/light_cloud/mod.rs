@@ -344,7 +344,9 @@ impl LightCloud {
         // Basis vectors and spherical harmonics (of exitance or emission) take both signs;
         // irradiance does not.
         let negative_allowed = self.basis() > 0 || self.coefficients > 1 || self.emission > 1;
-        if let Some(i) = self.terms.iter().chain(&self.coords).position(|t| !(crate::artifact::stored(*t) && (negative_allowed || *t >= 0.0))) {
+        if let Some(i) =
+            self.terms.iter().chain(&self.coords).position(|t| !(crate::artifact::stored(*t) && (negative_allowed || *t >= 0.0)))
+        {
             return Err(format!(
                 "transfer value {i} is {} (must be finite, within 1e9, and >= 0 uncompressed)",
                 self.terms.iter().chain(&self.coords).nth(i).unwrap()

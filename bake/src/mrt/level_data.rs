@@ -323,7 +323,10 @@ pub fn read(artifact: &Artifact, scene: &Scene, dictionary: &Dictionary, checksu
             texel,
         };
         if !f.iter().all(|v| crate::artifact::stored(*v)) || texel as usize >= layout.texel_count() {
-            return Err(bad(format!("sample {s} is not finite (or past 1e9) or names a texel past the light map's {}", layout.texel_count())));
+            return Err(bad(format!(
+                "sample {s} is not finite (or past 1e9) or names a texel past the light map's {}",
+                layout.texel_count()
+            )));
         }
         samples.push(sample);
     }
