@@ -49,19 +49,25 @@ fn light(entry: &Value, k: usize) -> Result<Light, String> {
     if intensity.min_element() < 0.0 || intensity.max_element() > crate::scene::MAX_LIGHT {
         return Err(format!("intensity {intensity} is negative or exceeds 1e9 (candela, or lux for a directional light)"));
     }
+    let position = || {
+        let p = vector("position")?;
+        (p.abs().max_element() <= crate::scene::MAX_COORDINATE)
+            .then_some(p)
+            .ok_or_else(|| format!("\"position\" {p} lies past 1e7 m from the origin"))
+    };
     let direction = || {
         let d = vector("direction")?;
         (d.length() > 1e-6).then(|| d.normalize()).ok_or_else(|| "\"direction\" must not be zero".to_string())
     };
     let (kind, position, direction) = match entry["type"].as_str() {
-        Some("point") => (LightKind::Point, vector("position")?, Vec3::NEG_Z),
+        Some("point") => (LightKind::Point, position()?, Vec3::NEG_Z),
         Some("spot") => {
             let degrees = |key: &str| entry[key].as_f64().map(|d| (d as f32).to_radians()).ok_or_else(|| format!("\"{key}\" is missing"));
             let (inner_cone, outer_cone) = (degrees("inner_cone_degrees")?, degrees("outer_cone_degrees")?);
             if !(0.0 <= inner_cone && inner_cone < outer_cone && outer_cone <= std::f32::consts::FRAC_PI_2) {
                 return Err("cones must satisfy 0 <= inner_cone_degrees < outer_cone_degrees <= 90".into());
             }
-            (LightKind::Spot { inner_cone, outer_cone }, vector("position")?, direction()?)
+            (LightKind::Spot { inner_cone, outer_cone }, position()?, direction()?)
         }
         Some("directional") => (LightKind::Directional, Vec3::ZERO, direction()?),
         _ => return Err("\"type\" must be \"point\", \"spot\" or \"directional\"".into()),

@@ -12,6 +12,11 @@
 /// tables into NaN; the brightest real lights (the sun, about 1e5 lux) are far below it.
 pub const MAX_LIGHT: f32 = 1e9;
 
+/// The farthest a vertex or a light may lie from the origin, metres: a city of ten kilometres
+/// in millimetres; past it f32 keeps no centimetre, and at 1e30 the BVH's and the camera's
+/// sums overflow.
+pub const MAX_COORDINATE: f32 = 1e7;
+
 use crate::environment::Environment;
 use crate::settings::SceneSettings;
 use glam::{Mat4, Vec2, Vec3, Vec4};

@@ -833,3 +833,21 @@ fn an_emissive_texture_leaves_the_emission_out_with_a_warning() {
     assert!(loaded.warnings.iter().any(|w| w.contains("emissiveTexture is not read")), "{:?}", loaded.warnings);
     assert!(loaded.scene.materials.iter().all(|m| m.emission == Vec3::ZERO));
 }
+
+/// A vertex or a light past 1e7 m from the origin (a node scaled by 1e30 gave finite but
+/// useless coordinates) is refused by item, as is a lights file's light and a camera there.
+#[test]
+fn coordinates_past_ten_thousand_kilometres_are_refused() {
+    let dir = temp_dir("far");
+    let (mut json, bin) = read_scene("cornell");
+    json["nodes"][0]["scale"] = json!([1e30, 1.0, 1.0]);
+    let line = load_err(&write_scene(&dir, "scaled", &json, Some(&bin))).to_string();
+    assert!(line.contains("past 1e7 m"), "{line}");
+    let (mut json, bin) = read_scene("cornell");
+    let light_node = json["nodes"].as_array().unwrap().iter().position(|n| n["extensions"]["KHR_lights_punctual"].is_object()).unwrap();
+    json["nodes"][light_node]["translation"] = json!([0.0, 1e30, 0.0]);
+    let line = load_err(&write_scene(&dir, "light", &json, Some(&bin))).to_string();
+    assert!(line.contains("light") && line.contains("past 1e7 m"), "{line}");
+    let error = CameraOverride::parse("eye=0,0,1e30;target=0,0,0").unwrap_err().to_string();
+    assert!(error.contains("within 1e7 m"), "{error}");
+}

@@ -65,13 +65,19 @@ fn a_lights_file_reads_back_as_written_and_bad_lights_are_refused_by_item() {
 
     let good: Value = serde_json::from_str(&lights_file::to_json(&rig())).unwrap();
     type Spoil = fn(&mut Value);
-    let spoiled: [(&str, Spoil); 6] = [
+    let spoiled: [(&str, Spoil); 8] = [
         ("lights[0]: intensity", |f| f["lights"][0]["intensity"] = json!([1, -1, 1])),
         ("lights[1]: cones", |f| f["lights"][1]["outer_cone_degrees"] = json!(120)),
         ("lights[2]: \"direction\" must not be zero", |f| f["lights"][2]["direction"] = json!([0, 0, 0])),
         ("lights[0]: \"position\" must be three finite numbers", |f| f["lights"][0]["position"] = json!([0, "up", 1])),
         ("lights[1]: \"type\"", |f| f["lights"][1]["type"] = json!("area")),
         ("lights: is empty", |f| f["lights"] = json!([])),
+        ("lights[0]: \"position\" [0, 1000000000000000000000000000000, 0] lies past 1e7 m", |f| {
+            f["lights"][0]["position"] = json!([0, 1e30, 0])
+        }),
+        ("lights[0]: intensity [100000000000000000000000000000000000000, 1, 1] is negative or exceeds 1e9", |f| {
+            f["lights"][0]["intensity"] = json!([1e38, 1, 1])
+        }),
     ];
     for (words, spoil) in spoiled {
         let mut file = good.clone();

@@ -39,8 +39,9 @@ impl CameraOverride {
             ),
             problem,
         };
-        if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
-            return Err(fail("eye, target and up must be finite numbers".into()));
+        let within = |p: Vec3| p.is_finite() && p.abs().max_element() <= crate::scene::MAX_COORDINATE;
+        if !(within(eye) && within(target) && up.is_finite()) {
+            return Err(fail("eye, target and up must be finite numbers, eye and target within 1e7 m of the origin".into()));
         }
         let forward = target - eye;
         if forward.length() <= 1e-6 * eye.length().max(1.0) {

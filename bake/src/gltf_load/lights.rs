@@ -1,7 +1,7 @@
 //! KHR_lights_punctual lights in world space: point, spot (with its cone) and directional.
 
 use super::{quoted_name, ErrorKind, Loader, SceneError};
-use crate::scene::{Light, LightKind, MAX_LIGHT};
+use crate::scene::{Light, LightKind, MAX_COORDINATE, MAX_LIGHT};
 use glam::{Mat4, Vec3};
 
 impl Loader<'_> {
@@ -64,6 +64,15 @@ impl Loader<'_> {
                 ));
             }
         }
+        let position = world.w_axis.truncate();
+        if !(position.is_finite() && position.abs().max_element() <= MAX_COORDINATE) {
+            return Err(ctx.fail(
+                ErrorKind::Invalid,
+                item,
+                format!("stands at {position}, past 1e7 m from the origin"),
+                "fix the light's node transform",
+            ));
+        }
         let direction = (-world.z_axis.truncate()).normalize_or_zero();
         if direction == Vec3::ZERO && kind != LightKind::Point {
             return Err(ctx.fail(
@@ -79,7 +88,7 @@ impl Loader<'_> {
             kind,
             intensity: color * intensity,
             range,
-            position: world.w_axis.truncate(),
+            position,
             direction: if direction == Vec3::ZERO { Vec3::NEG_Z } else { direction },
         })
     }

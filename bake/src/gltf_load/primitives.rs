@@ -98,6 +98,14 @@ impl Loader<'_> {
                 "fix the node transform's scale or the POSITION data's magnitude",
             ));
         }
+        if let Some(v) = world_positions.iter().position(|p| p.abs().max_element() > crate::scene::MAX_COORDINATE) {
+            return Err(ctx.fail(
+                ErrorKind::Invalid,
+                item,
+                format!("vertex {v} lies at {} after the node transform, past 1e7 m from the origin", world_positions[v]),
+                "fix the node transform's scale or the POSITION data's magnitude (or move the model nearer the origin)",
+            ));
+        }
         let linear = Mat3::from_mat4(world);
         let det = linear.determinant();
         let cofactor =
