@@ -103,24 +103,50 @@ pub struct Estimate {
     pub value: u64,
     /// The units grow as the lever's value to this power.
     pub power: f64,
+    /// Bytes per the lever's value squared, beside the units: a Gram matrix of the lever's
+    /// items (light path maps' entry points); 0 for most.
+    pub squared: u64,
 }
 
 impl Estimate {
     pub fn bytes(&self) -> u64 {
-        self.fixed.saturating_add(self.count.saturating_mul(self.bytes_per_unit))
+        let squared = self.squared.saturating_mul(self.value.saturating_mul(self.value));
+        self.fixed.saturating_add(self.count.saturating_mul(self.bytes_per_unit)).saturating_add(squared)
     }
 
-    /// The largest value of the lever whose estimate is within `limit` (0: none is).
+    /// The estimate at the lever's value `v`: the units scaled by (v / value)^power.
+    fn at(&self, v: u64) -> f64 {
+        let units = self.count as f64 * (v as f64 / self.value.max(1) as f64).powf(self.power);
+        self.fixed as f64 + units * self.bytes_per_unit as f64 + self.squared as f64 * (v as f64).powi(2)
+    }
+
+    /// The largest value of the lever up to its own whose estimate is within `limit` (0: none
+    /// is), by bisection: the estimate grows with the lever.
     pub fn fitting(&self, limit: u64) -> u64 {
-        let room = limit.saturating_sub(self.fixed) as f64;
-        let growing = (self.count as f64 * self.bytes_per_unit as f64).max(1.0);
-        (self.value as f64 * (room / growing).powf(1.0 / self.power)).floor().min(u64::MAX as f64) as u64
+        let within = |v: u64| self.at(v) <= limit as f64;
+        let (mut lo, mut hi) = (0, self.value.max(1));
+        if within(hi) {
+            return hi;
+        }
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            match within(mid) {
+                true => lo = mid,
+                false => hi = mid,
+            }
+        }
+        lo
     }
 
-    /// "N MiB (fixed F MiB + count unit x B bytes)".
+    /// "N MiB (F MiB fixed + count unit x B bytes)", and "+ value^2 x S bytes" where the lever
+    /// adds a square.
     pub fn describe(&self) -> String {
+        let squared = match self.squared {
+            0 => String::new(),
+            s => format!(" + {}^2 {} x {s} bytes", self.value, self.lever.trim_start_matches("--")),
+        };
         format!(
-            "{:.0} MiB ({:.0} MiB fixed + {} {} x {} bytes)",
+            "{:.0} MiB ({:.0} MiB fixed + {} {} x {} bytes{squared})",
             mib(self.bytes()),
             mib(self.fixed),
             self.count,
@@ -151,12 +177,21 @@ mod tests {
     use super::*;
 
     /// The lever's value a refusal names fits the limit, and one more does not, whether the
-    /// units grow with it or with its fourth power.
+    /// units grow with it or with its fourth power, and with a square of it beside them (light
+    /// path maps' Gram matrix, which once made "even --entry-points 1 would not fit").
     #[test]
     fn the_fitting_value_fits_and_one_more_does_not() {
-        for (power, value) in [(1.0, 4096u64), (4.0, 8)] {
-            let estimate =
-                Estimate { fixed: 100 << 20, count: 1 << 30, bytes_per_unit: 12, unit: "units".into(), lever: "--lever", value, power };
+        for (power, value, squared) in [(1.0, 4096u64, 0), (4.0, 8, 0), (1.0, 1 << 20, 16)] {
+            let estimate = Estimate {
+                fixed: 100 << 20,
+                count: 1 << 30,
+                bytes_per_unit: 12,
+                unit: "units".into(),
+                lever: "--lever",
+                value,
+                power,
+                squared,
+            };
             let limit = estimate.bytes() / 3;
             let fits = estimate.fitting(limit);
             let at = |v: u64| {

@@ -27,6 +27,7 @@ impl FivBaker {
             lever: "table samples per occluder type (--grid)",
             value: samples,
             power: 1.0,
+            squared: 0,
         }
     }
 }

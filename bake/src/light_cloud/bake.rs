@@ -107,6 +107,7 @@ impl LightCloudBaker {
             lever: "cloud lights (the grid's counts, extras.relume.light_cloud.grid, and --directions), or more --zones",
             value: lights as u64,
             power: 1.0,
+            squared: 0,
         }
     }
 

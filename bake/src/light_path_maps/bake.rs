@@ -70,15 +70,16 @@ impl LightPathMapsBaker {
     /// the atlas's `texels`.
     pub fn estimate(&self, fixed: &Estimate, texels: usize, covered: usize, entries: usize, textures: usize) -> Estimate {
         let stored = (textures * texels) as u64 * BYTES_PER_TEXTURE_TEXEL;
-        let gram = 2 * 8 * (entries as u64).pow(2);
         Estimate {
-            fixed: fixed.bytes() + stored + gram,
+            fixed: fixed.bytes() + stored,
             count: covered as u64 * entries as u64,
             bytes_per_unit: bytes_per_transfer(self.compression),
             unit: "covered texels x entry points".into(),
             lever: "--entry-points",
             value: entries as u64,
             power: 1.0,
+            // The transfers' Gram matrix, two f64 per pair of entry points.
+            squared: 2 * 8,
         }
     }
 }

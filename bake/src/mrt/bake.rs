@@ -70,6 +70,7 @@ impl MrtBaker {
             lever: "--lightfield",
             value: p,
             power: 4.0,
+            squared: 0,
         }
     }
 
@@ -87,6 +88,7 @@ impl MrtBaker {
             lever: "--modes",
             value: modes,
             power: 2.0,
+            squared: 0,
         }
     }
 

@@ -63,6 +63,7 @@ impl ObscuranceBaker {
             lever: "--patches",
             value: atlas.covered_texels() as u64,
             power: 1.0,
+            squared: 0,
         }
     }
 }
