@@ -64,7 +64,8 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
         ..Default::default()
     };
     // A bad recommended file is refused before anything is written.
-    let chosen = chosen_methods(args, &scene)?;
+    let mut skipped = Vec::new();
+    let chosen = chosen_methods(args, &scene, &mut skipped)?;
     let files =
         chosen.iter().flat_map(|(m, ..)| [format!("{}.exr", m.name()), format!("{}.png", m.name()), format!("error_{}.png", m.name())]);
     let files: Vec<PathBuf> =
@@ -128,7 +129,10 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
         let rgb = metrics::false_colour(&render.radiance, &reference.images.combined, 0.5)?;
         image::write_png_rgb8(&mut outputs, &args.out.join(format!("error_{name}.png")), args.scene.width, args.scene.height, &rgb)?;
     }
-    let report = report_text(args, &device, &models, renders, &rows, &reference, &bake_summary);
+    let mut report = report_text(args, &device, &models, renders, &rows, &reference, &bake_summary);
+    skipped.iter().for_each(|why| {
+        let _ = writeln!(report, "\nNot run: {why}.");
+    });
     if let Some(row) = rows.iter().find(|r| r.combined.non_finite_pixels > 0) {
         bail!(
             "the {} image has {} NaN or infinite pixel(s), so no image or report was written; render that method alone (`relume render`) to see where",
@@ -147,18 +151,28 @@ pub(crate) fn run_main_job(args: &RunArgs) -> Result<()> {
 /// The methods `relume run` renders, with their values and (from a recommended.toml) the
 /// frame's keys: the one the budget chose, or every method that suits the scene with the main
 /// job's values.
-fn chosen_methods(args: &RunArgs, scene: &Scene) -> Result<Vec<(&'static dyn Method, Values, Option<FrameParams>)>> {
+/// The methods `run` runs with their values, and why each of the others does not suit the
+/// scene (its bake would fail: a note, and a line of the report).
+type Chosen = Vec<(&'static dyn Method, Values, Option<FrameParams>)>;
+
+fn chosen_methods(args: &RunArgs, scene: &Scene, skipped: &mut Vec<String>) -> Result<Chosen> {
     if let Some(file) = &args.recommended {
         let (method, table) = config::recommended(file, &crate::bake::scene_name(&args.scene.scene))?;
         methods::refuse(method, scene).with_context(|| format!("{}: the method chosen for this scene", file.display()))?;
         let chosen = config::config(method, table).with_context(|| format!("{}", file.display()))?;
         return Ok(vec![(method, chosen.values, Some(chosen.frame))]);
     }
-    methods::METHODS
-        .into_iter()
-        .filter(|m| methods::suits(*m, scene))
-        .map(|method| Ok((method, methods::parse_values(method, &method.main_job_values(args.rays), None)?, None)))
-        .collect()
+    let mut chosen = Vec::new();
+    for method in methods::METHODS {
+        match methods::unsuited(method, scene) {
+            Some(why) => {
+                eprintln!("note: not run: {why}");
+                skipped.push(why);
+            }
+            None => chosen.push((method, methods::parse_values(method, &method.main_job_values(args.rays), None)?, None)),
+        }
+    }
+    Ok(chosen)
 }
 
 /// One method's error against the reference.

@@ -1,8 +1,11 @@
-//! No output over any input: every command refuses an output path (or a companion file, such
-//! as the PNG beside an EXR) that is one of the files it reads — the scene, its buffers and
-//! images, a bake's files, lights files, sweeps, scripts — by any name (a symlink, `..`, a hard
-//! link), with exit code 1 and one error line, and the folder is byte for byte as it was.
-//! A failed command replaces none of the outputs an earlier run left.
+//! What enters and what leaves. No output over any input: every command refuses an output
+//! path (or a companion file, such as the PNG beside an EXR) that is one of the files it reads
+//! — the scene, its buffers and images, a bake's files, lights files, sweeps, scripts — by any
+//! name (a symlink, `..`, a hard link), with exit code 1 and one error line, and the folder is
+//! byte for byte as it was. A failed command replaces none of the outputs an earlier run left.
+//! Values too large for the maths downstream are refused where they enter, the same way; a
+//! downloaded model's quirks (a cloud that would lie inside closed geometry, an emissive
+//! texture) do not fail `run` or light a scene wrongly.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -203,4 +206,126 @@ fn a_failed_run_leaves_no_bake_behind() {
     let run = ["run", "scene.gltf", "--out", "d", "--spp", "1", "--rays", "1", "--frames", "1", "--width", "8", "--height", "8"];
     assert_refused_unchanged(&dir, &run, &["reference.png", "not a regular file"]);
     assert!(!dir.join("d/bake").exists(), "a bake folder was moved in");
+}
+
+/// The textured quad with `spoil` applied to its glTF JSON, written as `name`.gltf beside it.
+fn spoiled_scene(dir: &Path, name: &str, spoil: impl FnOnce(&mut serde_json::Value)) -> String {
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("scene.gltf")).unwrap()).unwrap();
+    spoil(&mut json);
+    std::fs::write(dir.join(format!("{name}.gltf")), json.to_string()).unwrap();
+    format!("{name}.gltf")
+}
+
+/// Huge finite values are refused where they enter (exit 1, one error line, nothing changed):
+/// a Phong exponent of 1e30, an MRT grid cell of 1e30 m, an environment texel of 1e38, a
+/// light map texel of 3e38 in a bake whose checksums match.
+#[test]
+fn huge_finite_values_are_refused_where_they_enter_by_every_command() {
+    let dir = temp_dir("huge");
+    textured_scene(&dir);
+    let trace = [&SMALL[..], &["--spp", "1", "--out", "r.exr"]].concat();
+    let phong = spoiled_scene(&dir, "phong", |j| {
+        j["materials"][0]["extras"] = serde_json::json!({ "relume": { "phong": { "specular": 0.1, "exponent": 1e30 } } })
+    });
+    assert_refused_unchanged(&dir, &[&["reference", &phong][..], &trace].concat(), &["phong.gltf", "exponent", "past 1e6"]);
+    let cell = serde_json::json!({ "relume": { "mrt": { "grid": { "cell": [1e30, 2.0, 2.0], "rows": ["."] } } } });
+    let mrt = spoiled_scene(&dir, "mrt", move |j| j["scenes"][0]["extras"] = cell);
+    assert_refused_unchanged(&dir, &[&["reference", &mrt][..], &trace].concat(), &["mrt.gltf", "within 1000000 m"]);
+
+    let mut sky = relume_bake::image::Image::new(16, 8);
+    sky.pixels.iter_mut().for_each(|p| *p = glam::Vec3::ONE);
+    sky.set(3, 2, glam::Vec3::new(1e38, 1.0, 1.0));
+    let mut outputs = relume_bake::outputs::Outputs::new();
+    relume_bake::image::write_exr_layers(&mut outputs, &dir.join("sky.exr"), &[("rgb", &sky)]).unwrap();
+    outputs.commit().unwrap();
+    let args = [&["reference", "scene.gltf", "--environment", "sky.exr"][..], &trace].concat();
+    assert_refused_unchanged(&dir, &args, &["sky.exr", "texel (3, 2)", "at most 1e9"]);
+
+    let bake = relume(&["bake", "scene.gltf", "--method", "obscurance", "--rays", "1", "--out", "bk"], &dir);
+    assert!(bake.status.success(), "{}", String::from_utf8_lossy(&bake.stderr));
+    let path = dir.join("bk/obscurance.exr");
+    let mut lightmap = relume_bake::image::read_exr_layer(&path, Some("W")).unwrap();
+    lightmap.pixels[0].y = 3e38;
+    let mut outputs = relume_bake::outputs::Outputs::new();
+    relume_bake::image::write_exr_layers(&mut outputs, &path, &[("W", &lightmap)]).unwrap();
+    outputs.commit().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let mut manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("bk/manifest.json")).unwrap()).unwrap();
+    for section in manifest["sections"].as_array_mut().unwrap() {
+        if let Some(file) = section["files"].get_mut("obscurance.exr") {
+            *file = serde_json::json!({ "bytes": bytes.len(), "checksum": relume_bake::artifact::checksum(&bytes) });
+        }
+    }
+    std::fs::write(dir.join("bk/manifest.json"), serde_json::to_string_pretty(&manifest).unwrap()).unwrap();
+    let args = [&["render", "scene.gltf", "--bake", "bk", "--out", "r.exr"][..], &SMALL].concat();
+    assert_refused_unchanged(&dir, &args, &["obscurance.exr", "texel 0", "0..=1e9"]);
+}
+
+/// A closed cube from -1 to 1, faces outward, lit by a point light 0.05 m off its +z face:
+/// cube.gltf and cube.bin.
+fn cube_scene(dir: &Path) {
+    let faces: [([f32; 3], [f32; 3], [f32; 3]); 6] = [
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+        ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+    ];
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for (k, (n, u, v)) in faces.iter().enumerate() {
+        for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            positions.extend((0..3).map(|c| n[c] + su * u[c] + sv * v[c]));
+        }
+        let b = 4 * k as u32;
+        indices.extend([b, b + 1, b + 2, b, b + 2, b + 3]);
+    }
+    let mut bin: Vec<u8> = positions.iter().flat_map(|p: &f32| p.to_le_bytes()).collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.join("cube.bin"), &bin).unwrap();
+    let gltf = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": { "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 1 }] } },
+        // 8 texels a metre: at the default 32, run's light path maps (32 clusters, 2 eigen-
+        // textures) store more than one storage buffer holds, and it fails at render time.
+        "scene": 0, "scenes": [{ "nodes": [0, 1], "extras": { "relume": { "texel_density": 8.0 } } }],
+        "nodes": [{ "mesh": 0 }, { "translation": [0, 0, 1.05], "extensions": { "KHR_lights_punctual": { "light": 0 } } }],
+        "meshes": [{ "name": "Cube", "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "buffers": [{ "uri": "cube.bin", "byteLength": bin.len() }],
+        "bufferViews": [{ "buffer": 0, "byteOffset": 0, "byteLength": 288 }, { "buffer": 0, "byteOffset": 288, "byteLength": 144 }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 24, "type": "VEC3", "min": [-1, -1, -1], "max": [1, 1, 1] },
+            { "bufferView": 1, "componentType": 5125, "count": 36, "type": "SCALAR" }
+        ]
+    });
+    std::fs::write(dir.join("cube.gltf"), gltf.to_string()).unwrap();
+}
+
+/// A downloaded model's quirks: a light just outside a closed box derives a cloud whose every
+/// light lies inside the box, so `run` skips light clouds, saying why in its report (it failed
+/// after baking the others); a material with an emissive texture emits nothing, with a
+/// warning, and the scene nothing else lights takes the headlight.
+#[test]
+fn run_skips_a_method_that_cannot_succeed_and_an_emissive_texture_does_not_light_the_scene() {
+    let dir = temp_dir("downloaded");
+    cube_scene(&dir);
+    let run = ["run", "cube.gltf", "--out", "d", "--spp", "1", "--rays", "1", "--frames", "1", "--width", "8", "--height", "8"];
+    let result = relume(&run, &dir);
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    let report = std::fs::read_to_string(dir.join("d/report.md")).unwrap();
+    assert!(!dir.join("d/bake/light-cloud").exists() && report.contains("light-cloud"), "{report}");
+
+    textured_scene(&dir);
+    let glow = spoiled_scene(&dir, "glow", |j| {
+        j["extensions"]["KHR_lights_punctual"]["lights"] = serde_json::json!([]);
+        j["nodes"] = serde_json::json!([{ "mesh": 0 }]);
+        j["scenes"][0]["nodes"] = serde_json::json!([0]);
+        j["materials"][0]["emissiveFactor"] = serde_json::json!([1.0, 1.0, 1.0]);
+        j["materials"][0]["emissiveTexture"] = serde_json::json!({ "index": 0 });
+    });
+    let result = relume(&[&["reference", &glow][..], &SMALL, &["--spp", "1", "--out", "g.exr"]].concat(), &dir);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(stderr.contains("emissiveTexture is not read") && stderr.contains("default rig"), "{stderr}");
 }

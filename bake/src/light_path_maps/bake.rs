@@ -40,6 +40,12 @@ pub fn bytes_per_transfer(compression: Compression) -> u64 {
 /// while the clusters are made: the clusters' vectors and the textures spread over the atlas.
 pub const BYTES_PER_TEXTURE_TEXEL: u64 = 24;
 
+/// The bytes of stored textures (three f32 a texel) that every Vulkan device reads as one
+/// storage buffer (maxStorageBufferRange is at least 2^27): the error budget's search keeps
+/// within them, so that the size it chooses renders anywhere (a 2 m cube's 137,408 texels took
+/// 96 textures, 151 MiB, which lavapipe refused after `run` had baked it).
+const GPU_TEXTURE_BYTES: u64 = 1 << 27;
+
 /// Test points a directional light's derived region has (the scenes' declared boxes: 64).
 const SUN_TEST_POINTS: u32 = 64;
 
@@ -112,11 +118,14 @@ impl Baker for LightPathMapsBaker {
         };
         work.admit("light path maps", &self.estimate(&fixed, texels, covered, count, given))?;
         let transfers = stages.timed("transfer", || bake_transfers(scene, &bvh, &atlas, &entries.entries, &settings))?;
-        // The stored textures the memory limit leaves room for beside the transfers.
-        let most_textures = work.memory_limit.map(|limit| {
+        // The stored textures the memory limit leaves room for beside the transfers, and one
+        // storage buffer of any GPU holds.
+        let in_memory = work.memory_limit.map(|limit| {
             let room = limit.saturating_sub(self.estimate(&fixed, texels, covered, count, 0).bytes());
             (room / (texels as u64 * BYTES_PER_TEXTURE_TEXEL).max(1)) as usize
         });
+        let on_gpu = (GPU_TEXTURE_BYTES / (texels as u64 * 12).max(1)) as usize;
+        let most_textures = Some(in_memory.map_or(on_gpu, |m| m.min(on_gpu)));
         let compressed = stages.timed("cpca", || match sizes(&transfers, &entries.entries, self.compression, most_textures)? {
             None => compress(&transfers, &entries.entries, texels, region.light_area, self.compression),
             Some((clusters, basis)) => {
@@ -143,7 +152,7 @@ impl Baker for LightPathMapsBaker {
             if compressed.relative_error > budget {
                 let room = match most_textures {
                     Some(m) if m < BUDGET_TEXTURES_MAX => {
-                        format!(" that fits --memory-limit (at most {m} atlas-sized textures, C (1 + D), beside the transfers)")
+                        format!(" that fits --memory-limit and one GPU storage buffer (at most {m} atlas-sized textures, C (1 + D))")
                     }
                     _ => String::new(),
                 };
