@@ -82,12 +82,20 @@ PY
 for target in "${TARGETS[@]}"; do
     echo "fuzzing $target: $DESCRIBED"
     start=$(date +%s)
+    log="$work/$target.log"
+    status=0
     (cd fuzz && cargo +nightly fuzz run "$target" "../$corpus/$target" -- \
-        "${LIMIT[@]}" -seed=1 -max_len=4194304 -rss_limit_mb=4096 -timeout=30 -print_final_stats=1 2>&1) |
-        grep -E '^(Done|INFO: Seed|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==|SUMMARY|thread .* panicked)' || true
+        "${LIMIT[@]}" -seed=1 -max_len=4194304 -rss_limit_mb=4096 -timeout=30 -print_final_stats=1) >"$log" 2>&1 || status=$?
+    grep -E '^(Done|INFO: Seed|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==|SUMMARY|thread .* panicked)' "$log" || true
     echo "$target: $(( $(date +%s) - start )) s"
     if ls fuzz/artifacts/"$target"/crash-* fuzz/artifacts/"$target"/oom-* fuzz/artifacts/"$target"/timeout-* >/dev/null 2>&1; then
         echo "fuzz.sh: $target found an input that fails; see fuzz/artifacts/$target/" >&2
+        exit 1
+    fi
+    # A target that did not build or start fuzzed nothing: that is a failure too.
+    if [[ $status -ne 0 ]] || ! grep -q '^Done' "$log"; then
+        tail -n 20 "$log" >&2
+        echo "fuzz.sh: $target did not run to the end (exit $status); its log is above" >&2
         exit 1
     fi
 done

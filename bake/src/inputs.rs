@@ -87,6 +87,13 @@ pub fn admit(path: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// The text of the input file `path` (a sweep, a recommended.toml), admitted first; Err says
+/// why it cannot be read, for the caller's message.
+pub fn read_text(path: &Path) -> Result<String, String> {
+    admit(path)?;
+    std::fs::read_to_string(path).map_err(|e| format!("cannot read it ({e})"))
+}
+
 /// Forgets the input `path`, or every input under the folder `path`: a cache entry read and
 /// found stale is the command's to replace.
 pub fn release(path: &Path) {

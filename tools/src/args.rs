@@ -330,13 +330,6 @@ pub(crate) fn refuse_exr_and_png_over(out: &Path) -> Result<()> {
         .with_context(|| format!("--out {} (an EXR and the PNG beside it)", out.display()))
 }
 
-/// The text of the file `path` a command is given (a sweep, a recommended.toml), admitted as
-/// an input first; Err says why it cannot be read.
-pub(crate) fn read_input(path: &Path) -> std::result::Result<String, String> {
-    relume_bake::inputs::admit(path)?;
-    std::fs::read_to_string(path).map_err(|e| format!("cannot read it ({e})"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

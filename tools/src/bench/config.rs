@@ -104,7 +104,8 @@ pub(crate) fn split(table: &toml::Table) -> Result<(FrameParams, Vec<(String, St
 /// refused naming the file, the scene and the fix.
 pub(crate) fn recommended(file: &Path, name: &str) -> Result<(&'static dyn Method, toml::Table)> {
     let at = |what: String| anyhow::anyhow!("{}: {what}", file.display());
-    let text = crate::args::read_input(file).map_err(|e| at(format!("{e}; give the recommended.toml `relume bench --budget` wrote")))?;
+    let text =
+        relume_bake::inputs::read_text(file).map_err(|e| at(format!("{e}; give the recommended.toml `relume bench --budget` wrote")))?;
     let table: toml::Table =
         toml::from_str(&text).map_err(|e| at(format!("not a recommended.toml ({e}); `relume bench --budget` writes one")))?;
     let Some(entry) = table.get(name).and_then(|v| v.as_table()) else {

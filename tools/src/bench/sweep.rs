@@ -169,7 +169,7 @@ impl SweepScene {
 impl Sweep {
     /// Reads and checks `path`; scene paths become relative to the current folder.
     pub fn read(path: &Path) -> Result<Sweep> {
-        let text = crate::args::read_input(path).map_err(|e| anyhow::anyhow!("{}: {e}; give a sweep file", path.display()))?;
+        let text = relume_bake::inputs::read_text(path).map_err(|e| anyhow::anyhow!("{}: {e}; give a sweep file", path.display()))?;
         let mut sweep: Sweep = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim()))?;
         let folder = path.parent().unwrap_or(Path::new("."));
         for scene in &mut sweep.scenes {
