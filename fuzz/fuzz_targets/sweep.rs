@@ -14,6 +14,14 @@ mod gpu {
     pub const WARM_UP_SECONDS: f64 = 0.5;
 }
 
+/// sweep.rs names a scene without a name as `relume bake` does (tools/src/bake.rs, which
+/// needs the renderer too): by its file name.
+mod bake {
+    pub fn scene_name(scene: &std::path::Path) -> String {
+        scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let _ = sweep::Sweep::read(&relume_fuzz::scratch_file("sweep.toml", data));
 });
