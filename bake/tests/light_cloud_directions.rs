@@ -87,7 +87,9 @@ fn light_clustering_keeps_the_directions_and_the_section_round_trips() {
     use relume_bake::artifact::{Artifact, BakeOutput};
     let s = open_box();
     let cloud = gathered(1);
-    let reduced = lc::reduce(&s, &SceneBvh::new(&s), &cloud, lc::Reduction { zones: 2, weights: Some((0.5, 20.0)) }).unwrap();
+    let reduced =
+        lc::reduce(&s, &SceneBvh::new(&s), &cloud, lc::Reduction { zones: 2, weights: Some((0.5, 20.0)), linkage: lc::Linkage::Complete })
+            .unwrap();
     let reduced = reduced.cloud;
     assert_eq!((reduced.zone_count(), reduced.directions), (2, DIRECTIONS));
     for z in 0..2 {

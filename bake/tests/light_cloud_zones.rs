@@ -51,7 +51,7 @@ fn a_cloud_baked_zone_by_zone_is_the_whole_cloud_reduced_and_compressed() {
     for (directions, weights, compression) in cases {
         let case = format!("{directions} directions, weights {weights:?}, {compression:?}");
         let settings = settings(directions);
-        let reduction = Reduction { zones: 5, weights };
+        let reduction = Reduction { zones: 5, weights, linkage: lc::Linkage::Complete };
         let gathered = lc::bake(&s, &bvh, &settings).unwrap();
         let reduced = lc::reduce(&s, &bvh, &gathered, reduction).unwrap();
         let whole = compression.map(|(c, v)| lc::compress(&reduced.cloud, c, v, false).unwrap());

@@ -1,5 +1,6 @@
 //! Zones and light clustering (004 §4.1-4.2): complete linkage keeps together only lights
-//! whose metric is below 1 and stops when no groups can merge; lights that do not see each
+//! whose metric is below 1 and stops when no groups can merge; single linkage keeps the
+//! connected components of the pairs below 1; lights that do not see each
 //! other never merge; identical responses merge and distinct ones do not; zones cut the lights
 //! each keeps; the zoned, clustered transfer survives the section; the same bytes at any
 //! thread count.
@@ -7,7 +8,7 @@
 
 use glam::Vec3;
 use relume_bake::bvh::SceneBvh;
-use relume_bake::light_cloud::{self as lc, CloudGrid, LightCloud, LightCloudBakeSettings, Reduced, Reduction};
+use relume_bake::light_cloud::{self as lc, CloudGrid, LightCloud, LightCloudBakeSettings, Linkage, Reduced, Reduction};
 use relume_bake::scene::Scene;
 use relume_bake::testing::{closed_box, look_at, material, point_light, scene, sphere, Facing};
 use relume_bake::work::WorkOptions;
@@ -24,7 +25,7 @@ fn gathered(s: &Scene, grid: CloudGrid, samples: u32) -> LightCloud {
 }
 
 fn reduce(s: &Scene, cloud: &LightCloud, zones: usize, weights: Option<(f32, f32)>) -> Reduced {
-    lc::reduce(s, &SceneBvh::new(s), cloud, Reduction { zones, weights }).expect("reduce")
+    lc::reduce(s, &SceneBvh::new(s), cloud, Reduction { zones, weights, linkage: Linkage::Complete }).expect("reduce")
 }
 
 /// A 4 m room split by a wall at x = 2 with a door-less gap nowhere: lights on either side
@@ -61,7 +62,7 @@ fn random_metric(n: usize, seed: u64) -> Vec<f32> {
 fn complete_linkage_keeps_only_close_pairs_together_and_leaves_no_mergeable_groups() {
     for (n, seed) in [(40, 1), (60, 2), (25, 3)] {
         let metric = random_metric(n, seed);
-        let groups = lc::complete_linkage(n, &metric);
+        let groups = lc::link(n, &metric, Linkage::Complete);
         let mut all: Vec<u32> = groups.concat();
         all.sort_unstable();
         assert_eq!(all, (0..n as u32).collect::<Vec<_>>(), "the groups partition the lights");
@@ -84,7 +85,44 @@ fn complete_linkage_keeps_only_close_pairs_together_and_leaves_no_mergeable_grou
             }
         }
         assert!(groups.len() < n && groups.len() > 1, "{n} lights in {} groups: the metric should merge some, not all", groups.len());
-        assert_eq!(groups, lc::complete_linkage(n, &metric), "deterministic");
+        assert_eq!(groups, lc::link(n, &metric, Linkage::Complete), "deterministic");
+    }
+}
+
+/// Single linkage's groups are the connected components of the pairs below 1, found here by
+/// a plain flood fill; a sparse metric (mostly far pairs) leaves several.
+#[test]
+fn single_linkage_keeps_the_components_of_the_close_pairs() {
+    for (n, seed) in [(40, 4), (60, 5), (25, 6)] {
+        let metric: Vec<f32> = random_metric(n, seed).into_iter().map(|m| if m < 0.04 { m * 10.0 } else { m + 1.0 }).collect();
+        let mut component = vec![usize::MAX; n];
+        for start in 0..n {
+            if component[start] != usize::MAX {
+                continue;
+            }
+            let mut stack = vec![start];
+            component[start] = start;
+            while let Some(j) = stack.pop() {
+                for k in 0..n {
+                    if k != j && metric[j * n + k] < 1.0 && component[k] == usize::MAX {
+                        component[k] = start;
+                        stack.push(k);
+                    }
+                }
+            }
+        }
+        let mut expected: Vec<Vec<u32>> = Vec::new();
+        for start in 0..n {
+            let members: Vec<u32> = (0..n as u32).filter(|&j| component[j as usize] == start).collect();
+            if !members.is_empty() {
+                expected.push(members);
+            }
+        }
+        let groups = lc::link(n, &metric, Linkage::Single);
+        assert_eq!(groups, expected, "{n} lights");
+        assert!(groups.len() < n && groups.len() > 1, "{n} lights in {} groups: the metric should merge some, not all", groups.len());
+        let complete = lc::link(n, &metric, Linkage::Complete);
+        assert!(complete.len() >= groups.len(), "complete linkage never keeps fewer groups: {} against {}", complete.len(), groups.len());
     }
 }
 

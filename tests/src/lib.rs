@@ -204,7 +204,7 @@ pub fn light_cloud_by_defaults(
     gathered: &relume_bake::light_cloud::LightCloud,
 ) -> relume_bake::light_cloud::LightCloud {
     use relume_bake::light_cloud as lc;
-    let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)) };
+    let reduction = lc::Reduction { zones: 8, weights: Some((0.5, 20.0)), linkage: lc::Linkage::Complete };
     lc::compress(&lc::reduce(scene, bvh, gathered, reduction).expect("reduce").cloud, 32, lc::Vectors::Each(8), false).expect("compress")
 }
 

@@ -98,7 +98,10 @@ fn a_spot_light_on_emission_bands_equals_the_cpu_sum_as_it_moves() {
 #[test]
 fn more_weights_than_one_update_carries_reach_the_cpu_sum() {
     let (mut scene, cloud, visibility) = baked_with(16);
-    let zoned = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, lc::Reduction { zones: 4, weights: None }).unwrap().cloud;
+    let zoned =
+        lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, lc::Reduction { zones: 4, weights: None, linkage: lc::Linkage::Complete })
+            .unwrap()
+            .cloud;
     scene.lights = (0..32)
         .map(|k| {
             // The first light, which the check moves 0.15 to +x, starts at the -x side.
@@ -118,7 +121,7 @@ fn per_vertex_irradiance_equals_the_cpu_sum_as_the_light_moves() {
     // CPCA vertex reconstruction: 16 clusters of 4 vectors.
     gpu_equals_cpu(&scene, &lc::compress(&cloud, 16, lc::Vectors::Each(4), false).unwrap(), Arc::clone(&visibility));
     // 4 zones, each with its own clustered lights (004 §4): every cluster weighs its zone's.
-    let reduction = lc::Reduction { zones: 4, weights: Some((0.5, 20.0)) };
+    let reduction = lc::Reduction { zones: 4, weights: Some((0.5, 20.0)), linkage: lc::Linkage::Complete };
     let reduced = lc::reduce(&scene, &SceneBvh::new(&scene), &cloud, reduction).unwrap().cloud;
     assert!(reduced.lights.len() < 4 * cloud.lights.len(), "light clustering merged lights");
     gpu_equals_cpu(&scene, &lc::compress(&reduced, 16, lc::Vectors::Each(4), false).unwrap(), Arc::clone(&visibility));

@@ -6,7 +6,7 @@
 use super::zones::{gather_zones, reduce_zones, ZoneRows, ZoneSettings, Zoned};
 use super::{
     region, section, split_zones, vertex_count, vertex_positions, Gatherer, LightCloud, LightCloudBakeSettings, LightCloudSceneSettings,
-    Reduction, Vectors,
+    Linkage, Reduction, Vectors,
 };
 use crate::bvh::SceneBvh;
 use crate::contract::{scene_bytes, Baked, Baker, Estimate, Stages};
@@ -29,6 +29,7 @@ pub struct LightCloudBaker {
     pub zones: Option<usize>,
     /// Light clustering's weights (004 eq. 9); None: every zone keeps every cloud light.
     pub weights: Option<(f32, f32)>,
+    pub linkage: Linkage,
     /// Clusters and vectors; None: uncompressed.
     pub compression: Option<(usize, Vectors)>,
     /// Record 004 Fig. 5's shares of the first `VARIANCE_COMPONENTS` components.
@@ -144,7 +145,7 @@ impl Baker for LightCloudBaker {
         let emission = (chosen.bands + 1) * (chosen.bands + 1);
         let settings = LightCloudBakeSettings { grid, directions: chosen.directions, samples: self.samples, emission, work: *work };
         let gatherer = Gatherer::new(scene, &bvh, &settings)?;
-        let reduction = Reduction { zones: self.zone_count(scene), weights: self.weights };
+        let reduction = Reduction { zones: self.zone_count(scene), weights: self.weights, linkage: self.linkage };
         reduction.validate()?;
         let zones = split_zones(&vertex_positions(scene), reduction.zones);
         let shape = (gatherer.lights(), zones.iter().map(Vec::len).max().unwrap_or(0));
@@ -203,7 +204,7 @@ impl LightCloudBaker {
             "emission_bands": chosen.bands,
             "max_edge": chosen.edge,
             "zones": zones,
-            "light_clustering": self.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2 })),
+            "light_clustering": self.weights.map(|(w1, w2)| json!({ "w1": w1, "w2": w2, "linkage": self.linkage.name() })),
             "clusters": compression.map(|c| c.0),
             "vectors": compression.map(|(_, v)| v.count()),
             "variable_vectors": matches!(compression, Some((_, Vectors::Shared(_)))),

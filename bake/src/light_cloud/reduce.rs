@@ -12,9 +12,12 @@
 //!   transfer value of the whole cloud, so Table 1's weights (0.5 / 20 for the Cornell box)
 //!   carry over. That value is a maximum: one cloud light a few centimetres from a wall raises
 //!   it and makes every other light's responses look alike (tune w2 per scene, as Table 1 does).
-//! - The merge (§4.1, spec B2): complete linkage. Two groups merge only if every pair across
-//!   them has Delta < 1; the closest such pair of groups merges first (ties to the lowest
-//!   indices), until none is left.
+//! - The merge (§4.1): the paper names single linkage but states complete linkage's rule
+//!   ("only if Delta_jk < 1 for all possible pairs"). relume takes the rule (spec B2,
+//!   `Linkage::Complete`): two groups merge only if every pair across them has Delta < 1.
+//!   `Linkage::Single` merges them when any pair does: nearer Table 1's count on the Cornell
+//!   box, but worse at the same count (docs/BENCHMARKS.md, "The papers' claims"). Either way the closest pair of groups merges
+//!   first (ties to the lowest indices), until none is left.
 //! - The merged light (spec B3): its members' mean position (the member nearest it when the
 //!   mean does not see every member), and per vertex the mean of its members' transfer.
 
@@ -33,6 +36,41 @@ pub struct Reduction {
     pub zones: usize,
     /// Light clustering's weights (004 eq. 9); None: every zone keeps every cloud light.
     pub weights: Option<(f32, f32)>,
+    pub linkage: Linkage,
+}
+
+/// When two groups of lights may merge (004 §4.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Linkage {
+    /// Every pair across the groups is close (the paper's rule).
+    #[default]
+    Complete,
+    /// Some pair across the groups is close (the paper's name for it).
+    Single,
+}
+
+impl Linkage {
+    pub const ALL: [Linkage; 2] = [Linkage::Complete, Linkage::Single];
+
+    /// The name the command line, sweeps and stats.json give.
+    pub fn name(self) -> &'static str {
+        match self {
+            Linkage::Complete => "complete",
+            Linkage::Single => "single",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Linkage> {
+        Linkage::ALL.into_iter().find(|l| l.name() == name)
+    }
+
+    /// The merged group's distance to a third from the two groups' distances to it.
+    fn merged(self, a: f32, b: f32) -> f32 {
+        match self {
+            Linkage::Complete => a.max(b),
+            Linkage::Single => a.min(b),
+        }
+    }
 }
 
 impl Reduction {
@@ -89,6 +127,7 @@ pub struct Clustering {
     /// None: every zone keeps every cloud light.
     base: Option<Vec<f32>>,
     w2: f32,
+    linkage: Linkage,
     per_light: usize,
 }
 
@@ -98,12 +137,14 @@ impl Clustering {
     pub fn new(scene: &Scene, bvh: &SceneBvh, gathered: &LightCloud, reduction: Reduction, scale: f32) -> Result<Clustering, String> {
         reduction.validate()?;
         let per_light = gathered.per_light();
-        let Some((w1, w2)) = reduction.weights else { return Ok(Clustering { base: None, w2: 0.0, per_light }) };
+        let Some((w1, w2)) = reduction.weights else {
+            return Ok(Clustering { base: None, w2: 0.0, linkage: reduction.linkage, per_light });
+        };
         let (lo, hi) = scene.settings.bounds;
         let diagonal = (hi - lo).length().max(f32::MIN_POSITIVE);
         let n = gathered.lights.len();
         let base = pair_base(bvh, &gathered.lights[..n - gathered.directions], n, w1 / diagonal);
-        Ok(Clustering { base: Some(base), w2: w2 / scale.max(f32::MIN_POSITIVE), per_light })
+        Ok(Clustering { base: Some(base), w2: w2 / scale.max(f32::MIN_POSITIVE), linkage: reduction.linkage, per_light })
     }
 
     /// One zone's lights clustered over its gathered `rows` (vertex after vertex, every cloud
@@ -114,7 +155,7 @@ impl Clustering {
         let row = |v: u32| &rows[v as usize * per_light * n..][..per_light * n];
         let groups: Vec<Vec<u32>> = match &self.base {
             None => (0..n as u32).map(|j| vec![j]).collect(),
-            Some(base) => complete_linkage(n, &zone_metric(base, rows, (n, per_light), self.w2)),
+            Some(base) => link(n, &zone_metric(base, rows, (n, per_light), self.w2), self.linkage),
         };
         let mut zone = ReducedZone {
             lights: groups.iter().map(|g| merged_position(bvh, lights, g)).collect(),
@@ -292,10 +333,10 @@ impl Ord for Key {
     }
 }
 
-/// Complete-linkage clustering of `n` items by the symmetric row-major `metric`: groups merge,
-/// closest first (ties to the lowest indices), while some pair of groups has every cross pair
-/// below 1 (004 §4.1, spec B2). The groups, each ascending, ordered by their first member.
-pub fn complete_linkage(n: usize, metric: &[f32]) -> Vec<Vec<u32>> {
+/// Clustering of `n` items by the symmetric row-major `metric`: groups merge, closest first
+/// (ties to the lowest indices), while some pair of groups is below 1 by the `linkage` (004
+/// §4.1, spec B2). The groups, each ascending, ordered by their first member.
+pub fn link(n: usize, metric: &[f32], linkage: Linkage) -> Vec<Vec<u32>> {
     let mut distance = metric.to_vec();
     let mut members: Vec<Vec<u32>> = (0..n as u32).map(|j| vec![j]).collect();
     let mut heap = BinaryHeap::new();
@@ -307,19 +348,18 @@ pub fn complete_linkage(n: usize, metric: &[f32]) -> Vec<Vec<u32>> {
         }
     }
     while let Some(Reverse((Key(d), g, h))) = heap.pop() {
-        // Skip pairs whose group merged away or whose distance grew since.
+        // Skip pairs whose group merged away or whose distance changed since.
         if members[g].is_empty() || members[h].is_empty() || distance[g * n + h] != d {
             continue;
         }
         let moved = std::mem::take(&mut members[h]);
         members[g].extend(moved);
         for k in (0..n).filter(|&k| k != g && !members[k].is_empty()) {
-            // The complete linkage: the merged group's distance is the farther of the two.
-            let merged = distance[g * n + k].max(distance[h * n + k]);
-            let grew = merged != distance[g * n + k];
+            let merged = linkage.merged(distance[g * n + k], distance[h * n + k]);
+            let changed = merged != distance[g * n + k];
             distance[g * n + k] = merged;
             distance[k * n + g] = merged;
-            if grew && merged < 1.0 {
+            if changed && merged < 1.0 {
                 heap.push(Reverse((Key(merged), g.min(k), g.max(k))));
             }
         }

@@ -101,13 +101,19 @@ const W2: Param = Param::number(
     (0.0, 1e6, false),
     Default::Value("20"),
 );
+const LINKAGE: Param = Param::choice(
+    "linkage",
+    "when light clustering merges two groups (004 §4.1): complete (every pair across them is close: the paper's rule), single (some pair is: the paper's name, which keeps Table 1's counts)",
+    &["complete", "single"],
+    Default::Value("complete"),
+);
 const EXPLAINED_VARIANCE: Param = Param::flag(
     "explained-variance",
     "record each principal component's share of the clusters' variance, indirect (stored) and direct (not), in stats.json (004 Fig. 5)",
 );
 const NO_LIGHT_CLUSTERING: Param = Param::flag("no-light-clustering", "keep every cloud light in every zone (004 §4.1 off)");
 
-const PARAMS: [&Param; 16] = [
+const PARAMS: [&Param; 17] = [
     &SAMPLES,
     &EMISSION_BANDS,
     &DIRECTIONS,
@@ -115,6 +121,7 @@ const PARAMS: [&Param; 16] = [
     &ZONES,
     &W1,
     &W2,
+    &LINKAGE,
     &NO_LIGHT_CLUSTERING,
     &CLUSTERS,
     &VECTORS,
@@ -129,8 +136,8 @@ const PARAMS: [&Param; 16] = [
 /// Light clustering's weights as the flags ask; None: no light clustering.
 fn weights(values: &Values) -> Result<Option<(f32, f32)>> {
     let clustering = !values.given(&NO_LIGHT_CLUSTERING);
-    if !clustering && (values.given(&W1) || values.given(&W2)) {
-        anyhow::bail!("--w1 and --w2 weigh light clustering: give them without --no-light-clustering");
+    if !clustering && [&W1, &W2, &LINKAGE].iter().any(|p| values.given(p)) {
+        anyhow::bail!("--w1, --w2 and --linkage set light clustering: give them without --no-light-clustering");
     }
     Ok(clustering.then(|| (values.number(&W1) as f32, values.number(&W2) as f32)))
 }
@@ -241,6 +248,7 @@ impl Method for LightCloudMethod {
             compression: compression(values)?,
             zones: values.given_count(&ZONES).map(|z| z as usize),
             weights: weights(values)?,
+            linkage: lc::Linkage::parse(values.choice(&LINKAGE)).unwrap_or_default(),
             explained_variance: values.given(&EXPLAINED_VARIANCE),
         }))
     }
