@@ -26,7 +26,7 @@ fn main() {
         let f = with_threads(threads, || block::gather(shape, &samples, settings.gather_rays, settings.seed));
         let gathered = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let l_d = block::prior(shape, &samples, settings.prior_grid, settings.light_radius);
+        let l_d = block::prior(shape, &samples, (settings.prior_grid, settings.prior_lattice), settings.light_radius);
         let ops = block::reduce(shape, samples.clone(), &f, &l_d, &settings);
         let reduced = clock.elapsed().as_secs_f64();
         let counts = |sigma: &[f64]| [0.8, 0.9, 0.95].map(|x| modes_for_energy(sigma, x).to_string()).join(" / ");
@@ -54,7 +54,7 @@ fn enrichment_trade(settings: &BlockSettings) {
     let f = with_threads(settings.threads, || block::gather(shape, &samples, settings.gather_rays, settings.seed));
     println!("\n| prior | enrichment | uniform light | held-out lights |\n|---|---|---|---|");
     for (grid, unit, enrich) in [(6, false, true), (6, false, false), (6, true, true), (6, true, false), (8, true, true)] {
-        let mut l_d = block::prior(shape, &samples, grid, settings.light_radius);
+        let mut l_d = block::prior(shape, &samples, (grid, settings.prior_lattice), settings.light_radius);
         if unit {
             l_d.column_iter_mut().for_each(|mut c| c /= c.norm());
         }

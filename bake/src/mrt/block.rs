@@ -9,7 +9,7 @@
 
 use super::dictionary::BlockData;
 use super::svd::{self, Svd};
-use super::{BlockSettings, Face, Samples, Shape};
+use super::{BlockSettings, Face, PriorLattice, Samples, Shape};
 use crate::sampling::{cosine_hemisphere, orthonormal_basis, PathSampler};
 use crate::shards::{self, Items, Role};
 use crate::work::with_threads;
@@ -81,7 +81,7 @@ pub fn build(shape: Shape, settings: &BlockSettings) -> BlockOperators {
 
 /// A shape's operators from its gathered F.
 pub fn reduced(shape: Shape, samples: Samples, f: &DMatrix<f64>, settings: &BlockSettings) -> BlockOperators {
-    let l_d = prior(shape, &samples, settings.prior_grid, settings.light_radius);
+    let l_d = prior(shape, &samples, (settings.prior_grid, settings.prior_lattice), settings.light_radius);
     let mut ops = reduce(shape, samples, f, &l_d, settings);
     ops.u_bvol = with_threads(settings.threads, || super::volume::own(&ops));
     ops
@@ -173,12 +173,11 @@ pub(super) fn exit(origin: Vec3, direction: Vec3) -> (Face, Vec3) {
     (face, point.clamp(Vec3::ZERO, Vec3::ONE))
 }
 
-/// L_d (n x m): the direct irradiance of unit sphere lights at the centres of a grid^3 lattice
-/// in the block and in the cube beyond each open face (spec B3), seen through the opening.
-pub fn prior(shape: Shape, samples: &Samples, grid: usize, radius: f32) -> DMatrix<f64> {
-    let lattice: Vec<Vec3> = (0..grid * grid * grid)
-        .map(|c| (Vec3::new((c % grid) as f32, (c / grid % grid) as f32, (c / grid / grid) as f32) + 0.5) / grid as f32)
-        .collect();
+/// L_d (n x m): the direct irradiance of unit sphere lights on a grid^3 `lattice` in the block
+/// and in the cube beyond each open face (spec B3), seen through the opening.
+pub fn prior(shape: Shape, samples: &Samples, (grid, lattice): (usize, PriorLattice), radius: f32) -> DMatrix<f64> {
+    let at = |i: usize| lattice.coordinate(i, grid);
+    let lattice: Vec<Vec3> = (0..grid * grid * grid).map(|c| Vec3::new(at(c % grid), at(c / grid % grid), at(c / grid / grid))).collect();
     let mut lights: Vec<Vec3> = lattice.clone();
     for face in shape.open_faces() {
         lights.extend(lattice.iter().map(|p| *p - face.inward()));

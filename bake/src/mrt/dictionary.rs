@@ -4,14 +4,14 @@
 //! per shape and U_rvol per side face (§6.5, `volume`); f32, column-major. A level
 //! reads it only when it was made with the parameters the level asks for.
 
-use super::{volume, BlockSettings, Face, InterfaceSettings, Samples, Shape};
+use super::{volume, BlockSettings, Face, InterfaceSettings, PriorLattice, Samples, Shape};
 use crate::artifact::{fail, Artifact, ArtifactError, Key, Section, REBAKE};
 use crate::binary::{Reader, Writer};
 
 pub const SECTION: &str = "mrt-dictionary";
-pub const SECTION_VERSION: u32 = 3;
+pub const SECTION_VERSION: u32 = 4;
 pub const BIN: &str = "mrt-dictionary.bin";
-const MAGIC: &[u8; 8] = b"RLMRTD03";
+const MAGIC: &[u8; 8] = b"RLMRTD04";
 
 /// One shape's operators: `samples` (n) rows, `modes` (k) columns.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,7 +66,7 @@ pub fn slots() -> Vec<(usize, Face)> {
 }
 
 /// The parameters a dictionary is checked against, as (name, value) in the stored order.
-fn parameters(s: &BlockSettings, i: &InterfaceSettings) -> [(&'static str, u64); 15] {
+fn parameters(s: &BlockSettings, i: &InterfaceSettings) -> [(&'static str, u64); 16] {
     [
         ("samples-per-face", s.samples_per_face as u64),
         ("gather-rays", s.gather_rays as u64),
@@ -83,6 +83,7 @@ fn parameters(s: &BlockSettings, i: &InterfaceSettings) -> [(&'static str, u64);
         ("response-modes", i.response_modes as u64),
         ("response-rays", i.gather_rays as u64),
         ("interface-seed", i.seed),
+        ("prior-lattice", s.prior_lattice as u64),
     ]
 }
 
@@ -129,7 +130,7 @@ pub fn read(artifact: &Artifact, wanted: Option<(&BlockSettings, &InterfaceSetti
     let data = artifact.section(SECTION, SECTION_VERSION, None)?;
     let (bin, path) = data.file(BIN)?;
     let mut r = Reader::new(&bin, &path, MAGIC, "MRT dictionary")?;
-    let mut stored = [0u64; 15];
+    let mut stored = [0u64; 16];
     for (i, (name, _)) in parameters(&BlockSettings::default(), &InterfaceSettings::default()).iter().enumerate() {
         stored[i] = r.u32(name)? as u64 | (r.u32(name)? as u64) << 32;
     }
@@ -150,13 +151,14 @@ pub fn read(artifact: &Artifact, wanted: Option<(&BlockSettings, &InterfaceSetti
 }
 
 /// The settings of stored `parameters`, refused where no dictionary could have been made so.
-fn from_parameters(p: &[u64; 15]) -> Result<(BlockSettings, InterfaceSettings), String> {
+fn from_parameters(p: &[u64; 16]) -> Result<(BlockSettings, InterfaceSettings), String> {
     let small = |i: usize, most: u64| (1..=most).contains(&p[i]).then_some(p[i] as usize);
     let bad = |name: &str| format!("stored parameter {name} is impossible");
     let block = BlockSettings {
         samples_per_face: small(0, 64).ok_or_else(|| bad("samples-per-face"))?,
         gather_rays: small(1, 1 << 24).ok_or_else(|| bad("gather-rays"))? as u32,
         prior_grid: small(2, 64).ok_or_else(|| bad("prior-grid"))?,
+        prior_lattice: *PriorLattice::ALL.get(p[15] as usize).ok_or_else(|| bad("prior-lattice"))?,
         light_radius: f32::from_bits(p[3] as u32),
         prior_modes: small(4, 1 << 16).ok_or_else(|| bad("prior-modes"))?,
         modes: small(5, 1 << 16).ok_or_else(|| bad("modes"))?,

@@ -190,6 +190,41 @@ impl Shape {
     }
 }
 
+/// Where the prior's grid^3 sphere lights stand in a block (002 §4.1 says only "uniformly in
+/// the volume").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PriorLattice {
+    /// At the centres of grid^3 cells: 152 of 216 lights a twelfth of a side from a wall, whose
+    /// sharp spots need 74 / 104 / 125 modes for 80 / 90 / 95 % of L_d's energy.
+    Centres,
+    /// 1 / (grid + 1) apart and as far from the walls: 22 / 41 / 64 modes, Table 2's 22 / 41 / 62.
+    Inset,
+}
+
+impl PriorLattice {
+    pub const ALL: [PriorLattice; 2] = [PriorLattice::Centres, PriorLattice::Inset];
+
+    /// The name the command line gives.
+    pub fn name(self) -> &'static str {
+        match self {
+            PriorLattice::Centres => "centres",
+            PriorLattice::Inset => "inset",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<PriorLattice> {
+        PriorLattice::ALL.into_iter().find(|l| l.name() == name)
+    }
+
+    /// The lattice's coordinate `i` of `grid` along an axis, in block sides.
+    pub fn coordinate(self, i: usize, grid: usize) -> f32 {
+        match self {
+            PriorLattice::Centres => (i as f32 + 0.5) / grid as f32,
+            PriorLattice::Inset => (i as f32 + 1.0) / (grid + 1) as f32,
+        }
+    }
+}
+
 /// What one block's operators are built from (spec A2 and B3; the paper's values by default).
 #[derive(Clone, Debug)]
 pub struct BlockSettings {
@@ -199,6 +234,8 @@ pub struct BlockSettings {
     pub gather_rays: u32,
     /// Sphere lights of the prior per axis, in the block and in each open neighbour: 6.
     pub prior_grid: usize,
+    /// Where on each axis the prior's lights stand (docs/BENCHMARKS.md, "The papers' claims").
+    pub prior_lattice: PriorLattice,
     /// The prior's sphere lights' radius, in block sides: 0.05.
     pub light_radius: f32,
     /// k_d: prior modes kept: 64.
@@ -218,6 +255,7 @@ impl Default for BlockSettings {
             samples_per_face: 16,
             gather_rays: 16_384,
             prior_grid: 6,
+            prior_lattice: PriorLattice::Centres,
             light_radius: 0.05,
             prior_modes: 64,
             modes: 32,
