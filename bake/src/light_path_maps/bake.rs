@@ -17,10 +17,8 @@ use serde_json::json;
 pub struct LightPathMapsBaker {
     /// The small scale: its variant is the spectral obscurance unless given otherwise.
     pub obscurance: ObscuranceBaker,
-    /// Its threshold and `work` are replaced by `threshold` and the bake's.
+    /// Its `work` is replaced by the bake's.
     pub settings: LightPathMapSettings,
-    /// Connections shorter than this are dropped; None: the obscurance's L_max.
-    pub threshold: Option<f32>,
     /// The region's box re-sampled at this many test points.
     pub test_points: Option<u32>,
     pub compression: Compression,
@@ -99,8 +97,7 @@ fn derived_region(scene: &Scene) -> Option<LightRegion> {
 
 impl Baker for LightPathMapsBaker {
     fn bake(&self, scene: &Scene, work: &WorkOptions, stages: &mut Stages) -> Result<Baked, String> {
-        let threshold = self.threshold.unwrap_or(self.obscurance.obscurance.l_max);
-        let settings = LightPathMapSettings { threshold, work: *work, ..self.settings.clone() };
+        let settings = LightPathMapSettings { work: *work, ..self.settings.clone() };
         settings.validate().map_err(|e| format!("{e} (--entry-points, --walks, --threshold, --threads)"))?;
         let region = self.region(scene)?;
         let (mut baked, atlas, bvh) = self.obscurance.bake_on_atlas(scene, work, stages, true)?;

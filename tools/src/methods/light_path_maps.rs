@@ -35,9 +35,9 @@ const WALKS: Param = Param::within(
 );
 const THRESHOLD: Param = Param::within(
     "threshold",
-    "connections shorter than this are dropped, metres (000 §3.2.2; 0 keeps every one)",
+    "connections shorter than this are dropped, metres (000 §3.2.2 cuts at the small scale's L_max, 0.15 on cornell, for a small-scale term to stand in; 0 keeps every one, which halves cornell's indirect error: docs/BENCHMARKS.md \"The papers' claims\")",
     LightPathMapSettings::THRESHOLD,
-    Default::From("L_max"),
+    Default::Value("0"),
 );
 const CLUSTERS: Param =
     Param::count("clusters", "clusters C of the transfers' PCA (with --basis)", 1, 1 << 20, Default::From("chosen by --error-budget"));
@@ -50,7 +50,7 @@ const ERROR_BUDGET: Param = Param::number(
     Default::Value("0.1"),
 );
 const UNCOMPRESSED: Param = Param::flag("uncompressed", "keep every transfer (one cluster per entry point, no PCA)");
-const COMPOSITION: Param = Param::choice("composition", "how the indirect irradiance I is added (000 §3.4): plain (albedo/pi I), times-obscurance (albedo/pi W I), times-obscurance-with-direct (albedo/pi W (I + E_direct))", &["plain", "times-obscurance", "times-obscurance-with-direct"], Default::Value("times-obscurance")).at_render();
+const COMPOSITION: Param = Param::choice("composition", "how the indirect irradiance I is added (000 §3.4): plain (albedo/pi I), times-obscurance (albedo/pi W I), times-obscurance-with-direct (albedo/pi W (I + E_direct))", &["plain", "times-obscurance", "times-obscurance-with-direct"], Default::Value("plain")).at_render();
 
 const PARAMS: [&Param; 9] =
     [&ENTRY_POINTS, &TEST_POINTS, &WALKS, &THRESHOLD, &CLUSTERS, &BASIS, &ERROR_BUDGET, &UNCOMPRESSED, &COMPOSITION];
@@ -86,7 +86,7 @@ fn baker(scene: &Scene, values: &Values) -> Result<LightPathMapsBaker> {
     let settings = LightPathMapSettings {
         entry_points: values.count(&ENTRY_POINTS) as u32,
         walks: values.count(&WALKS) as u32,
-        threshold: 0.0,
+        threshold: values.number(&THRESHOLD) as f32,
         max_depth: 64,
         work: WorkOptions::default(),
     };
@@ -94,7 +94,6 @@ fn baker(scene: &Scene, values: &Values) -> Result<LightPathMapsBaker> {
     Ok(LightPathMapsBaker {
         obscurance,
         settings,
-        threshold: values.given_number(&THRESHOLD).map(|t| t as f32),
         test_points: values.given_count(&TEST_POINTS).map(|m| m as u32),
         compression: compression(values)?,
     })

@@ -37,13 +37,15 @@ use relume_bake::light_path_maps::ClusteredTransfer;
 
 /// How the light path maps' indirect irradiance I is added to a surface of albedo a, with W
 /// the frame's occlusion term (the spectral obscurance, 000 §3.3) and E_d the shadowed direct
-/// irradiance. 000 §3.4 can be read three ways; relume renders each, to measure them.
+/// irradiance. 000 §3.4 can be read three ways; relume renders each, to measure them. Plain is
+/// the default: with no connection cut (`--threshold 0`) I holds the short range as well, and W
+/// would darken it twice (docs/BENCHMARKS.md, "The papers' claims").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Composition {
     /// L += a / pi * I: the large scale alone, no small-scale term.
+    #[default]
     Plain,
     /// L += a / pi * W * I: "the two texture values are multiplied".
-    #[default]
     TimesObscurance,
     /// L += a / pi * W * (I + E_d): the literal reading, which also multiplies "the
     /// obscuration value by the direct illumination" (paths of length 2 whose last ray is
