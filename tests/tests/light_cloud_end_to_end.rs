@@ -117,6 +117,9 @@ fn indirect_light_along_a_path_inside_the_cloud_follows_the_reference() {
     // reference alone is 0.065 from a converged one): frames 0.141, 0.164, 0.173, 0.370,
     // 0.270, 0.152, the column 0.163. Frame 3 is the light 4 cm over the tall block, whose hot
     // spot its nearest visible cloud lights (8 cm and more away) underestimate.
+    // The spec's bar for the column is 0.10 (light-clouds.md D9); this one is 0.18 because both
+    // sides are noisy at a test's effort: at 128 gather paths and 4,096 samples the same column
+    // is 0.091 (the ignored test below, docs/BENCHMARKS.md "The papers' claims").
     assert!(column < 0.18, "the stored column: indirect NRMSE {column}");
     assert!(median(&frames) < 0.19 && frames.iter().all(|&e| e < 0.41), "indirect NRMSE per frame {frames:?}");
     // The defaults (8 zones of clustered lights, 32 clusters x 8 vectors), bars from their first
