@@ -21,7 +21,7 @@ FIGURES=(
     obscurance-passes obscurance-vs-reference lightmap-seams lpm-bake lpm-passes
     lpm-vs-reference bench-four-methods bench-stability fiv light-clouds viewer mrt-blocks
     mrt-levels every-method cross-method ray-casting atlas-utilization bake-memory scale-sweep
-    shards correctness-tests
+    shards papers-claims correctness-tests
 )
 
 bench() { "$RELUME" bench "$1" --out "$DIR/$2" --cache "$OUT/reference-cache" "${@:3}"; }
@@ -157,6 +157,30 @@ figure_fiv() {
         "$RELUME" compare "$DIR/garden-$s.exr" "$DIR/garden-reference.exr" --reference-layer direct
         "$RELUME" compare "$DIR/garden-$s.exr" "$DIR/garden-reference.exr"
     done
+}
+
+figure_papers_claims() {
+    release_test -p relume-bake --test mrt the_prior_and_m_need_far_fewer_modes_than_f_as_in_table_2 -- --nocapture
+    release_test -p relume-tests --test fiv_end_to_end ground_error_per_grid_under_a_soft_probe -- --ignored --nocapture
+    bench tools/sweeps/light-path-maps-cut.toml light-path-maps-cut
+    bench tools/sweeps/light-cloud-linkage.toml light-cloud-linkage
+    local lc=(--method light-cloud --uncompressed)
+    for w in "0.5 20 complete" "0.5 20 single" "0.5 8 complete" "0.5 10 complete" "0.5 12 complete"; do
+        set -- $w
+        "$RELUME" bake scenes/cornell-cloud.gltf "${lc[@]}" --w1 $1 --w2 $2 --linkage $3 --out "$DIR/cornell-cloud-$1-$2-$3"
+    done
+    for w in "0.5 20 complete" "0.5 20 single" "0.8 5 complete" "0.8 5 single" "0.8 10 complete" "0.8 20 complete" "0.8 20 single"; do
+        set -- $w
+        "$RELUME" bake scenes/cornell-window.gltf "${lc[@]}" --w1 $1 --w2 $2 --linkage $3 --out "$DIR/cornell-window-$1-$2-$3"
+    done
+    for w in "0.5 300 complete" "0.5 300 single" "0.5 100 complete" "0.5 50 complete" "0 0 complete" "0 0 single"; do
+        set -- $w
+        "$RELUME" bake scenes/maze.gltf "${lc[@]}" --samples 8 --zones 16 --w1 $1 --w2 $2 --linkage $3 --out "$DIR/maze-$1-$2-$3"
+        rm -rf "$DIR/maze-$1-$2-$3"
+    done
+    "$RELUME" bake scenes/maze.gltf "${lc[@]}" --samples 32 --zones 16 --w2 300 --out "$DIR/maze-32-paths"
+    rm -rf "$DIR/maze-32-paths"
+    release_test -p relume-tests --test light_cloud_end_to_end -- --include-ignored --nocapture
 }
 
 figure_light_clouds() {
