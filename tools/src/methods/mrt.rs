@@ -12,7 +12,7 @@ use relume_bake::artifact::Artifact;
 use relume_bake::contract::Baker;
 use relume_bake::mrt::dictionary::{self, Dictionary};
 use relume_bake::mrt::level_data::{self, LevelData};
-use relume_bake::mrt::{self, BlockSettings, DictionarySource, InterfaceSettings, MrtBaker};
+use relume_bake::mrt::{self, BlockSettings, DictionarySource, InterfaceSettings, MrtBaker, PriorLattice};
 use relume_bake::scene::Scene;
 use relume_bake::tessellation;
 use relume_renderer::techniques::mrt::MrtData;
@@ -29,6 +29,12 @@ const GATHER_RAYS: Param = Param::count(
 );
 const MODES: Param = Param::count("modes", "k_self: a block's indirect modes (002 Table 2: 32)", 1, 512, Default::Value("32"));
 const PRIOR_MODES: Param = Param::count("prior-modes", "k_d: the light prior's modes (002 §4: 64)", 1, 1024, Default::Value("64"));
+const PRIOR_LATTICE: Param = Param::choice(
+    "prior-lattice",
+    "where the light prior's 6^3 sphere lights stand (002 §4.1: \"uniformly in the volume\"): centres (of the cells, most a twelfth of a side from a wall) or inset (1/7 apart and from the walls: Table 2's modes)",
+    &["centres", "inset"],
+    Default::Value("centres"),
+);
 const NO_ENRICH: Param = Param::flag("no-enrich", "leave the prior without App. A's enrichment (002 Fig. 13's failure)");
 const LIGHTFIELD_MODES: Param =
     Param::count("lightfield-modes", "k_rlf: the interface lightfield's modes (002 §5.1: 128)", 1, 1024, Default::Value("128"));
@@ -64,11 +70,12 @@ const FEEDBACK: Param = Param::choice(
 )
 .at_render();
 
-const PARAMS: [&Param; 12] = [
+const PARAMS: [&Param; 13] = [
     &SAMPLES_PER_FACE,
     &GATHER_RAYS,
     &MODES,
     &PRIOR_MODES,
+    &PRIOR_LATTICE,
     &NO_ENRICH,
     &LIGHTFIELD_MODES,
     &RESPONSE_MODES,
@@ -89,6 +96,7 @@ fn baker(values: &Values) -> MrtBaker {
         prior_modes: values.count(&PRIOR_MODES) as usize,
         modes: values.count(&MODES) as usize,
         enrich: !values.given(&NO_ENRICH),
+        prior_lattice: PriorLattice::parse(values.choice(&PRIOR_LATTICE)).unwrap_or(PriorLattice::Centres),
         ..BlockSettings::default()
     };
     let positions = values.count(&LIGHTFIELD) as usize;
