@@ -160,7 +160,7 @@ figure_fiv() {
 }
 
 figure_papers_claims() {
-    release_test -p relume-bake --test mrt the_prior_and_m_need_far_fewer_modes_than_f_as_in_table_2 -- --nocapture
+    release_test -p relume-bake --test mrt -- --nocapture
     release_test -p relume-tests --test fiv_end_to_end ground_error_per_grid_under_a_soft_probe -- --ignored --nocapture
     bench tools/sweeps/light-path-maps-cut.toml light-path-maps-cut
     bench tools/sweeps/light-cloud-linkage.toml light-cloud-linkage
