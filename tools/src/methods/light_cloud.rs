@@ -103,7 +103,7 @@ const W2: Param = Param::number(
 );
 const LINKAGE: Param = Param::choice(
     "linkage",
-    "when light clustering merges two groups (004 §4.1): complete (every pair across them is close: the paper's rule), single (some pair is: the paper's name, which keeps Table 1's counts)",
+    "when light clustering merges two groups (004 §4.1): complete (every pair across them is close: the paper's rule), single (some pair is: the paper's name for it; nearer Table 1's count on the Cornell box, worse at the same count)",
     &["complete", "single"],
     Default::Value("complete"),
 );
