@@ -51,13 +51,18 @@ fn the_gather_of_a_block_with_an_open_face_loses_exactly_the_form_factor_of_the_
     assert!(rms <= 0.01, "F 1 against 1 - the opening's form factor: RMS {rms:.4}");
 }
 
-/// A closed cube's samples, F and prior at the tests' settings, the prior on `lattice`.
-fn closed_cube_parts(lattice: PriorLattice) -> (Samples, nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>) {
-    let (shape, base) = (Shape::closed(), BlockSettings { prior_lattice: lattice, ..settings() });
+/// A closed cube's samples and F at the tests' settings (F does not depend on the prior).
+fn closed_cube_parts() -> (Samples, nalgebra::DMatrix<f64>) {
+    let (shape, base) = (Shape::closed(), settings());
     let samples = Samples::new(shape, base.samples_per_face);
     let f = block::gather(shape, &samples, base.gather_rays, base.seed);
-    let l_d = block::prior(shape, &samples, (base.prior_grid, base.prior_lattice), base.light_radius);
-    (samples, f, l_d)
+    (samples, f)
+}
+
+/// The closed cube's prior L_d at the tests' settings, its lights on `lattice`.
+fn closed_cube_prior(samples: &Samples, lattice: PriorLattice) -> nalgebra::DMatrix<f64> {
+    let base = settings();
+    block::prior(Shape::closed(), samples, (base.prior_grid, lattice), base.light_radius)
 }
 
 fn closed_cube() -> BlockOperators {
@@ -89,9 +94,9 @@ fn a_closed_cube_under_uniform_direct_light_reconstructs_uniform_indirect_light_
 /// against 0.067).
 #[test]
 fn the_cell_centres_fit_uniform_light_better_than_the_inset_lattice() {
+    let (samples, f) = closed_cube_parts();
     let worst = |lattice| {
-        let (samples, f, _) = closed_cube_parts(lattice);
-        let ops = block::reduced(Shape::closed(), samples, &f, &BlockSettings { prior_lattice: lattice, ..settings() });
+        let ops = block::reduced(Shape::closed(), samples.clone(), &f, &BlockSettings { prior_lattice: lattice, ..settings() });
         let uniform = ops.indirect(&DVector::from_element(ops.samples.len(), 1.0));
         uniform.iter().map(|v| (v - 1.0).abs()).fold(0.0, f64::max)
     };
@@ -102,9 +107,10 @@ fn the_cell_centres_fit_uniform_light_better_than_the_inset_lattice() {
 
 #[test]
 fn held_out_lights_converge_to_the_brute_force_bounce_as_modes_grow() {
+    let (samples, f) = closed_cube_parts();
     let held_out = |lattice| {
         let (shape, base) = (Shape::closed(), BlockSettings { prior_lattice: lattice, ..settings() });
-        let (samples, f, l_d) = closed_cube_parts(lattice);
+        let l_d = closed_cube_prior(&samples, lattice);
         let mut errors = Vec::new();
         for modes in [4, 8, 12, 16, 32] {
             let ops = block::reduce(shape, samples.clone(), &f, &l_d, &BlockSettings { modes, ..base.clone() });
@@ -128,7 +134,7 @@ fn held_out_lights_converge_to_the_brute_force_bounce_as_modes_grow() {
 
 #[test]
 fn the_prior_and_m_need_far_fewer_modes_than_f_as_in_table_2() {
-    let (samples, f, _) = closed_cube_parts(PriorLattice::Centres);
+    let (samples, f) = closed_cube_parts();
     let f_sigma = nalgebra::SymmetricEigen::new(f.transpose() * &f).eigenvalues.iter().map(|l| l.max(0.0).sqrt()).collect::<Vec<f64>>();
     let mut f_sigma = f_sigma;
     f_sigma.sort_by(|a, b| b.total_cmp(a));
@@ -173,7 +179,8 @@ fn the_operators_are_the_same_bytes_at_any_thread_count() {
 #[test]
 fn enrichment_fixes_the_per_face_constants_that_the_raw_prior_misses() {
     let (shape, base) = (Shape::closed(), settings());
-    let (samples, f, l_d) = closed_cube_parts(PriorLattice::Centres);
+    let (samples, f) = closed_cube_parts();
+    let l_d = closed_cube_prior(&samples, PriorLattice::Centres);
     let uniform_error = |enrich| {
         let ops = block::reduce(shape, samples.clone(), &f, &l_d, &BlockSettings { enrich, ..base.clone() });
         ops.indirect(&DVector::from_element(samples.len(), 1.0)).iter().map(|v| (v - 1.0).abs()).fold(0.0, f64::max)
@@ -190,7 +197,8 @@ fn enrichment_fixes_the_per_face_constants_that_the_raw_prior_misses() {
 #[test]
 fn enrichment_stops_red_faces_bouncing_green_onto_the_white_face_as_in_fig_13() {
     let (shape, base) = (Shape::closed(), settings());
-    let (samples, f, l_d) = closed_cube_parts(PriorLattice::Centres);
+    let (samples, f) = closed_cube_parts();
+    let l_d = closed_cube_prior(&samples, PriorLattice::Centres);
     let white = Face::ALL[2];
     let on_white: Vec<usize> = (0..samples.len()).filter(|&i| samples.sample(i).0 == white).collect();
     let irradiance = block::direct_irradiance(shape, &samples, Vec3::new(0.5, 0.6, 0.45), base.light_radius);
